@@ -1,0 +1,36 @@
+"""The science of mt-widgets, with numpy, scipy and numba only (no Jupyter, no widgets, no serial).
+
+Arm dynamics, plants, feature maps, skills, the ridge learner, exact machine teaching,
+query-state selection and rollouts.
+"""
+
+from .arm import ArmParameters, TwoLinkArm
+from .arm_plant import ArmPlant
+from .fast_mode import running_under_test
+from .features import EndEffectorFeatures, FeatureMap, FunctionFeatures, PositionFeatures
+from .learner import DEFAULT_LAMBDA, RidgeLearner
+from .machine_teaching import (
+    ActionDifference,
+    TeachingAnalysis,
+    UnderdeterminedTeachingWarning,
+    action_difference,
+    analyse_demonstrations,
+    optimal_actions,
+    ridge_operator,
+    teaching_risk,
+)
+from .plants import ContinuousPlant, KinematicPlant, Plant
+from .query_states import SeedSchedule, condition_number, sample_query_states
+from .skills import SKILLS, LineTarget, PointTarget, Skill
+from .trajectory import Trajectory, TrajectoryBatch
+from .uarm_plant import UARM_WORKSPACE_CM, UArmPlant
+from .workspace import AnnulusSector, Box
+
+__all__ = [
+    "ActionDifference", "AnnulusSector", "ArmParameters", "ArmPlant", "Box", "ContinuousPlant", "DEFAULT_LAMBDA",
+    "EndEffectorFeatures", "FeatureMap", "FunctionFeatures", "KinematicPlant", "LineTarget", "Plant",
+    "PointTarget", "PositionFeatures", "RidgeLearner", "SKILLS", "SeedSchedule", "Skill", "TeachingAnalysis",
+    "Trajectory", "TrajectoryBatch", "TwoLinkArm", "UARM_WORKSPACE_CM", "UArmPlant",
+    "UnderdeterminedTeachingWarning", "action_difference", "analyse_demonstrations", "condition_number",
+    "optimal_actions", "ridge_operator", "running_under_test", "sample_query_states", "teaching_risk",
+]

@@ -1,0 +1,83 @@
+"""The simulated two-link arm as a plant: query-state region, end-effector readout, fast rollouts."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import arm_rollout
+from .arm import TwoLinkArm
+from .features import EndEffectorFeatures
+from .plants import ContinuousPlant, _batch, _check_rollout
+from .validation import as_count, as_positive
+from .workspace import Box
+
+
+class ArmPlant(ContinuousPlant):
+    """The paper's simulated arm: state x = (q1, q2, qd1, qd2), action = end-effector force (N).
+
+    Args:
+        arm: the ``TwoLinkArm`` (default: the paper's arm, uniform rods, gravity compensated).
+        joint_speed_range: query states have joint speeds uniform in [-v, v] rad/s.
+        max_joint_speed: a rollout whose joint speed exceeds this (rad/s) is stopped and
+            flagged diverged. 100 rad/s (16 turns a second) is far beyond any motion a sensible
+            skill produces and well before the numbers overflow.
+    """
+
+    robot = "sim"
+    state_names = ("q1", "q2", "qd1", "qd2")
+    units = "m"
+    action_units = "N"
+    default_duration = 10.0
+
+    def __init__(self, arm: TwoLinkArm | None = None, joint_speed_range: float = 2.0, max_joint_speed: float = 100.0):
+        self.arm = arm if arm is not None else TwoLinkArm()
+        if not isinstance(self.arm, TwoLinkArm):
+            raise ValueError(f"arm: expected a TwoLinkArm, got {type(arm).__name__}")
+        self.joint_speed_range = as_positive("joint_speed_range", joint_speed_range, allow_zero=True)
+        self.max_joint_speed = as_positive("max_joint_speed", max_joint_speed)
+        reach = 1.1 * self.arm.reach
+        self.view = Box((-reach, reach), (-reach, reach))
+
+    def __repr__(self) -> str:
+        return f"ArmPlant({self.arm!r})"
+
+    def end_effector(self, states):
+        states = self.check_states("states", states)
+        q, qd = states[..., :2], states[..., 2:]
+        return self.arm.forward_kinematics(q), self.arm.end_effector_velocity(q, qd)
+
+    def sample_states(self, rng, n):
+        q = rng.uniform(-np.pi, np.pi, size=(n, 2))
+        qd = rng.uniform(-self.joint_speed_range, self.joint_speed_range, size=(n, 2))
+        return np.concatenate([q, qd], axis=1)
+
+    def state_at(self, position, velocity=(0.0, 0.0), elbow_up: bool = True) -> np.ndarray:
+        """The state whose end-effector is at ``position`` (m) moving at ``velocity`` (m/s)."""
+        q = self.arm.inverse_kinematics(position, elbow_up=elbow_up)
+        qd = np.linalg.solve(self.arm.jacobian(q), np.asarray(velocity, dtype=float))
+        return np.concatenate([q, qd])
+
+    # -- dynamics for the generic rollout (user feature maps) ----------------------------------
+    def hold(self, states, actions):
+        return self.arm.applied_torque(states[..., :2], actions)
+
+    def derivative(self, states, held_input):
+        q, qd = states[..., :2], states[..., 2:]
+        return np.concatenate([qd, self.arm.joint_acceleration(q, qd, held_input)], axis=-1)
+
+    def has_diverged(self, states):
+        return ~np.all(np.isfinite(states), axis=-1) | np.any(np.abs(states[..., 2:]) > self.max_joint_speed, axis=-1)
+
+    def rollout(self, thetas, feature_map, start, duration, record_every=None):
+        if not isinstance(feature_map, EndEffectorFeatures):
+            return super().rollout(thetas, feature_map, start, duration, record_every)
+        thetas, start, n_steps = _check_rollout(self, thetas, feature_map, start, duration, self.control_rate)
+        record_every = as_count("record_every", record_every if record_every is not None else 1)
+        states, actions, lengths, diverged_step = arm_rollout.allocate_outputs(len(thetas), n_steps, record_every)
+        dt = 1.0 / self.control_rate
+        arm_rollout.rollout_arm_linear_policy(np.ascontiguousarray(thetas), start, self.arm.parameters.as_array(),
+                                              self.arm.gravity_compensation, dt, n_steps, record_every,
+                                              self.max_joint_speed, states, actions, lengths, diverged_step)
+        diverged_at = np.where(diverged_step >= 0, diverged_step * dt, np.nan)
+        times = np.arange(states.shape[1]) * record_every * dt
+        return _batch(self, times, states, actions, diverged_at, lengths)
