@@ -1,0 +1,33 @@
+"""Teaching widgets (ipycanvas + ipywidgets): draw demonstrations, see guidance, watch the robot.
+
+- ``EpisodeWidget``: a whole episode (the three-line entry point).
+- ``TeachingCanvas``: query states one after another, an arrow drawn at each.
+- ``ArmView``: the workspace, target and robot on layered canvases.
+- ``ReproductionPlayer``: the learnt skill's rollout as an animation.
+- ``EffortProgress``, ``GuidancePanel``: the progress bars and the guidance in words.
+- ``ViewTransform``: world <-> pixel mapping; ``draw_arrow``: arrow rendering;
+  ``play_frames``: animation; ``THEMES``: colour-blind-safe default and the paper's look.
+
+Widgets hold no science: they call ``mt_widgets.core`` and draw the result.
+"""
+
+from .animation import frame_times, play_frames, sample_at
+from .arm_view import LAYERS, ArmView
+from .arrows import draw_arrow
+from .coords import ViewTransform
+from .episode import DemonstrationRecord, EpisodeResult, EpisodeWidget
+from .guidance import GuidancePanel, explain_difference, legend_html
+from .progress import EffortProgress
+from .redraw import drawing_batch, repaint_on_new_view
+from .reproduction import ReproductionPlayer
+from .robots import SimArmPainter, UArmPainter, painter_for
+from .teaching import ConfirmedAction, TeachingCanvas, describe_action
+from .theme import DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, ArrowStyle, Theme, get_theme
+
+__all__ = [
+    "ArmView", "ArrowStyle", "ConfirmedAction", "DEFAULT_THEME", "DemonstrationRecord", "EffortProgress",
+    "EpisodeResult", "EpisodeWidget", "GuidancePanel", "LAYERS", "PAPER_THEME", "PAPER_UARM_THEME",
+    "ReproductionPlayer", "SimArmPainter", "THEMES", "TeachingCanvas", "Theme", "UArmPainter", "ViewTransform",
+    "describe_action", "draw_arrow", "drawing_batch", "explain_difference", "frame_times", "get_theme",
+    "legend_html", "painter_for", "play_frames", "repaint_on_new_view", "sample_at",
+]

@@ -1,0 +1,234 @@
+"""The arm view: the workspace, the target and the robot, on layered canvases.
+
+Layers (bottom to top) of the ``MultiCanvas``:
+
+- ``background``: grid, axes in the skill's units, the target, the arrow scale bar. Drawn
+  once; it never changes for a skill.
+- ``ghost``: faint paths (the target skill's own motion, the learnt path).
+- ``robot``: the robot in its current state; the animation layer.
+- ``arrows``: action arrows (the user's, the optimal one, the rubber band while dragging).
+
+Each layer keeps the function that paints its current content, so a browser view that
+attaches later (Voila, a page reload) gets everything again (see ``redraw.py``).
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+from ipycanvas import MultiCanvas
+from ipywidgets import Layout
+
+from .coords import ViewTransform, nice_ticks
+from .redraw import drawing_batch, repaint_on_new_view
+from .robots import painter_for
+from .theme import get_theme
+
+LAYERS = ("background", "ghost", "robot", "arrows")
+
+# Default arrow lengths, in world units per action unit: chosen so that a typical action
+# of each robot is a clearly visible arrow (sim: about 1-3 N -> 0.35-1 m; uArm: about
+# 1-4 cm of displacement per step -> 2-8 cm on screen). The scale bar shows the value.
+DEFAULT_ACTION_LENGTH = {"sim": 0.35, "uarm": 2.0}
+
+
+def default_canvas_size(xlim, ylim, max_width: int = 480, max_height: int = 480, margin: float = 34.0):
+    """Canvas (width, height) in pixels that fits the world rectangle's aspect ratio."""
+    span_x, span_y = xlim[1] - xlim[0], ylim[1] - ylim[0]
+    scale = min((max_width - 2 * margin) / span_x, (max_height - 2 * margin) / span_y)
+    return int(round(span_x * scale + 2 * margin)), int(round(span_y * scale + 2 * margin))
+
+
+class ArmView:
+    """A skill's workspace on a layered canvas, with a robot drawn in any state.
+
+    Args:
+        skill: A ``mt_widgets.core.Skill`` (its ``workspace``, ``target``, ``units``,
+            ``action_units`` and ``robot`` are read).
+        width: Canvas width in pixels (default: fitted to the workspace's aspect ratio).
+        height: Canvas height in pixels (default: fitted to the workspace's aspect ratio).
+        theme: A ``Theme`` or a theme name (default Okabe-Ito).
+        action_length: World units of arrow per action unit (default per robot).
+        css_width: CSS width of the canvas element (e.g. "100%"); the canvas is then
+            stretched by the browser and pointer events are still mapped to canvas pixels.
+    """
+
+    def __init__(self, skill, width: int | None = None, height: int | None = None, theme=None,
+                 action_length: float | None = None, css_width: str | None = None):
+        self.skill = skill
+        self.theme = get_theme(theme)
+        box = skill.workspace
+        auto_w, auto_h = default_canvas_size(box.xlim, box.ylim)
+        width = auto_w if width is None else int(width)
+        height = auto_h if height is None else int(height)
+        if action_length is None:
+            action_length = DEFAULT_ACTION_LENGTH.get(skill.robot, 1.0)
+        self.transform = ViewTransform(tuple(box.xlim), tuple(box.ylim), width, height, 34.0,
+                                       float(action_length))
+        layout = Layout(width=css_width, height="auto") if css_width else Layout()
+        self.canvas = MultiCanvas(len(LAYERS), width=width, height=height, layout=layout)
+        self.painter = painter_for(skill)
+        self._painters: dict[str, Callable[[object], None]] = {}
+        for name in LAYERS:
+            layer = self.layer(name)
+            repaint_on_new_view(layer, lambda name=name: self._repaint(name))
+        self.show(self.draw_background, "background")
+
+    # -- layers -----------------------------------------------------------------------------------
+    def layer(self, name: str):
+        """The ipycanvas ``Canvas`` of a layer: one of ``LAYERS``."""
+        if name not in LAYERS:
+            raise ValueError(f"name: expected one of {LAYERS}, got {name!r}")
+        return self.canvas[LAYERS.index(name)]
+
+    def show(self, paint: Callable[[object], None] | None, name: str) -> None:
+        """Replace a layer's content: clear it and run ``paint(layer)`` in one message.
+
+        ``paint`` is kept and re-run when a new browser view attaches. ``None`` leaves the
+        layer empty.
+        """
+        self._painters[name] = paint
+        self._repaint(name)
+
+    def remember(self, paint: Callable[[object], None] | None, name: str) -> None:
+        """Record what a layer shows without drawing it (the caller has just drawn it,
+        e.g. the last frame of an animation)."""
+        self._painters[name] = paint
+
+    def _repaint(self, name: str) -> None:
+        layer = self.layer(name)
+        paint = self._painters.get(name)
+        with drawing_batch():
+            layer.clear()
+            if paint is not None:
+                paint(layer)
+
+    def repaint(self) -> None:
+        """Redraw every layer from the recorded painters (one message)."""
+        with drawing_batch():
+            for name in LAYERS:
+                self._repaint(name)
+
+    # -- what the background shows ---------------------------------------------------------------------
+    def draw_background(self, canvas) -> None:
+        """Grid, axes with tick labels in ``skill.units``, the target and the arrow scale bar."""
+        t, theme = self.transform, self.theme
+        canvas.fill_style = theme.background
+        canvas.fill_rect(0, 0, t.width, t.height)
+        (x0, x1), (y0, y1) = t.xlim, t.ylim
+        xs, ys = nice_ticks(x0, x1), nice_ticks(y0, y1)
+        canvas.stroke_style = theme.grid
+        canvas.line_width = 1.0
+        for x in xs:
+            (a, b), (c, d) = t.to_pixel([[x, y0], [x, y1]])
+            canvas.stroke_line(a, b, c, d)
+        for y in ys:
+            (a, b), (c, d) = t.to_pixel([[x0, y], [x1, y]])
+            canvas.stroke_line(a, b, c, d)
+        canvas.stroke_style = theme.axes
+        (a, b), (c, d) = t.to_pixel([[x0, y0], [x1, y1]])
+        canvas.stroke_rect(a, d, c - a, b - d)
+        canvas.fill_style = theme.text
+        canvas.font = "11px sans-serif"
+        canvas.text_align = "center"
+        canvas.text_baseline = "top"
+        for x in xs:
+            px, py = t.to_pixel([x, y0])
+            canvas.fill_text(f"{x:g}", px, py + 4)
+        canvas.text_align = "right"
+        canvas.text_baseline = "middle"
+        for y in ys:
+            px, py = t.to_pixel([x0, y])
+            canvas.fill_text(f"{y:g}", px - 4, py)
+        canvas.text_align = "left"
+        canvas.text_baseline = "top"
+        canvas.fill_text(f"{self.skill.units}", 4, 4)
+        self._draw_workspace_outline(canvas)
+        self._draw_target(canvas)
+        self._draw_scale_bar(canvas)
+
+    def _draw_workspace_outline(self, canvas) -> None:
+        sector = getattr(getattr(self.skill, "plant", None), "workspace", None)
+        if sector is None or not hasattr(sector, "r_min"):
+            return
+        # The uArm's reachable sector, so the user sees where states and motions can be.
+        t = self.transform
+        centre = t.to_pixel([0.0, 0.0])
+        yaw = np.deg2rad(sector.max_yaw_deg)
+        canvas.stroke_style = self.theme.axes
+        canvas.line_width = 1.0
+        canvas.set_line_dash([3.0, 3.0])
+        canvas.begin_path()
+        # Canvas angles run clockwise (y down), so the bearing +yaw is the angle -yaw.
+        canvas.arc(float(centre[0]), float(centre[1]), sector.r_max * t.pixels_per_unit, -yaw, yaw, False)
+        canvas.arc(float(centre[0]), float(centre[1]), sector.r_min * t.pixels_per_unit, yaw, -yaw, True)
+        canvas.close_path()
+        canvas.stroke()
+        canvas.set_line_dash([])
+        canvas.fill_style = self.theme.arm
+        canvas.fill_circle(float(centre[0]), float(centre[1]), 6.0)
+
+    def _draw_target(self, canvas) -> None:
+        target = self.skill.target
+        if target is None:
+            return
+        t, theme = self.transform, self.theme
+        canvas.stroke_style = theme.target
+        canvas.fill_style = theme.target
+        canvas.line_width = 2.5
+        if hasattr(target, "direction"):
+            point, direction = np.asarray(target.point), np.asarray(target.direction)
+            reach = 4 * max(t.xlim[1] - t.xlim[0], t.ylim[1] - t.ylim[0])
+            (a, b), (c, d) = t.to_pixel([point - reach * direction, point + reach * direction])
+            canvas.save()
+            (l, bot), (r, top) = t.to_pixel([[t.xlim[0], t.ylim[0]], [t.xlim[1], t.ylim[1]]])
+            canvas.begin_path()
+            canvas.rect(l, top, r - l, bot - top)
+            canvas.clip()
+            canvas.stroke_line(a, b, c, d)
+            canvas.restore()
+            label_at = t.to_pixel(point + 0.0 * direction)
+        else:
+            label_at = t.to_pixel(target.point)
+            canvas.fill_circle(float(label_at[0]), float(label_at[1]), 7.0)
+        canvas.font = "12px sans-serif"
+        canvas.text_align = "left"
+        canvas.text_baseline = "bottom"
+        canvas.fill_text("target", float(label_at[0]) + 9, float(label_at[1]) - 6)
+
+    def _draw_scale_bar(self, canvas) -> None:
+        t = self.transform
+        step = t.nice_action_step()
+        length = step * t.pixels_per_action
+        x, y = t.width - 12 - length, t.height - 12
+        canvas.stroke_style = self.theme.text
+        canvas.line_width = 2.0
+        canvas.stroke_line(x, y, x + length, y)
+        canvas.stroke_line(x, y - 4, x, y + 4)
+        canvas.stroke_line(x + length, y - 4, x + length, y + 4)
+        canvas.fill_style = self.theme.text
+        canvas.font = "11px sans-serif"
+        canvas.text_align = "right"
+        canvas.text_baseline = "bottom"
+        canvas.fill_text(f"arrows: {step:g} {self.skill.action_units}", t.width - 12, y - 5)
+
+    @property
+    def scale_text(self) -> str:
+        """The arrow scale in words, e.g. "1 N = 42 px (0.0238 N per pixel)"."""
+        per_pixel = 1.0 / self.transform.pixels_per_action
+        units = self.skill.action_units
+        return f"1 {units} = {self.transform.pixels_per_action:.0f} px ({per_pixel:.3g} {units} per pixel)"
+
+    # -- the robot -----------------------------------------------------------------------------------
+    def show_state(self, state, show_velocity: bool = True) -> None:
+        """Draw the robot in ``state`` (shape (state_dim,)) on the robot layer."""
+        state = np.array(state, dtype=float)
+        if state.shape != (self.skill.state_dim,):
+            raise ValueError(f"state: expected shape ({self.skill.state_dim},), got {state.shape}")
+        self.show(lambda c: self.painter.draw_state(c, self.transform, self.theme, state, show_velocity), "robot")
+
+    def end_effector_pixel(self, state) -> np.ndarray:
+        """Pixel (2,) of the end-effector in ``state``."""
+        position, _ = self.painter.end_effector(state)
+        return self.transform.to_pixel(position)

@@ -1,0 +1,59 @@
+"""Arrow rendering: the one function every view uses to draw an action or a velocity."""
+
+from __future__ import annotations
+
+import math
+
+from .theme import ArrowStyle
+
+
+def draw_arrow(canvas, start, end, style: ArrowStyle) -> bool:
+    """Draw an arrow from pixel ``start`` to pixel ``end`` on an ipycanvas ``Canvas``.
+
+    The head is a filled triangle (always solid, so a dashed arrow still shows its
+    direction); arrows shorter than 2 pixels draw only a dot, because a zero action has
+    no direction to show.
+
+    Args:
+        canvas: The ipycanvas Canvas (one layer) to draw on.
+        start: (x, y) pixel of the tail.
+        end: (x, y) pixel of the tip.
+        style: Colour, width, dash pattern, head length and opacity.
+
+    Returns:
+        True if a full arrow was drawn, False if only the dot (arrow too short).
+    """
+    x0, y0 = float(start[0]), float(start[1])
+    x1, y1 = float(end[0]), float(end[1])
+    length = math.hypot(x1 - x0, y1 - y0)
+    canvas.global_alpha = style.alpha
+    canvas.fill_style = style.color
+    canvas.stroke_style = style.color
+    if length < 2.0:
+        canvas.fill_circle(round(x0, 1), round(y0, 1), style.width)
+        canvas.global_alpha = 1.0
+        return False
+    ux, uy = (x1 - x0) / length, (y1 - y0) / length
+    head = min(style.head, 0.6 * length)
+    # The shaft stops at the base of the head so a thick line does not poke through the tip.
+    bx, by = x1 - ux * head * 0.9, y1 - uy * head * 0.9
+    canvas.line_width = style.width
+    canvas.line_cap = "round"
+    canvas.set_line_dash(list(style.dash))
+    canvas.begin_path()
+    canvas.move_to(round(x0, 1), round(y0, 1))
+    canvas.line_to(round(bx, 1), round(by, 1))
+    canvas.stroke()
+    canvas.set_line_dash([])
+    half = head * 0.45
+    # Head: tip plus two corners perpendicular to the shaft.
+    left = (x1 - ux * head - uy * half, y1 - uy * head + ux * half)
+    right = (x1 - ux * head + uy * half, y1 - uy * head - ux * half)
+    canvas.begin_path()
+    canvas.move_to(round(x1, 1), round(y1, 1))
+    canvas.line_to(round(left[0], 1), round(left[1], 1))
+    canvas.line_to(round(right[0], 1), round(right[1], 1))
+    canvas.close_path()
+    canvas.fill()
+    canvas.global_alpha = 1.0
+    return True

@@ -1,0 +1,292 @@
+"""One teaching episode: query states, demonstrations, guidance, learning, reproduction, error.
+
+Three lines give a full episode in a notebook::
+
+    from mt_widgets.widgets import EpisodeWidget
+    episode = EpisodeWidget("sim-point", guidance=True)
+    episode
+
+The science comes from ``mt_widgets.core``: ``skill.features``, ``optimal_actions``,
+``RidgeLearner``, ``teaching_risk`` and ``skill.reproduce``; this widget sequences them and
+draws their results. A study runner drives it through constructor arguments, the
+observable traits (``phase``, ``state_index``, ``demonstrations``, ``error``) and the two
+callbacks ``on_demonstration`` and ``on_finished``.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+from ipywidgets import HTML, Button, CallbackDispatcher, Layout, VBox
+from traitlets import Float, Int, List, Unicode
+
+from mt_widgets.core import (DEFAULT_LAMBDA, SKILLS, RidgeLearner, UnderdeterminedTeachingWarning,
+                             optimal_actions, teaching_risk)
+
+from .guidance import GuidancePanel
+from .progress import EffortProgress
+from .reproduction import ReproductionPlayer
+from .teaching import ConfirmedAction, TeachingCanvas
+
+PHASES = ("teaching", "guidance", "finished")
+
+
+@dataclass(frozen=True)
+class DemonstrationRecord:
+    """What a study log needs about one confirmed demonstration.
+
+    Attributes:
+        episode_index: The episode's index as given to the widget.
+        index: Query-state index within the episode (0-based).
+        state: (state_dim,) the query state.
+        action: (R,) the confirmed action, in ``skill.action_units``.
+        optimal_action: (R,) the optimal action at this state (computed whether or not it is shown).
+        guidance_shown: True if the optimal arrow was shown after this demonstration.
+        method: "pointer", "keyboard", "numeric" or "code".
+        time_to_first_input_s: Seconds from the state appearing to the first input (None: code).
+        drawing_duration_s: Seconds from the first input to the confirmation (None: code).
+        redraws: Times the arrow was set before confirming.
+        confirmed_at: Wall-clock time of the confirmation (``time.time()``).
+    """
+
+    episode_index: int
+    index: int
+    state: np.ndarray
+    action: np.ndarray
+    optimal_action: np.ndarray
+    guidance_shown: bool
+    method: str
+    time_to_first_input_s: float | None
+    drawing_duration_s: float | None
+    redraws: int
+    confirmed_at: float
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    """What an episode produced.
+
+    Attributes:
+        skill_key: The skill's key.
+        query_states: (N, state_dim).
+        demonstrations: (N, R) the user's actions.
+        optimal_actions: (N, R) the optimal actions for these states and ``lam``.
+        lam: The learner's ridge parameter.
+        theta_hat: (R, S) the learnt policy.
+        error: The teaching error E = ||vec(theta_hat) - vec(theta)||.
+        trajectory: The learnt skill's reproduction (a core ``Trajectory``).
+        diverged: True if the reproduction diverged.
+        feedback_latency_s: Seconds from the last confirmation to the animation sent.
+    """
+
+    skill_key: str
+    query_states: np.ndarray
+    demonstrations: np.ndarray
+    optimal_actions: np.ndarray
+    lam: float
+    theta_hat: np.ndarray
+    error: float
+    trajectory: object
+    diverged: bool
+    feedback_latency_s: float
+
+
+def _resolve_skill(skill):
+    if isinstance(skill, str):
+        if skill not in SKILLS:
+            raise ValueError(f"skill: expected a Skill or one of {sorted(SKILLS)}, got {skill!r}")
+        return SKILLS[skill]
+    for name in ("theta", "features", "reproduce", "query_states", "robot"):
+        if not hasattr(skill, name):
+            raise ValueError(f"skill: expected a Skill (with .{name}) or a skill key, got {type(skill).__name__}")
+    return skill
+
+
+_GHOSTS: dict[tuple[int, float], object] = {}
+
+
+def _target_rollout(skill, duration: float):
+    # The target skill's own motion depends only on the skill and duration: computed once.
+    key = (id(skill), float(duration))
+    if key not in _GHOSTS:
+        _GHOSTS[key] = skill.reproduce(skill.theta, duration=duration)
+    return _GHOSTS[key]
+
+
+class EpisodeWidget(VBox):
+    """A full teaching episode.
+
+    Args:
+        skill: A ``Skill`` or a key of ``mt_widgets.SKILLS`` ("sim-point", "sim-line",
+            "uarm-point", "uarm-line").
+        query_states: (N, state_dim) states to demonstrate at; default
+            ``skill.query_states(seed=seed)`` (N = S, the teaching dimension).
+        seed: Seed for the default query states.
+        guidance: Show the optimal arrow and its explanation after each demonstration.
+        lam: The learner's ridge parameter (also used for the optimal actions).
+        theme: A ``Theme`` or theme name ("okabe-ito", "paper", "paper-uarm").
+        duration: Reproduction length in seconds (default ``skill.default_duration``).
+        ghost: Draw the target skill's own motion faintly during the reproduction.
+        demonstrations: Already-given actions (k, R) to restore when resuming (k <= N);
+            if all N are given the episode finishes at once.
+        episode_index: This episode's index, for the progress bar and the records.
+        episodes_total: Episodes in the phase, for the progress bar.
+        on_demonstration: ``callback(record: DemonstrationRecord)`` after each confirmation.
+        on_finished: ``callback(result: EpisodeResult)`` when the reproduction is sent.
+        title: Heading shown above the episode (default: the skill's title).
+        fps: Reproduction frames per second.
+        width, height, css_width, action_length: As for ``ArmView``.
+    """
+
+    phase = Unicode("teaching", help="One of 'teaching', 'guidance', 'finished'.")
+    state_index = Int(0, help="Index of the query state shown.")
+    demonstrations = List(help="Confirmed actions so far, [u1, u2] each.")
+    error = Float(None, allow_none=True, help="Teaching error once the episode is finished.")
+
+    def __init__(self, skill="sim-point", query_states=None, seed: int | None = 0, guidance: bool = True,
+                 lam: float = DEFAULT_LAMBDA, theme=None, duration: float | None = None, ghost: bool = True,
+                 demonstrations=None, episode_index: int = 0, episodes_total: int = 1,
+                 on_demonstration: Callable | None = None, on_finished: Callable | None = None,
+                 title: str | None = None, fps: float = 60.0, width=None, height=None, css_width=None,
+                 action_length=None):
+        self.skill = _resolve_skill(skill)
+        if not (np.isfinite(lam) and lam >= 0):
+            raise ValueError(f"lam: expected a finite number >= 0, got {lam!r}")
+        self.lam = float(lam)
+        self.guidance = bool(guidance)
+        self.duration = float(self.skill.default_duration if duration is None else duration)
+        if not self.duration > 0:
+            raise ValueError(f"duration: expected a positive number of seconds, got {duration!r}")
+        self.show_ghost = bool(ghost)
+        self.episode_index = int(episode_index)
+        states = self.skill.query_states(seed=seed) if query_states is None else np.asarray(query_states, float)
+        if states.ndim != 2 or states.shape[1] != self.skill.state_dim:
+            raise ValueError(f"query_states: expected shape (N, {self.skill.state_dim}), got {states.shape}")
+        self.query_states = states
+        self.features = self.skill.features(states)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", UnderdeterminedTeachingWarning)
+            self.optimal = optimal_actions(self.features, self.skill.theta, self.lam)
+        self.exact = not any(issubclass(w.category, UnderdeterminedTeachingWarning) for w in caught)
+        self.result: EpisodeResult | None = None
+        self.records: list[DemonstrationRecord] = []
+        self._demonstration_callbacks = CallbackDispatcher()
+        self._finished_callbacks = CallbackDispatcher()
+        if on_demonstration is not None:
+            self.on_demonstration(on_demonstration)
+        if on_finished is not None:
+            self.on_finished(on_finished)
+
+        view_args = dict(theme=theme, width=width, height=height, css_width=css_width, action_length=action_length)
+        self.teaching = TeachingCanvas(self.skill, states, auto_advance=False, **view_args)
+        self.theme = self.teaching.theme
+        self.player = ReproductionPlayer(self.skill, fps=fps, **view_args)
+        self.progress = EffortProgress(len(states), max(int(episodes_total), self.episode_index + 1),
+                                       episodes_done=self.episode_index)
+        self.guidance_panel = GuidancePanel(self.theme, self.skill.action_units)
+        self.next_button = Button(description="Next state", icon="arrow-right", button_style="primary",
+                                  layout=Layout(display="none"))
+        self.next_button.on_click(lambda _: self.next())
+        heading = title if title is not None else self.skill.title
+        self.header = HTML(f"<h3 style='margin:4px 0'>{heading}</h3>"
+                           f"<div style='max-width:760px'>{self.skill.description}</div>")
+        self.teaching.on_confirm(self._on_confirm)
+        self.teaching.observe(self._sync_traits, names=["state_index", "demonstrations"])
+        super().__init__([self.header, self.progress, self.teaching, self.guidance_panel, self.next_button,
+                          self.player])
+        if demonstrations is not None and len(demonstrations):
+            self.restore(demonstrations)
+
+    # -- callbacks --------------------------------------------------------------------------------------
+    def on_demonstration(self, callback: Callable[[DemonstrationRecord], None], remove: bool = False) -> None:
+        """Register ``callback(record)``, called after each confirmed demonstration."""
+        self._demonstration_callbacks.register_callback(callback, remove=remove)
+
+    def on_finished(self, callback: Callable[[EpisodeResult], None], remove: bool = False) -> None:
+        """Register ``callback(result)``, called when the episode is learnt and its reproduction sent."""
+        self._finished_callbacks.register_callback(callback, remove=remove)
+
+    # -- driving it from code ------------------------------------------------------------------------------
+    def demonstrate(self, action) -> DemonstrationRecord:
+        """Set and confirm ``action`` (R,) at the current state, as if drawn (method "code")."""
+        if self.phase != "teaching":
+            raise RuntimeError(f"demonstrate: expected phase 'teaching', the episode is in {self.phase!r}; "
+                               f"call next() after guidance")
+        self.teaching.set_action(action)
+        self.teaching.confirm()
+        return self.records[-1]
+
+    def next(self) -> None:
+        """Leave the guidance of the current state: show the next state, or finish the episode."""
+        if self.phase != "guidance":
+            raise RuntimeError(f"next: expected phase 'guidance', the episode is in {self.phase!r}")
+        self.guidance_panel.hide()
+        self.next_button.layout.display = "none"
+        self.teaching._set_locked(False)
+        if len(self.teaching.demonstrations) >= len(self.query_states):
+            self.finish()
+        else:
+            self.phase = "teaching"
+            self.teaching.advance()
+
+    def restore(self, demonstrations) -> None:
+        """Take already-given demonstrations (k, R) when resuming; finishes if all are there."""
+        actions = np.asarray(demonstrations, dtype=float).reshape(-1, 2)
+        self.teaching.restore(actions)
+        self.progress.demonstrations_done = len(actions)
+        if len(actions) == len(self.query_states):
+            self.finish()
+
+    def finish(self) -> EpisodeResult:
+        """Learn from the demonstrations, play the reproduction, show the error."""
+        if len(self.teaching.demonstrations) != len(self.query_states):
+            raise RuntimeError(f"finish: expected {len(self.query_states)} demonstrations, "
+                               f"got {len(self.teaching.demonstrations)}")
+        started = time.perf_counter()
+        U = np.array(self.teaching.demonstrations, dtype=float)
+        theta_hat = RidgeLearner(lam=self.lam).fit(self.features, U)
+        error = teaching_risk(theta_hat, self.skill.theta)
+        trajectory = self.skill.reproduce(theta_hat, duration=self.duration)
+        ghost = _target_rollout(self.skill, self.duration) if self.show_ghost else None
+        self.player.play(trajectory, error=error, ghost=ghost)
+        latency = time.perf_counter() - started
+        self.teaching._set_locked(True)
+        self.progress.episodes_done = min(self.episode_index + 1, self.progress.episode_budget)
+        self.result = EpisodeResult(self.skill.key, self.query_states.copy(), U, self.optimal.copy(), self.lam,
+                                    theta_hat, float(error), trajectory, bool(trajectory.diverged), latency)
+        self.error = float(error)
+        self.phase = "finished"
+        self._finished_callbacks(self.result)
+        return self.result
+
+    # -- internals -----------------------------------------------------------------------------------------
+    def _sync_traits(self, change) -> None:
+        setattr(self, change["name"], change["new"])
+
+    def _on_confirm(self, confirmed: ConfirmedAction) -> None:
+        index = confirmed.index
+        record = DemonstrationRecord(
+            self.episode_index, index, confirmed.state, confirmed.action, self.optimal[index].copy(),
+            self.guidance, confirmed.method, confirmed.time_to_first_input_s, confirmed.drawing_duration_s,
+            confirmed.redraws, confirmed.confirmed_at)
+        self.records.append(record)
+        self.progress.demonstrations_done = index + 1
+        last = index + 1 >= len(self.query_states)
+        if self.guidance:
+            self.teaching._set_locked(True)
+            self.teaching.show_guidance(self.optimal[index])
+            self.guidance_panel.show(confirmed.action, self.optimal[index], exact=self.exact)
+            self.next_button.description = "Finish and watch" if last else "Next state"
+            self.next_button.layout.display = None
+            self.phase = "guidance"
+            self._demonstration_callbacks(record)
+            return
+        self._demonstration_callbacks(record)
+        if last:
+            self.finish()
+        else:
+            self.teaching.advance()

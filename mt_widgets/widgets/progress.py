@@ -1,0 +1,53 @@
+"""Teaching effort: demonstrations and episodes done against the budget."""
+
+from __future__ import annotations
+
+from ipywidgets import HTML, IntProgress, Layout, VBox
+from traitlets import Int, observe
+
+
+class EffortProgress(VBox):
+    """Two progress bars: demonstrations in this episode, and episodes in the phase.
+
+    Args:
+        demonstration_budget: Demonstrations per episode (the teaching dimension S).
+        episode_budget: Episodes in the phase (e.g. 8 in the paper's phase 3).
+        demonstrations_done: Demonstrations confirmed so far in this episode.
+        episodes_done: Episodes finished before this one.
+    """
+
+    demonstrations_done = Int(0)
+    episodes_done = Int(0)
+
+    def __init__(self, demonstration_budget: int, episode_budget: int = 1, demonstrations_done: int = 0,
+                 episodes_done: int = 0):
+        for name, value in (("demonstration_budget", demonstration_budget), ("episode_budget", episode_budget)):
+            if int(value) != value or value < 1:
+                raise ValueError(f"{name}: expected a positive whole number, got {value!r}")
+        self.demonstration_budget = int(demonstration_budget)
+        self.episode_budget = int(episode_budget)
+        bar = Layout(width="260px")
+        self.demonstration_bar = IntProgress(min=0, max=self.demonstration_budget, layout=bar,
+                                             description="Demos", bar_style="info")
+        self.episode_bar = IntProgress(min=0, max=self.episode_budget, layout=bar, description="Episodes")
+        self.label = HTML()
+        super().__init__([self.demonstration_bar, self.episode_bar, self.label])
+        self.demonstrations_done = int(demonstrations_done)
+        self.episodes_done = int(episodes_done)
+        self._refresh()
+
+    @observe("demonstrations_done", "episodes_done")
+    def _on_change(self, change) -> None:
+        limit = self.demonstration_budget if change["name"] == "demonstrations_done" else self.episode_budget
+        if not 0 <= change["new"] <= limit:
+            raise ValueError(f"{change['name']}: expected 0..{limit}, got {change['new']}")
+        self._refresh()
+
+    def _refresh(self) -> None:
+        if not hasattr(self, "label"):
+            return
+        self.demonstration_bar.value = self.demonstrations_done
+        self.episode_bar.value = self.episodes_done
+        self.label.value = (f"<small>Teaching effort: {self.demonstrations_done} of {self.demonstration_budget} "
+                            f"demonstrations in this episode; {self.episodes_done} of {self.episode_budget} "
+                            f"episodes done.</small>")

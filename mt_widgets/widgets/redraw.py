@@ -1,0 +1,62 @@
+"""Robust rendering: batches that survive a new browser view (ipycanvas issue #322).
+
+ipycanvas keeps no drawing state on the kernel side: a browser view that attaches later
+(Voila renders the page after the kernel ran the notebook; a JupyterLab page reload)
+starts blank. Each canvas model then sends ``client_ready``, but the kernel-side canvas
+manager still remembers which canvas it last drew on and skips the ``switchCanvas``
+command, while the fresh front-end manager has no current canvas, so the redraw fails
+(https://github.com/jupyter-widgets-contrib/ipycanvas/issues/322).
+
+The work-around lives here and nowhere else: every batch starts by forgetting the
+manager's current canvas, so each message names its canvas, and every layer repaints
+itself when its front-end model (re)appears.
+"""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+from typing import Callable
+
+import ipycanvas
+from ipycanvas import hold_canvas
+
+# Private names of ipycanvas 0.14 (pinned below 0.15 in pyproject.toml).
+_MANAGER = ipycanvas.canvas._CANVAS_MANAGER
+
+
+def forget_current_canvas() -> None:
+    """Make the next drawing command start with a ``switchCanvas`` (issue #322)."""
+    _MANAGER._current_canvas = None
+
+
+@contextmanager
+def drawing_batch():
+    """Like ``hold_canvas()``, but the message is self-contained: it names its canvas first.
+
+    Nested batches join the outer one (as ``hold_canvas`` does), so a view can call
+    painters that open their own batch.
+    """
+    if _MANAGER._caching:
+        yield
+        return
+    forget_current_canvas()
+    with hold_canvas():
+        yield
+
+
+def repaint_on_new_view(layer, paint: Callable[[], None]) -> None:
+    """Call ``paint()`` (inside one batch) whenever a browser view of ``layer`` attaches.
+
+    Args:
+        layer: An ipycanvas ``Canvas`` (a MultiCanvas layer); its front-end model sends
+            ``client_ready`` when it is created in a page.
+        paint: Redraws everything the layer should show, from the widget's current state.
+    """
+    if not hasattr(layer, "on_client_ready"):
+        raise TypeError(f"layer: expected an ipycanvas Canvas, got {type(layer).__name__}")
+
+    def _on_client_ready():
+        with drawing_batch():
+            paint()
+
+    layer.on_client_ready(_on_client_ready)

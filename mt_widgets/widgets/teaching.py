@@ -1,0 +1,392 @@
+"""The teaching canvas: query states one after another, an arrow drawn for each.
+
+Input, three ways to the same pending action:
+
+- pointer: press on the end-effector (or on the tip of the arrow being drawn) and drag;
+  a rubber band follows the pointer and the readout gives the arrow in the action's units;
+- keyboard on the canvas (click it first): arrow keys nudge the arrow (Shift: finer),
+  Enter confirms, Escape or Backspace clears;
+- numbers: components (u1, u2) or angle (degrees, counter-clockwise from +x) and magnitude.
+
+An arrow can be redrawn any number of times; ``Confirm`` records it as the demonstration
+for the current state. Everything observable is a trait: ``state_index``,
+``demonstrations`` (confirmed actions, in order) and ``pending_action``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+from ipywidgets import (HTML, Button, CallbackDispatcher, FloatText, HBox, Layout,
+                        ToggleButtons, VBox)
+from traitlets import Any, Bool, Int, List
+
+from .arm_view import ArmView
+from .arrows import draw_arrow
+from .redraw import drawing_batch
+
+#: How often the text readout follows a drag, at most (seconds): the canvas follows every
+#: move, the readout is a second message per update and need not.
+READOUT_INTERVAL_S = 0.08
+
+
+@dataclass
+class InputTiming:
+    """When the user acted on one query state (``time.monotonic()`` seconds)."""
+
+    shown_at: float
+    first_input_at: float | None = None
+    last_input_at: float | None = None
+    method: str | None = None
+    redraws: int = 0
+
+
+@dataclass(frozen=True)
+class ConfirmedAction:
+    """One confirmed arrow, as the teaching canvas saw it.
+
+    Attributes:
+        index: Query-state index (0-based).
+        state: (state_dim,) the query state.
+        action: (2,) the confirmed action in ``action_units``.
+        method: "pointer", "keyboard", "numeric" or "code" (how the last change was made).
+        time_to_first_input_s: From the state appearing to the first input on it (None if
+            set by code without any input).
+        drawing_duration_s: From the first input to the confirmation.
+        redraws: How many times the arrow was set before it was confirmed.
+    """
+
+    index: int
+    state: np.ndarray
+    action: np.ndarray
+    method: str
+    time_to_first_input_s: float | None
+    drawing_duration_s: float | None
+    redraws: int
+    confirmed_at: float = field(default_factory=time.time)
+
+
+def describe_action(action, units: str) -> str:
+    """The arrow in words: components, magnitude and direction (degrees from +x, anticlockwise)."""
+    u = np.asarray(action, dtype=float)
+    angle = math.degrees(math.atan2(u[1], u[0]))
+    return (f"({u[0]:+.2f}, {u[1]:+.2f}) {units}, |u| = {np.hypot(*u):.2f} {units}, "
+            f"direction {angle:+.0f}&deg;")
+
+
+class TeachingCanvas(VBox):
+    """Draw one action arrow at each query state.
+
+    Args:
+        skill: The skill being taught (its robot, units and target are drawn).
+        query_states: (N, state_dim) the states to demonstrate at, shown in order.
+        theme: A ``Theme`` or theme name.
+        grab_radius: Pixels around the end-effector (and the arrow tip) where a press starts
+            a drag.
+        auto_advance: Move to the next state as soon as an arrow is confirmed (standalone
+            use); the episode widget turns this off to show guidance first.
+        width, height, css_width, action_length: As for ``ArmView``.
+    """
+
+    state_index = Int(0, help="Index of the query state shown (== number confirmed; N when done).")
+    demonstrations = List(help="Confirmed actions, one [u1, u2] list per state so far.")
+    pending_action = Any(None, allow_none=True, help="The arrow drawn but not confirmed: [u1, u2] or None.")
+    locked = Bool(False, help="True while input is disabled (guidance shown, episode over).")
+
+    def __init__(self, skill, query_states, theme=None, grab_radius: float = 28.0, auto_advance: bool = True, width=None, height=None,
+                 css_width=None, action_length=None):
+        states = np.array(query_states, dtype=float)
+        if states.ndim != 2 or states.shape[1] != skill.state_dim or len(states) == 0:
+            raise ValueError(f"query_states: expected shape (N, {skill.state_dim}) with N >= 1, got {states.shape}")
+        self.skill = skill
+        self.query_states = states
+        self.grab_radius = float(grab_radius)
+        self.auto_advance = bool(auto_advance)
+        self.view = ArmView(skill, width=width, height=height, theme=theme, action_length=action_length,
+                            css_width=css_width)
+        self.theme = self.view.theme
+        self._confirm_callbacks = CallbackDispatcher()
+        self._dragging = False
+        self._last_readout = 0.0
+        self._guidance = None
+        self._timing = InputTiming(time.monotonic())
+
+        units = skill.action_units
+        self.readout = HTML(value="")
+        self.hint = HTML(value="")
+        self.scale_label = HTML(value=f"<small>Scale: {self.view.scale_text}</small>")
+        self.entry_mode = ToggleButtons(options=[("u1, u2", "components"), ("angle, size", "polar")],
+                                        value="components", style={"button_width": "90px"},
+                                        tooltips=["Components of the action",
+                                                  "Angle in degrees from +x (anticlockwise) and magnitude"])
+        self.first_entry = FloatText(description=f"u1 ({units})", step=0.1, layout=Layout(width="170px"))
+        self.second_entry = FloatText(description=f"u2 ({units})", step=0.1, layout=Layout(width="170px"))
+        self.set_button = Button(description="Set arrow", tooltip="Draw the arrow from the numbers")
+        self.confirm_button = Button(description="Confirm", button_style="success", icon="check", disabled=True,
+                                     tooltip="Record this arrow as your demonstration (Enter on the canvas)")
+        self.clear_button = Button(description="Clear", icon="eraser", disabled=True,
+                                   tooltip="Remove the arrow and draw again (Escape on the canvas)")
+        self.entry_mode.observe(self._on_entry_mode, names="value")
+        self.set_button.on_click(lambda _: self._set_from_entries())
+        self.confirm_button.on_click(lambda _: self.confirm())
+        self.clear_button.on_click(lambda _: self.clear_action())
+
+        canvas = self.view.canvas
+        canvas.on_mouse_down(self._on_mouse_down)
+        canvas.on_mouse_move(self._on_mouse_move)
+        canvas.on_mouse_up(self._on_mouse_up)
+        canvas.on_mouse_out(self._on_mouse_up)
+        canvas.on_key_down(self._on_key_down)
+
+        controls = VBox([
+            self.readout,
+            HBox([self.confirm_button, self.clear_button]),
+            HTML("<small>Or type the arrow:</small>"),
+            self.entry_mode,
+            HBox([self.first_entry, self.second_entry]),
+            self.set_button,
+            self.hint,
+            self.scale_label,
+            HTML("<small>Keyboard: click the canvas, then arrow keys move the arrow tip "
+                 "(Shift: finer), Enter confirms, Escape clears.</small>"),
+        ], layout=Layout(min_width="300px", max_width="380px"))
+        super().__init__([HBox([canvas, controls], layout=Layout(flex_flow="row wrap", align_items="flex-start"))])
+        self._show_current_state()
+
+    # -- public API ---------------------------------------------------------------------------------
+    @property
+    def n_states(self) -> int:
+        return len(self.query_states)
+
+    @property
+    def current_state(self) -> np.ndarray | None:
+        """The query state being demonstrated, or None when all are done."""
+        return self.query_states[self.state_index] if self.state_index < self.n_states else None
+
+    def on_confirm(self, callback: Callable[[ConfirmedAction], None], remove: bool = False) -> None:
+        """Register ``callback(confirmed: ConfirmedAction)``, called when an arrow is confirmed."""
+        self._confirm_callbacks.register_callback(callback, remove=remove)
+
+    def set_action(self, action, method: str = "code") -> None:
+        """Draw ``action`` (2,) in ``action_units`` as the pending arrow at the current state."""
+        u = np.array(action, dtype=float).reshape(-1)
+        if u.shape != (2,) or not np.all(np.isfinite(u)):
+            raise ValueError(f"action: expected 2 finite numbers in {self.skill.action_units}, got {action!r}")
+        if self.current_state is None:
+            raise RuntimeError("set_action: every query state already has a demonstration")
+        self._note_input(method)
+        self.pending_action = [float(u[0]), float(u[1])]
+        self._draw_arrows()
+        self._update_readout()
+        self._sync_entries()
+
+    def clear_action(self) -> None:
+        """Remove the pending (unconfirmed) arrow."""
+        self.pending_action = None
+        self._draw_arrows()
+        self._update_readout()
+
+    def confirm(self) -> ConfirmedAction:
+        """Record the pending arrow as the demonstration at the current state."""
+        if self.locked:
+            raise RuntimeError("confirm: input is locked (guidance is shown or the episode is over)")
+        if self.pending_action is None or self.current_state is None:
+            raise RuntimeError("confirm: draw an arrow first (pending_action is None)")
+        now = time.monotonic()
+        timing = self._timing
+        confirmed = ConfirmedAction(
+            index=self.state_index, state=self.current_state.copy(), action=np.array(self.pending_action),
+            method=timing.method or "code",
+            time_to_first_input_s=None if timing.first_input_at is None else timing.first_input_at - timing.shown_at,
+            drawing_duration_s=None if timing.first_input_at is None else now - timing.first_input_at,
+            redraws=timing.redraws)
+        self.demonstrations = self.demonstrations + [list(self.pending_action)]
+        self._confirm_callbacks(confirmed)
+        if self.auto_advance and self.state_index == confirmed.index:
+            self.advance()
+        return confirmed
+
+    def show_guidance(self, optimal_action) -> None:
+        """Draw the optimal arrow (2,) beside the confirmed one at the current state."""
+        self._guidance = np.array(optimal_action, dtype=float)
+        self._draw_arrows()
+
+    def advance(self) -> None:
+        """Move on to the next query state (after a confirmation)."""
+        if len(self.demonstrations) <= self.state_index:
+            raise RuntimeError("advance: confirm the current arrow first")
+        self.state_index += 1
+        self.pending_action = None
+        self._guidance = None
+        self._show_current_state()
+
+    def restore(self, actions) -> None:
+        """Take already-given demonstrations (k, 2) as confirmed, without callbacks (resuming)."""
+        actions = np.array(actions, dtype=float).reshape(-1, 2) if len(actions) else np.zeros((0, 2))
+        if len(actions) > self.n_states:
+            raise ValueError(f"actions: expected at most {self.n_states} demonstrations, got {len(actions)}")
+        self.demonstrations = [list(map(float, a)) for a in actions]
+        self.state_index = len(actions)
+        self.pending_action = None
+        self._guidance = None
+        self._show_current_state()
+
+    # -- drawing --------------------------------------------------------------------------------------
+    def _show_current_state(self) -> None:
+        state = self.current_state
+        self._timing = InputTiming(time.monotonic())
+        with drawing_batch():
+            if state is None:
+                self.view.show(None, "robot")
+            else:
+                self.view.show_state(state)
+            self._draw_arrows()
+        self._update_readout()
+        self.confirm_button.disabled = True
+
+    def _draw_arrows(self, rubber_band: bool = False) -> None:
+        state = self.current_state
+        if state is None:
+            self.view.show(None, "arrows")
+            return
+        view, theme = self.view, self.theme
+        origin, _ = view.painter.end_effector(state)
+        start = view.transform.to_pixel(origin)
+        user = None if self.pending_action is None else view.transform.action_tip(origin, self.pending_action)
+        optimal = None if self._guidance is None else view.transform.action_tip(origin, self._guidance)
+        style = theme.rubber_band if rubber_band else theme.user_arrow
+
+        def paint(canvas):
+            if optimal is not None:
+                draw_arrow(canvas, start, optimal, theme.optimal_arrow)
+            if user is not None:
+                draw_arrow(canvas, start, user, style)
+
+        view.show(paint, "arrows")
+
+    def _update_readout(self) -> None:
+        units = self.skill.action_units
+        n = self.state_index
+        if self.current_state is None:
+            self.readout.value = f"<b>All {self.n_states} demonstrations given.</b>"
+        elif self.pending_action is None:
+            self.readout.value = (f"<b>State {n + 1} of {self.n_states}</b>: press on the end-effector and drag "
+                                  f"to draw the action.")
+        else:
+            self.readout.value = (f"<b>State {n + 1} of {self.n_states}</b>: your arrow "
+                                  f"{describe_action(self.pending_action, units)}")
+        can_confirm = self.pending_action is not None and not self.locked and self.current_state is not None
+        self.confirm_button.disabled = not can_confirm
+        self.clear_button.disabled = not can_confirm
+
+    def _sync_entries(self) -> None:
+        u = self.pending_action
+        if u is None:
+            return
+        if self.entry_mode.value == "components":
+            self.first_entry.value, self.second_entry.value = round(u[0], 4), round(u[1], 4)
+        else:
+            self.first_entry.value = round(math.degrees(math.atan2(u[1], u[0])), 2)
+            self.second_entry.value = round(float(np.hypot(*u)), 4)
+
+    # -- input ----------------------------------------------------------------------------------------
+    def _note_input(self, method: str) -> None:
+        now = time.monotonic()
+        if self._timing.first_input_at is None and method != "code":
+            self._timing.first_input_at = now
+        self._timing.last_input_at = now
+        self._timing.method = method
+        self._timing.redraws += 1
+
+    def _accepting(self) -> bool:
+        return not self.locked and self.current_state is not None
+
+    def _on_mouse_down(self, x, y) -> None:
+        if not self._accepting():
+            return
+        state = self.current_state
+        view = self.view
+        pointer = np.array([x, y], dtype=float)
+        origin, _ = view.painter.end_effector(state)
+        near_origin = np.hypot(*(pointer - view.transform.to_pixel(origin))) <= self.grab_radius
+        near_tip = (self.pending_action is not None and np.hypot(
+            *(pointer - view.transform.action_tip(origin, self.pending_action))) <= self.grab_radius)
+        if not (near_origin or near_tip):
+            self.hint.value = "<small>Press on the end-effector (the marker) to start an arrow.</small>"
+            return
+        self.hint.value = ""
+        self._dragging = True
+        self._note_input("pointer")
+        if near_tip and not near_origin:
+            return  # keep the arrow; the drag moves its tip
+        self._drag_to(pointer)
+
+    def _on_mouse_move(self, x, y) -> None:
+        # Called for every pointer move over the canvas: return at once unless dragging.
+        if not self._dragging:
+            return
+        self._drag_to((x, y))
+
+    def _on_mouse_up(self, x, y) -> None:
+        if not self._dragging:
+            return
+        self._dragging = False
+        self._drag_to((x, y), final=True)
+
+    def _drag_to(self, pointer, final: bool = False) -> None:
+        origin, _ = self.view.painter.end_effector(self.current_state)
+        action = self.view.transform.action_from_drag(origin, pointer)
+        self.pending_action = [float(action[0]), float(action[1])]
+        self._draw_arrows(rubber_band=not final)
+        now = time.monotonic()
+        if final or now - self._last_readout >= READOUT_INTERVAL_S:
+            self._last_readout = now
+            self._update_readout()
+        if final:
+            self._sync_entries()
+
+    def _on_key_down(self, key, shift_key, ctrl_key, meta_key) -> None:
+        if not self._accepting():
+            return
+        step = self.view.transform.nice_action_step() / (50.0 if shift_key else 10.0)
+        moves = {"ArrowLeft": (-step, 0.0), "ArrowRight": (step, 0.0), "ArrowUp": (0.0, step),
+                 "ArrowDown": (0.0, -step)}
+        if key in moves:
+            base = np.zeros(2) if self.pending_action is None else np.array(self.pending_action)
+            self.set_action(base + np.array(moves[key]), method="keyboard")
+        elif key == "Enter" and self.pending_action is not None:
+            self.confirm()
+        elif key in ("Escape", "Backspace", "Delete"):
+            self.clear_action()
+
+    def _on_entry_mode(self, change) -> None:
+        units = self.skill.action_units
+        if change["new"] == "components":
+            self.first_entry.description, self.second_entry.description = f"u1 ({units})", f"u2 ({units})"
+        else:
+            self.first_entry.description, self.second_entry.description = "angle (deg)", f"size ({units})"
+        self._sync_entries()
+
+    def _set_from_entries(self) -> None:
+        if not self._accepting():
+            return
+        a, b = float(self.first_entry.value), float(self.second_entry.value)
+        if self.entry_mode.value == "components":
+            action = (a, b)
+        else:
+            if b < 0:
+                self.hint.value = "<small>The size must be zero or more.</small>"
+                return
+            action = (b * math.cos(math.radians(a)), b * math.sin(math.radians(a)))
+        self.hint.value = ""
+        self.set_action(action, method="numeric")
+
+    def _set_locked(self, locked: bool) -> None:
+        self.locked = locked
+        for widget in (self.set_button, self.first_entry, self.second_entry, self.entry_mode):
+            widget.disabled = locked
+        self._update_readout()

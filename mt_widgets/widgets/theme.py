@@ -1,0 +1,112 @@
+"""Colours and line styles of every view, in one place.
+
+The default theme uses the Okabe-Ito palette (Okabe & Ito 2008, "Color Universal Design"),
+which stays distinguishable under the common colour-vision deficiencies, and it never relies
+on colour alone: the optimal (guidance) arrow is dashed and the user's arrow solid. The
+paper's screens used two greens (dark: the user's action, light: the guidance on the
+simulator; swapped on the uArm screen); those are kept as the ``"paper"`` and ``"paper-uarm"``
+themes for replications.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+OKABE_ITO = {
+    "black": "#000000",
+    "orange": "#E69F00",
+    "sky_blue": "#56B4E9",
+    "bluish_green": "#009E73",
+    "yellow": "#F0E442",
+    "blue": "#0072B2",
+    "vermillion": "#D55E00",
+    "reddish_purple": "#CC79A7",
+}
+
+
+@dataclass(frozen=True)
+class ArrowStyle:
+    """How one kind of arrow looks.
+
+    Args:
+        color: CSS colour.
+        width: Shaft width in pixels.
+        dash: Canvas line-dash pattern in pixels; empty for a solid line.
+        head: Length of the arrow head in pixels.
+        alpha: Opacity in [0, 1].
+    """
+
+    color: str
+    width: float = 3.0
+    dash: tuple[float, ...] = ()
+    head: float = 12.0
+    alpha: float = 1.0
+
+
+@dataclass(frozen=True)
+class Theme:
+    """Everything a view needs to know about colours."""
+
+    name: str
+    background: str = "#FFFFFF"
+    grid: str = "#E6E6E6"
+    axes: str = "#7F7F7F"
+    text: str = "#222222"
+    arm: str = "#4D4D4D"
+    joint: str = "#FFFFFF"
+    end_effector: str = OKABE_ITO["yellow"]
+    end_effector_outline: str = "#000000"
+    uarm_state: str = "#000000"
+    target: str = OKABE_ITO["vermillion"]
+    ghost: str = OKABE_ITO["reddish_purple"]
+    ghost_alpha: float = 0.35
+    trail: str = OKABE_ITO["sky_blue"]
+    diverged: str = OKABE_ITO["vermillion"]
+    user_arrow: ArrowStyle = field(default_factory=lambda: ArrowStyle(OKABE_ITO["blue"], 3.5))
+    optimal_arrow: ArrowStyle = field(
+        default_factory=lambda: ArrowStyle(OKABE_ITO["orange"], 3.5, dash=(9.0, 5.0)))
+    rubber_band: ArrowStyle = field(
+        default_factory=lambda: ArrowStyle(OKABE_ITO["blue"], 2.5, alpha=0.6))
+    velocity_arrow: ArrowStyle = field(
+        default_factory=lambda: ArrowStyle(OKABE_ITO["sky_blue"], 2.0, head=9.0))
+    legend_user: str = "your action (solid)"
+    legend_optimal: str = "optimal action (dashed)"
+
+
+DEFAULT_THEME = Theme(name="okabe-ito")
+
+PAPER_THEME = replace(
+    DEFAULT_THEME,
+    name="paper",
+    end_effector="#FFD700",
+    velocity_arrow=ArrowStyle("#1F4FD8", 2.0, head=9.0),
+    user_arrow=ArrowStyle("#006400", 3.5),
+    optimal_arrow=ArrowStyle("#7CFC00", 3.5),
+    rubber_band=ArrowStyle("#006400", 2.5, alpha=0.6),
+    target="#FF0000",
+    legend_user="your action (dark green)",
+    legend_optimal="optimal action (light green)",
+)
+
+PAPER_UARM_THEME = replace(
+    PAPER_THEME,
+    name="paper-uarm",
+    user_arrow=ArrowStyle("#7CFC00", 3.5),
+    optimal_arrow=ArrowStyle("#006400", 3.5),
+    rubber_band=ArrowStyle("#7CFC00", 2.5, alpha=0.6),
+    legend_user="your action (light green)",
+    legend_optimal="optimal action (dark green)",
+)
+
+THEMES = {theme.name: theme for theme in (DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME)}
+
+
+def get_theme(theme: "Theme | str | None") -> Theme:
+    """A Theme from a Theme, a theme name (``"okabe-ito"``, ``"paper"``, ``"paper-uarm"``) or None."""
+    if theme is None:
+        return DEFAULT_THEME
+    if isinstance(theme, Theme):
+        return theme
+    if isinstance(theme, str) and theme in THEMES:
+        return THEMES[theme]
+    raise ValueError(f"theme: expected a Theme or one of {sorted(THEMES)}, got {theme!r}")
