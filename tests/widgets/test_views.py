@@ -1,0 +1,195 @@
+import numpy as np
+import pytest
+
+from mt_widgets import SKILLS
+from mt_widgets.widgets import ArmView, ReproductionPlayer, TeachingCanvas
+
+from .conftest import client_ready, key, near, path_points, pointer
+
+
+def _cross(a, b) -> float:
+    return float(a[0] * b[1] - a[1] * b[0])
+
+
+def test_background_is_drawn_once_and_shows_the_point_target(recorder):
+    skill = SKILLS["sim-point"]
+    view = ArmView(skill)
+    background = recorder.on(view.layer("background"))
+    target_px = view.transform.to_pixel(skill.target.point)
+    circles = [args for name, args in background if name == "fillCircle"]
+    assert any(np.allclose(args[:2], target_px) for args in circles), "a dot at the target point"
+    texts = [args[0] for name, args in background if name == "fillText"]
+    assert "m" in texts and any(t.startswith("arrows: ") and t.endswith(" N") for t in texts)
+    recorder.clear()
+    view.show_state(skill.start)
+    assert recorder.on(view.layer("background")) == [], "showing a state leaves the background alone"
+
+
+def test_line_target_and_uarm_workspace_are_drawn(recorder):
+    skill = SKILLS["uarm-line"]
+    view = ArmView(skill)
+    background = recorder.on(view.layer("background"))
+    lines = [args for name, args in background if name == "strokeLine"]
+    point, direction = np.array(skill.target.point), np.array(skill.target.direction)
+    on_line = []
+    for x1, y1, x2, y2 in lines:
+        a, b = view.transform.to_world([[x1, y1], [x2, y2]])
+        if abs(_cross(a - point, direction)) < 1e-6 and abs(_cross(b - point, direction)) < 1e-6 \
+                and np.linalg.norm(b - a) > 20:
+            on_line.append((a, b))
+    assert on_line, "a long stroke along the target line r1 = 2 r2"
+    assert any(name == "arc" for name, _ in background), "the uArm's reachable sector is outlined"
+
+
+def test_sim_arm_is_drawn_through_its_joints_in_the_given_state(recorder):
+    skill = SKILLS["sim-point"]
+    view = ArmView(skill)
+    state = np.array([0.4, 0.9, 0.5, -0.2])
+    recorder.clear()
+    view.show_state(state)
+    commands = recorder.on(view.layer("robot"))
+    joints = view.transform.to_pixel(skill.plant.arm.joint_positions(state[:2]))
+    points = path_points(commands)
+    assert all(near(points, joint) for joint in joints)
+    assert ("fillCircle", [*np.round(joints[2], 6).tolist(), 8.0]) in [
+        (n, [round(v, 6) for v in a]) for n, a in commands if n == "fillCircle"], "end-effector marker"
+
+
+def test_uarm_state_is_a_black_dot_at_its_position(recorder):
+    skill = SKILLS["uarm-point"]
+    view = ArmView(skill)
+    recorder.clear()
+    view.show_state([22.0, -5.0])
+    commands = recorder.on(view.layer("robot"))
+    assert ("set", [0, "#000000"]) in commands
+    dots = [a for n, a in commands if n == "fillCircle"]
+    assert np.allclose(dots[-1][:2], view.transform.to_pixel([22.0, -5.0]))
+
+
+def test_every_layer_repaints_itself_when_a_new_view_attaches_issue_322(recorder):
+    skill = SKILLS["sim-point"]
+    view = ArmView(skill)
+    view.show_state(skill.start)
+    first_background = recorder.on(view.layer("background"))
+    recorder.clear()
+    # The manager still believes it is drawing on the robot layer (what breaks #322) ...
+    import ipycanvas
+    ipycanvas.canvas._CANVAS_MANAGER._current_canvas = view.layer("background")
+    client_ready(view.layer("background"))
+    # ... yet the repaint names its canvas first, and draws the same background again.
+    first = recorder.messages[0][0]
+    assert first[0][0] == ipycanvas.canvas.COMMANDS["switchCanvas"]
+    assert recorder.on(view.layer("background")) == first_background
+    recorder.clear()
+    client_ready(view.layer("robot"))
+    assert path_points(recorder.on(view.layer("robot"))), "the robot layer redraws the arm"
+
+
+def test_pointer_drag_from_the_end_effector_gives_the_action_within_a_pixel(recorder):
+    skill = SKILLS["sim-point"]
+    states = skill.query_states(seed=3)
+    teach = TeachingCanvas(skill, states)
+    view = teach.view
+    ee = view.end_effector_pixel(states[0])
+    target = ee + np.array([47.3, -21.8])
+    pointer(view.canvas, "mouse_down", *ee)
+    recorder.clear()
+    pointer(view.canvas, "mouse_move", *(ee + [20, -10]))
+    assert len(recorder.messages) == 1, "one message per drag move"
+    assert recorder.on(view.layer("arrows")) and not recorder.on(view.layer("robot")), "only the arrow layer"
+    pointer(view.canvas, "mouse_up", *target)
+    expected = view.transform.action_from_drag(skill.end_effector(states[:1])[0][0], target)
+    assert np.allclose(teach.pending_action, expected)
+    one_pixel = 1.0 / view.transform.pixels_per_action
+    tip = view.transform.action_tip(skill.end_effector(states[:1])[0][0], teach.pending_action)
+    assert np.hypot(*(tip - target)) < 1e-9
+    assert abs(teach.pending_action[0] - 47.3 * one_pixel) < one_pixel
+    assert abs(teach.pending_action[1] - 21.8 * one_pixel) < one_pixel, "pixel y down is world y up"
+    assert "State 1 of 5" in teach.readout.value and "N" in teach.readout.value
+
+
+def test_moves_without_a_press_send_nothing_and_presses_away_from_the_marker_do_not_draw(recorder):
+    skill = SKILLS["sim-point"]
+    teach = TeachingCanvas(skill, skill.query_states(seed=0))
+    ee = teach.view.end_effector_pixel(teach.current_state)
+    recorder.clear()
+    for dx in range(30):
+        pointer(teach.view.canvas, "mouse_move", ee[0] + dx, ee[1])
+    assert recorder.messages == []
+    pointer(teach.view.canvas, "mouse_down", ee[0] + 100, ee[1] + 100)
+    pointer(teach.view.canvas, "mouse_move", ee[0] + 120, ee[1] + 100)
+    assert teach.pending_action is None and "end-effector" in teach.hint.value
+
+
+def test_an_arrow_can_be_redrawn_before_it_is_confirmed_and_then_the_next_state_shows():
+    skill = SKILLS["uarm-point"]
+    teach = TeachingCanvas(skill, skill.query_states(seed=1))
+    ee = teach.view.end_effector_pixel(teach.current_state)
+    for end in (ee + [30, 0], ee + [0, 40]):
+        pointer(teach.view.canvas, "mouse_down", *ee)
+        pointer(teach.view.canvas, "mouse_up", *end)
+    assert teach.pending_action[0] == pytest.approx(0.0, abs=1e-9) and teach.pending_action[1] < 0
+    confirmed = teach.confirm()
+    assert confirmed.method == "pointer" and confirmed.redraws == 2
+    assert confirmed.time_to_first_input_s >= 0 and confirmed.drawing_duration_s >= 0
+    assert teach.state_index == 1 and teach.demonstrations == [list(confirmed.action)]
+    assert teach.pending_action is None
+
+
+def test_keyboard_and_numeric_entry_set_the_same_kind_of_action():
+    skill = SKILLS["sim-line"]
+    teach = TeachingCanvas(skill, skill.query_states(seed=0))
+    step = teach.view.transform.nice_action_step() / 10
+    for name in ("ArrowRight", "ArrowRight", "ArrowUp"):
+        key(teach.view.canvas, name)
+    assert np.allclose(teach.pending_action, [2 * step, step])
+    key(teach.view.canvas, "Escape")
+    assert teach.pending_action is None
+    teach.entry_mode.value = "polar"
+    teach.first_entry.value, teach.second_entry.value = 90.0, 2.0
+    teach.set_button.click()
+    assert np.allclose(teach.pending_action, [0.0, 2.0], atol=1e-12)
+    key(teach.view.canvas, "Enter")
+    assert teach.state_index == 1 and np.allclose(teach.demonstrations[0], [0.0, 2.0], atol=1e-12)
+
+
+def test_code_can_set_an_action_and_bad_actions_are_refused():
+    skill = SKILLS["sim-point"]
+    teach = TeachingCanvas(skill, skill.query_states(seed=0))
+    teach.set_action([0.5, -1.0])
+    assert teach.pending_action == [0.5, -1.0]
+    with pytest.raises(ValueError, match="action"):
+        teach.set_action([1.0, float("nan")])
+    with pytest.raises(ValueError, match="query_states"):
+        TeachingCanvas(skill, np.zeros((3, 2)))
+
+
+def test_reproduction_is_one_message_with_a_frame_per_sixtieth_of_a_second(recorder):
+    skill = SKILLS["sim-point"]
+    player = ReproductionPlayer(skill)
+    trajectory = skill.reproduce(skill.theta * 0.5)
+    recorder.clear()
+    player.play(trajectory, error=0.5, ghost=skill.reproduce(skill.theta))
+    assert len(recorder.messages) == 1
+    sleeps = [a[0] for c, n, a in recorder.commands(0) if n == "sleep"]
+    assert len(sleeps) == round(trajectory.times[-1] * 60) and sleeps[0] == pytest.approx(1000 / 60, abs=0.01)
+    assert recorder.message_bytes(0) <= 150_000
+    robot = recorder.on(player.view.layer("robot"))
+    final_tip = player.view.transform.to_pixel(trajectory.positions[-1])
+    assert near([a[:2] for n, a in robot[-12:] if n == "fillCircle"], final_tip, 0.01), "ends at the last state"
+    assert "0.5" in player.error_label.value and not player.replay_button.disabled
+    recorder.clear()
+    player.replay_button.click()
+    assert len(recorder.messages) == 1
+
+
+def test_a_diverging_skill_is_shown_as_diverged(recorder):
+    skill = SKILLS["sim-point"]
+    player = ReproductionPlayer(skill)
+    unstable = -5.0 * np.asarray(skill.theta)
+    trajectory = skill.reproduce(unstable)
+    assert trajectory.diverged, "precondition: this policy pushes the arm away"
+    player.play(trajectory, error=10.0)
+    assert "diverged" in player.status.value
+    strokes = [a for n, a in recorder.on(player.view.layer("robot")) if n == "strokeLine"]
+    assert len(strokes) >= 2, "a cross at the point of divergence"
