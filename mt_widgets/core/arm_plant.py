@@ -7,7 +7,8 @@ import numpy as np
 from . import arm_rollout
 from .arm import TwoLinkArm
 from .features import EndEffectorFeatures
-from .plants import ContinuousPlant, _batch, _check_rollout
+from .plants import ContinuousPlant, _check_rollout
+from .trajectory import TrajectoryBatch
 from .validation import as_count, as_positive
 from .workspace import Box
 
@@ -73,11 +74,11 @@ class ArmPlant(ContinuousPlant):
             return super().rollout(thetas, feature_map, start, duration, record_every)
         thetas, start, n_steps = _check_rollout(self, thetas, feature_map, start, duration, self.control_rate)
         record_every = as_count("record_every", record_every if record_every is not None else 1)
-        states, actions, lengths, diverged_step = arm_rollout.allocate_outputs(len(thetas), n_steps, record_every)
         dt = 1.0 / self.control_rate
-        arm_rollout.rollout_arm_linear_policy(np.ascontiguousarray(thetas), start, self.arm.parameters.as_array(),
-                                              self.arm.gravity_compensation, dt, n_steps, record_every,
-                                              self.max_joint_speed, states, actions, lengths, diverged_step)
+        states, positions, velocities, actions, lengths, diverged_step = arm_rollout.rollout(
+            np.ascontiguousarray(thetas), start, self.arm.parameters.as_array(), self.arm.gravity_compensation,
+            dt, n_steps, record_every, self.max_joint_speed)
         diverged_at = np.where(diverged_step >= 0, diverged_step * dt, np.nan)
         times = np.arange(states.shape[1]) * record_every * dt
-        return _batch(self, times, states, actions, diverged_at, lengths)
+        return TrajectoryBatch(times, states, positions, velocities, actions, diverged_step >= 0, diverged_at,
+                               lengths, self.units)

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 
 @njit(cache=True, fastmath=False)
@@ -62,9 +62,66 @@ def _policy_torque(p, theta, compensate, q1, q2, qd1, qd2):
 
 
 @njit(cache=True)
-def rollout_arm_linear_policy(thetas, start, params, compensate, dt, n_steps, record_every, max_joint_speed,
-                              out_states, out_actions, lengths, diverged_step):
-    """Rolls out B policies from one start state, writing into preallocated outputs.
+def _rollout_one(b, thetas, start, params, compensate, dt, n_steps, record_every, max_joint_speed,
+                 out_states, out_positions, out_velocities, out_actions, lengths, diverged_step):
+    n_samples = out_states.shape[1]
+    theta = thetas[b]
+    l1, l2 = params[0], params[1]
+    q1, q2, qd1, qd2 = start[0], start[1], start[2], start[3]
+    sample = 0
+    diverged_step[b] = -1
+    for k in range(n_steps + 1):
+        u1, u2, tau1, tau2 = _policy_torque(params, theta, compensate, q1, q2, qd1, qd2)
+        if k % record_every == 0 and sample < n_samples:
+            out_states[b, sample, 0] = q1
+            out_states[b, sample, 1] = q2
+            out_states[b, sample, 2] = qd1
+            out_states[b, sample, 3] = qd2
+            s1, c1, s12, c12 = math.sin(q1), math.cos(q1), math.sin(q1 + q2), math.cos(q1 + q2)
+            out_positions[b, sample, 0] = l1 * c1 + l2 * c12
+            out_positions[b, sample, 1] = l1 * s1 + l2 * s12
+            out_velocities[b, sample, 0] = (-l1 * s1 - l2 * s12) * qd1 - l2 * s12 * qd2
+            out_velocities[b, sample, 1] = (l1 * c1 + l2 * c12) * qd1 + l2 * c12 * qd2
+            out_actions[b, sample, 0] = u1
+            out_actions[b, sample, 1] = u2
+            sample += 1
+        if k == n_steps:
+            break
+        a1, a2 = _acceleration(params, q1, q2, qd1, qd2, tau1, tau2)
+        k1q1, k1q2, k1v1, k1v2 = qd1, qd2, a1, a2
+        h = 0.5 * dt
+        a1, a2 = _acceleration(params, q1 + h * k1q1, q2 + h * k1q2, qd1 + h * k1v1, qd2 + h * k1v2, tau1, tau2)
+        k2q1, k2q2, k2v1, k2v2 = qd1 + h * k1v1, qd2 + h * k1v2, a1, a2
+        a1, a2 = _acceleration(params, q1 + h * k2q1, q2 + h * k2q2, qd1 + h * k2v1, qd2 + h * k2v2, tau1, tau2)
+        k3q1, k3q2, k3v1, k3v2 = qd1 + h * k2v1, qd2 + h * k2v2, a1, a2
+        a1, a2 = _acceleration(params, q1 + dt * k3q1, q2 + dt * k3q2, qd1 + dt * k3v1, qd2 + dt * k3v2,
+                               tau1, tau2)
+        k4q1, k4q2, k4v1, k4v2 = qd1 + dt * k3v1, qd2 + dt * k3v2, a1, a2
+        w = dt / 6.0
+        n1 = q1 + w * (k1q1 + 2.0 * k2q1 + 2.0 * k3q1 + k4q1)
+        n2 = q2 + w * (k1q2 + 2.0 * k2q2 + 2.0 * k3q2 + k4q2)
+        n3 = qd1 + w * (k1v1 + 2.0 * k2v1 + 2.0 * k3v1 + k4v1)
+        n4 = qd2 + w * (k1v2 + 2.0 * k2v2 + 2.0 * k3v2 + k4v2)
+        if not (math.isfinite(n1) and math.isfinite(n2) and abs(n3) <= max_joint_speed
+                and abs(n4) <= max_joint_speed):
+            diverged_step[b] = k + 1
+            break
+        q1, q2, qd1, qd2 = n1, n2, n3, n4
+    lengths[b] = sample
+    # Freeze a stopped rollout at its last valid sample so the batch arrays stay finite.
+    for s in range(sample, n_samples):
+        for i in range(4):
+            out_states[b, s, i] = out_states[b, sample - 1, i]
+        for i in range(2):
+            out_positions[b, s, i] = out_positions[b, sample - 1, i]
+            out_velocities[b, s, i] = 0.0
+            out_actions[b, s, i] = 0.0
+
+
+@njit(cache=True)
+def rollout_serial(thetas, start, params, compensate, dt, n_steps, record_every, max_joint_speed,
+                   out_states, out_positions, out_velocities, out_actions, lengths, diverged_step):
+    """Rolls out B policies from one start state one after another, into preallocated outputs.
 
     Args:
         thetas: (B, 2, 5) policy parameters.
@@ -73,58 +130,38 @@ def rollout_arm_linear_policy(thetas, start, params, compensate, dt, n_steps, re
         compensate: add g(q_k) to the held torque.
         dt: step in seconds; n_steps: number of steps; record_every: steps between samples.
         max_joint_speed: a joint speed above this (rad/s) counts as divergence.
-        out_states: (B, T, 4), out_actions: (B, T, 2) with T = n_steps // record_every + 1.
+        out_states (B, T, 4), out_positions (B, T, 2), out_velocities (B, T, 2), out_actions (B, T, 2)
+            with T = n_steps // record_every + 1.
         lengths: (B,) int, receives the number of valid samples.
         diverged_step: (B,) int, receives the step at which divergence was found, or -1.
     """
-    n_samples = out_states.shape[1]
     for b in range(thetas.shape[0]):
-        theta = thetas[b]
-        q1, q2, qd1, qd2 = start[0], start[1], start[2], start[3]
-        sample = 0
-        diverged_step[b] = -1
-        for k in range(n_steps + 1):
-            u1, u2, tau1, tau2 = _policy_torque(params, theta, compensate, q1, q2, qd1, qd2)
-            if k % record_every == 0 and sample < n_samples:
-                out_states[b, sample, 0] = q1
-                out_states[b, sample, 1] = q2
-                out_states[b, sample, 2] = qd1
-                out_states[b, sample, 3] = qd2
-                out_actions[b, sample, 0] = u1
-                out_actions[b, sample, 1] = u2
-                sample += 1
-            if k == n_steps:
-                break
-            a1, a2 = _acceleration(params, q1, q2, qd1, qd2, tau1, tau2)
-            k1q1, k1q2, k1v1, k1v2 = qd1, qd2, a1, a2
-            h = 0.5 * dt
-            a1, a2 = _acceleration(params, q1 + h * k1q1, q2 + h * k1q2, qd1 + h * k1v1, qd2 + h * k1v2, tau1, tau2)
-            k2q1, k2q2, k2v1, k2v2 = qd1 + h * k1v1, qd2 + h * k1v2, a1, a2
-            a1, a2 = _acceleration(params, q1 + h * k2q1, q2 + h * k2q2, qd1 + h * k2v1, qd2 + h * k2v2, tau1, tau2)
-            k3q1, k3q2, k3v1, k3v2 = qd1 + h * k2v1, qd2 + h * k2v2, a1, a2
-            a1, a2 = _acceleration(params, q1 + dt * k3q1, q2 + dt * k3q2, qd1 + dt * k3v1, qd2 + dt * k3v2,
-                                   tau1, tau2)
-            k4q1, k4q2, k4v1, k4v2 = qd1 + dt * k3v1, qd2 + dt * k3v2, a1, a2
-            w = dt / 6.0
-            n1 = q1 + w * (k1q1 + 2.0 * k2q1 + 2.0 * k3q1 + k4q1)
-            n2 = q2 + w * (k1q2 + 2.0 * k2q2 + 2.0 * k3q2 + k4q2)
-            n3 = qd1 + w * (k1v1 + 2.0 * k2v1 + 2.0 * k3v1 + k4v1)
-            n4 = qd2 + w * (k1v2 + 2.0 * k2v2 + 2.0 * k3v2 + k4v2)
-            if not (math.isfinite(n1) and math.isfinite(n2) and abs(n3) <= max_joint_speed
-                    and abs(n4) <= max_joint_speed):
-                diverged_step[b] = k + 1
-                break
-            q1, q2, qd1, qd2 = n1, n2, n3, n4
-        lengths[b] = sample
-        # Freeze a stopped rollout at its last valid sample so the batch arrays stay finite.
-        for s in range(sample, n_samples):
-            for i in range(4):
-                out_states[b, s, i] = out_states[b, sample - 1, i]
-            out_actions[b, s, 0] = 0.0
-            out_actions[b, s, 1] = 0.0
+        _rollout_one(b, thetas, start, params, compensate, dt, n_steps, record_every, max_joint_speed,
+                     out_states, out_positions, out_velocities, out_actions, lengths, diverged_step)
 
 
-def allocate_outputs(batch: int, n_steps: int, record_every: int):
-    n_samples = n_steps // record_every + 1
-    return (np.empty((batch, n_samples, 4)), np.empty((batch, n_samples, 2)),
-            np.empty(batch, dtype=np.int64), np.empty(batch, dtype=np.int64))
+@njit(cache=True, parallel=True)
+def rollout_parallel(thetas, start, params, compensate, dt, n_steps, record_every, max_joint_speed,
+                     out_states, out_positions, out_velocities, out_actions, lengths, diverged_step):
+    """``rollout_serial`` with the batch spread over all cores; each rollout's arithmetic is identical."""
+    for b in prange(thetas.shape[0]):
+        _rollout_one(b, thetas, start, params, compensate, dt, n_steps, record_every, max_joint_speed,
+                     out_states, out_positions, out_velocities, out_actions, lengths, diverged_step)
+
+
+#: Batches at least this large are spread over cores; below it threads cost more than they save.
+PARALLEL_FROM = 8
+
+
+def rollout(thetas, start, params, compensate, dt, n_steps, record_every, max_joint_speed):
+    """Allocates the outputs and runs the serial or parallel kernel.
+
+    Returns:
+        (states, positions, velocities, actions, lengths, diverged_step) as described above.
+    """
+    batch, n_samples = thetas.shape[0], n_steps // record_every + 1
+    outputs = (np.empty((batch, n_samples, 4)), np.empty((batch, n_samples, 2)), np.empty((batch, n_samples, 2)),
+               np.empty((batch, n_samples, 2)), np.empty(batch, dtype=np.int64), np.empty(batch, dtype=np.int64))
+    kernel = rollout_parallel if batch >= PARALLEL_FROM else rollout_serial
+    kernel(thetas, start, params, compensate, dt, n_steps, record_every, max_joint_speed, *outputs)
+    return outputs
