@@ -1,0 +1,506 @@
+"""The crash-safe study log: one append-only JSON-lines file per participant, in a study folder.
+
+A study folder holds:
+
+- ``study.json``: the study's name, its protocol (plain data and source text), the protocol
+  hash, the software version and the creation time. Written once (exclusive creation) and
+  never changed: a folder runs exactly one protocol, so logs of different protocols never mix.
+- ``_enrolment.jsonl``: one line per enrolled participant (ID, enrolment number, group, how the
+  group was assigned, time), appended under a lock so two processes never draw the same
+  enrolment number. Participant IDs cannot start with "_", so no log can be named like it.
+- ``<participant>.jsonl``: the participant's events, one JSON object a line.
+- ``.locks/``: lock files (``fcntl.flock``); a lock dies with its process, so a crash never
+  leaves a folder locked.
+
+Every event is written with one ``os.write`` on an ``O_APPEND`` descriptor and ``fsync``-ed
+before ``append`` returns, so the interface moves on only once the event is on disk (as
+PsychoPy's experiment handler saves each trial as it completes). A log file is created with
+``O_EXCL`` (never overwritten) and written only while holding its participant's lock (never
+written by two processes). A crash can leave at most the last line torn; loading drops it,
+and reopening for writing first ends it with a newline so the next event starts on a line of
+its own; the ``session_resumed`` event that follows records the repair, and only such
+repaired lines are tolerated in the middle of a log.
+
+Events are JSON objects with at least ``seq`` (0-based, consecutive), ``type``, ``time``
+(ISO 8601 UTC), ``participant`` and ``study``; see ``mt_widgets.study.session`` for the types.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import errno
+import fcntl
+import json
+import math
+import os
+import secrets
+import shutil
+import time
+from pathlib import Path
+
+import numpy as np
+
+import mt_widgets
+
+from .participants import ParticipantIdError, block_assignment, validate_participant_id
+from .protocol import Protocol, protocol_from_data
+
+STUDY_FILE = "study.json"
+ENROLMENT_FILE = "_enrolment.jsonl"
+LOCK_FOLDER = ".locks"
+#: Refuse to start a participant with less free space than this in the log folder (bytes): a
+#: participant's log is about 50 kB, so this leaves room for hundreds.
+MIN_FREE_BYTES = 20 * 1024 * 1024
+
+
+class LogError(RuntimeError):
+    """A log or study folder that cannot be used as asked (in use, corrupt, mismatched)."""
+
+
+class LogFolderError(LogError):
+    """A study folder that cannot be written: refused before any participant starts."""
+
+
+def utc_now() -> str:
+    """The current time as ISO 8601 UTC with milliseconds, e.g. '2025-01-31T14:03:07.123Z'."""
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="milliseconds").replace("+00:00", "Z")
+
+
+def to_jsonable(value):
+    """Plain JSON data from numpy arrays and scalars, tuples and dicts; non-finite floats -> None."""
+    if isinstance(value, np.ndarray):
+        return to_jsonable(value.tolist())
+    if isinstance(value, dict):
+        return {str(k): to_jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [to_jsonable(v) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        value = float(value)
+        return value if math.isfinite(value) else None
+    if value is None or isinstance(value, str):
+        return value
+    raise TypeError(f"value: expected JSON-like data (numbers, text, lists, dicts, numpy arrays), "
+                    f"got {type(value).__name__}")
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    """Writes every byte (regular files take it in one call; the loop covers signals)."""
+    view = memoryview(data)
+    while view:
+        written = os.write(fd, view)
+        view = view[written:]
+
+
+def _fsync_folder(folder: Path) -> None:
+    # A new file's directory entry is only durable once the directory itself is synced.
+    fd = os.open(folder, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+class _Lock:
+    """An exclusive ``flock`` on ``path``, waiting up to ``timeout_s`` seconds."""
+
+    def __init__(self, path: Path, what: str, timeout_s: float = 0.0):
+        path.parent.mkdir(exist_ok=True)
+        self.fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        deadline = time.monotonic() + timeout_s
+        while True:
+            try:
+                fcntl.flock(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                return
+            except OSError as error:
+                if error.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                    os.close(self.fd)
+                    raise
+                if time.monotonic() >= deadline:
+                    os.close(self.fd)
+                    raise LogError(f"{what} is in use by another session (a second tab, kernel or process); "
+                                   f"close it first, or wait for it to end") from None
+                time.sleep(0.05)
+
+    def release(self) -> None:
+        if self.fd is not None:
+            os.close(self.fd)  # closing the descriptor releases the flock
+            self.fd = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.release()
+
+
+# -- reading --------------------------------------------------------------------------------------
+
+def read_events(path) -> tuple[list[dict], dict]:
+    """Reads a participant log, tolerating a torn last line and repaired torn lines.
+
+    Args:
+        path: the ``<participant>.jsonl`` file.
+
+    Returns:
+        (events, info): the events in order, and ``info`` with ``torn_tail`` (bytes of an
+        unfinished last line, 0 if none) and ``repaired_lines`` (line numbers skipped because a
+        later ``session_resumed`` event records their repair).
+
+    Raises:
+        LogError: a line that does not parse in the middle of the log and was not repaired,
+            or events out of sequence; naming the file and the line.
+    """
+    path = Path(path)
+    data = path.read_bytes()
+    lines = data.split(b"\n")
+    # The last element is what follows the final newline: empty, or a torn line.
+    torn_tail = len(lines[-1])
+    complete = lines[:-1]
+    events: list[dict] = []
+    pending_bad: list[int] = []
+    repaired: list[int] = []
+    for number, raw in enumerate(complete, start=1):
+        if not raw.strip():
+            pending_bad.append(number)  # an empty line can only come from a repaired tear
+            continue
+        try:
+            event = json.loads(raw)
+            if not isinstance(event, dict):
+                raise ValueError("not an object")
+        except ValueError:
+            pending_bad.append(number)
+            continue
+        if pending_bad:
+            if event.get("type") == "session_resumed" and event.get("repaired_torn_line"):
+                repaired.extend(pending_bad)
+                pending_bad = []
+            else:
+                raise LogError(f"{path}, line {pending_bad[0]}: not a JSON event, and no later session_resumed "
+                               f"event records repairing it; the log is damaged")
+        if event.get("seq") != len(events):
+            raise LogError(f"{path}, line {number}: expected event seq {len(events)}, got {event.get('seq')!r}; "
+                           f"events are missing, duplicated or from another log")
+        events.append(event)
+    if torn_tail:
+        # Every byte but the final newline reached the disk: the event is complete, keep it
+        # (its writer had not returned yet, so nothing after it can depend on it either way).
+        try:
+            event = json.loads(lines[-1])
+        except ValueError:
+            event = None
+        if isinstance(event, dict) and event.get("seq") == len(events) and not pending_bad:
+            events.append(event)
+            return events, {"torn_tail": 0, "unterminated": True, "repaired_lines": repaired}
+    if pending_bad:
+        # A torn line already ended with a newline by a resume that crashed before logging.
+        if len(pending_bad) > 1 or pending_bad[0] != len(complete):
+            raise LogError(f"{path}, line {pending_bad[0]}: not a JSON event; the log is damaged")
+        torn_tail += len(complete[-1]) + 1
+    return events, {"torn_tail": torn_tail, "unterminated": False, "repaired_lines": repaired}
+
+
+# -- writing --------------------------------------------------------------------------------------
+
+class ParticipantLog:
+    """One participant's append-only log, held open and locked while a session writes to it.
+
+    Build it with ``StudyFolder.create_log`` / ``StudyFolder.open_log`` (or the class methods
+    ``create`` / ``open``); ``close`` releases the lock.
+
+    Attributes:
+        path: the log file.
+        events: every event, as read at opening plus those appended since.
+        repaired_torn_bytes: length of a torn last line found at opening (0 if none); the next
+            appended event should record it (``session_resumed`` does).
+    """
+
+    def __init__(self, path: Path, fd: int, lock: _Lock, events: list[dict], repaired_torn_bytes: int):
+        self.path, self._fd, self._lock = path, fd, lock
+        self.events = events
+        self.repaired_torn_bytes = repaired_torn_bytes
+        self.participant = path.stem
+        self.study = events[0]["study"] if events else None
+
+    @classmethod
+    def create(cls, path, study: str, lock_timeout_s: float = 0.0) -> "ParticipantLog":
+        """Creates a new log; refuses if the file exists (a log is never overwritten)."""
+        path = Path(path)
+        lock = _Lock(path.parent / LOCK_FOLDER / (path.stem + ".lock"), f"participant {path.stem!r}", lock_timeout_s)
+        try:
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_APPEND, 0o644)
+        except FileExistsError:
+            lock.release()
+            raise LogError(f"participant {path.stem!r} already has a log at {path}; resume them instead "
+                           f"(a log is never overwritten)") from None
+        except BaseException:
+            lock.release()
+            raise
+        _fsync_folder(path.parent)
+        log = cls(path, fd, lock, [], 0)
+        log.study = study
+        return log
+
+    @classmethod
+    def open(cls, path, lock_timeout_s: float = 0.0) -> "ParticipantLog":
+        """Opens an existing log to continue it, repairing a torn last line."""
+        path = Path(path)
+        lock = _Lock(path.parent / LOCK_FOLDER / (path.stem + ".lock"), f"participant {path.stem!r}", lock_timeout_s)
+        try:
+            if not path.is_file():
+                raise LogError(f"participant {path.stem!r} has no log at {path}")
+            events, info = read_events(path)
+            fd = os.open(path, os.O_WRONLY | os.O_APPEND)
+            torn = info["torn_tail"]
+            if (torn or info["unterminated"]) and not path.read_bytes().endswith(b"\n"):
+                # End the torn line so the next event starts a line of its own; its bytes stay
+                # (append-only) and the session_resumed event records the repair.
+                _write_all(fd, b"\n")
+                os.fsync(fd)
+        except BaseException:
+            lock.release()
+            raise
+        return cls(path, fd, lock, events, torn)
+
+    def append(self, event_type: str, **fields) -> dict:
+        """Appends one event and returns once it is on disk (written and fsync-ed).
+
+        Args:
+            event_type: the event's ``type``.
+            **fields: its data (numpy arrays become lists).
+
+        Returns:
+            The event as written, with ``seq``, ``type``, ``time``, ``participant`` and ``study``.
+        """
+        if self._fd is None:
+            raise LogError(f"the log of participant {self.participant!r} is closed")
+        event = {"seq": len(self.events), "type": event_type, "time": utc_now(),
+                 "participant": self.participant, "study": self.study}
+        event.update(to_jsonable(fields))
+        line = json.dumps(event, separators=(",", ":"), allow_nan=False, ensure_ascii=True) + "\n"
+        _write_all(self._fd, line.encode("ascii"))
+        os.fsync(self._fd)
+        self.events.append(event)
+        return event
+
+    def close(self) -> None:
+        """Closes the file and releases the participant's lock (idempotent)."""
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
+        self._lock.release()
+
+    @property
+    def closed(self) -> bool:
+        return self._fd is None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:  # at interpreter exit the os module may already be gone
+            pass
+
+
+class MemoryLog:
+    """The same interface as ``ParticipantLog``, kept in memory: for unlogged lessons."""
+
+    def __init__(self, participant: str = "lesson", study: str = "lesson"):
+        self.participant, self.study = participant, study
+        self.events: list[dict] = []
+        self.repaired_torn_bytes = 0
+        self.path = None
+        self.closed = False
+
+    def append(self, event_type: str, **fields) -> dict:
+        event = {"seq": len(self.events), "type": event_type, "time": utc_now(),
+                 "participant": self.participant, "study": self.study}
+        event.update(to_jsonable(fields))
+        self.events.append(event)
+        return event
+
+    def close(self) -> None:
+        self.closed = True
+
+
+# -- the study folder -------------------------------------------------------------------------------
+
+def check_folder_writable(folder) -> Path:
+    """Refuses a log folder that cannot take a log, before any participant starts.
+
+    Creates the folder if needed, then writes, fsyncs and removes a probe file, and checks the
+    free space.
+
+    Raises:
+        LogFolderError: saying why (not a folder, permission denied, read-only, disk full).
+    """
+    folder = Path(folder).expanduser()
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise LogFolderError(f"log folder {folder}: cannot be created ({error.strerror or error})") from None
+    if not folder.is_dir():
+        raise LogFolderError(f"log folder {folder}: expected a folder, found a file")
+    probe = folder / f".write-test-{secrets.token_hex(4)}"
+    try:
+        fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        try:
+            _write_all(fd, b"probe\n")
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        probe.unlink()
+    except OSError as error:
+        raise LogFolderError(f"log folder {folder}: not writable ({error.strerror or error}); choose another "
+                             f"folder before the participant starts") from None
+    free = shutil.disk_usage(folder).free
+    if free < MIN_FREE_BYTES:
+        raise LogFolderError(f"log folder {folder}: only {free // 1024} kB free, expected at least "
+                             f"{MIN_FREE_BYTES // 1024 // 1024} MB")
+    return folder
+
+
+class StudyFolder:
+    """A folder of participant logs for one study and one protocol.
+
+    Use ``StudyFolder.create(folder, protocol)`` for a new study (or to reopen one with the same
+    protocol), ``StudyFolder(folder)`` to open an existing one.
+    """
+
+    def __init__(self, folder):
+        self.folder = Path(folder).expanduser()
+        path = self.folder / STUDY_FILE
+        if not path.is_file():
+            raise LogError(f"folder: {self.folder} holds no {STUDY_FILE}; create the study with "
+                           f"StudyFolder.create(folder, protocol)")
+        self.meta = json.loads(path.read_text(encoding="utf-8"))
+        self.protocol: Protocol = protocol_from_data(self.meta["protocol"], str(path))
+        if self.protocol.hash != self.meta["protocol_hash"]:
+            raise LogError(f"{path}: the stored protocol hash does not match the stored protocol; the file was edited")
+
+    @classmethod
+    def create(cls, folder, protocol: Protocol) -> "StudyFolder":
+        """Creates the study folder for ``protocol``, or reopens it if it runs the same protocol.
+
+        Raises:
+            LogFolderError: the folder is not writable.
+            LogError: the folder already runs a different protocol.
+        """
+        if not isinstance(protocol, Protocol):
+            raise ValueError(f"protocol: expected a Protocol (load_protocol(...)), got {type(protocol).__name__}")
+        folder = check_folder_writable(folder)
+        path = folder / STUDY_FILE
+        meta = {"study": protocol.name, "title": protocol.title, "protocol_hash": protocol.hash,
+                "protocol": protocol.data, "protocol_source": protocol.source_text,
+                "protocol_file": Path(protocol.source).name, "created_at": utc_now(),
+                "software_version": mt_widgets.__version__, "format": 1}
+        text = json.dumps(meta, indent=1, sort_keys=True, allow_nan=False)
+        try:
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        except FileExistsError:
+            study = cls(folder)
+            if study.protocol.hash != protocol.hash:
+                raise LogError(f"folder: {folder} already runs study {study.meta['study']!r} with protocol "
+                               f"{study.protocol.hash[:19]}..., not {protocol.name!r} {protocol.hash[:19]}...; "
+                               f"use a new folder for a different protocol") from None
+            return study
+        try:
+            _write_all(fd, text.encode())
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        _fsync_folder(folder)
+        return cls(folder)
+
+    # -- participants ---------------------------------------------------------------------------
+    def log_path(self, participant_id: str) -> Path:
+        return self.folder / f"{participant_id}.jsonl"
+
+    def enrolments(self) -> list[dict]:
+        """Every enrolment record, in enrolment order."""
+        path = self.folder / ENROLMENT_FILE
+        if not path.exists():
+            return []
+        records = []
+        for number, raw in enumerate(path.read_bytes().split(b"\n"), start=1):
+            if raw.strip():
+                try:
+                    records.append(json.loads(raw))
+                except ValueError:
+                    # Only a torn last line can fail; an enrolment that never reached the disk
+                    # never started a participant.
+                    continue
+        return records
+
+    def enrolment(self, participant_id: str) -> dict:
+        for record in self.enrolments():
+            if record["participant"] == participant_id:
+                return record
+        raise LogError(f"participant_id: {participant_id!r} is not enrolled in study {self.meta['study']!r}")
+
+    def participant_ids(self) -> list[str]:
+        return [record["participant"] for record in self.enrolments()]
+
+    def enrol(self, participant_id: str, group: str | None = None) -> dict:
+        """Enrols a new participant and assigns their group, under the study lock.
+
+        Args:
+            participant_id: a new pseudonymous ID.
+            group: None for the protocol's block randomisation, or a group chosen by the
+                experimenter (recorded as such).
+
+        Returns:
+            The enrolment record: participant, index, group, method, enrolled_at.
+        """
+        check_folder_writable(self.folder)
+        if group is not None and group not in self.protocol.groups:
+            raise ValueError(f"group: expected None (randomised) or one of {list(self.protocol.groups)}, "
+                             f"got {group!r}")
+        with _Lock(self.folder / LOCK_FOLDER / "_study.lock", f"study folder {self.folder}", timeout_s=10.0):
+            records = self.enrolments()
+            existing = [r["participant"] for r in records]
+            existing += [p.stem for p in self.folder.glob("*.jsonl") if not p.name.startswith("_")]
+            validate_participant_id(participant_id, existing)
+            index = len(records)
+            # Block randomisation counts only randomised enrolments, so an experimenter's
+            # manual choice does not shift the sequence everyone else gets.
+            slot = sum(1 for r in records if r["method"] == "block")
+            if group is None:
+                group, method = block_assignment(slot, self.protocol.groups, self.protocol.block_size,
+                                                 self.protocol.assignment_seed), "block"
+            else:
+                method = "experimenter"
+            record = {"participant": participant_id, "index": index, "group": group, "method": method,
+                      "block_slot": slot if method == "block" else None, "enrolled_at": utc_now(),
+                      "protocol_hash": self.protocol.hash}
+            fd = os.open(self.folder / ENROLMENT_FILE, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+            try:
+                _write_all(fd, (json.dumps(record, separators=(",", ":")) + "\n").encode())
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+        return record
+
+    def status(self) -> list[dict]:
+        """For the experimenter: each participant with group and whether their log is complete."""
+        rows = []
+        for record in self.enrolments():
+            path = self.log_path(record["participant"])
+            finished, n_events = False, 0
+            if path.exists():
+                try:
+                    events, _ = read_events(path)
+                    n_events = len(events)
+                    finished = any(e["type"] == "session_finished" for e in events)
+                except LogError:
+                    n_events = -1
+            rows.append({**record, "events": n_events, "finished": finished})
+        return rows

@@ -1,0 +1,558 @@
+"""The session engine: a headless state machine that runs one participant through a protocol.
+
+The engine knows nothing of the paper beyond the protocol file. A protocol unrolls into a
+fixed timeline of steps::
+
+    welcome -> consent -> instructions -> practice (if duration_s > 0)
+    -> for each phase: phase_intro
+         -> for each episode: demonstration x N -> episode_end -> reproduction
+    -> thank_you
+
+Each step is completed by exactly one logged event, and the position in the timeline is a
+pure function of the log (the events are replayed on resume and checked against the
+timeline, so a duplicated or missing event is detected, never silently accepted). A step's
+event is written and fsync-ed before the call that completes it returns, so whatever the
+participant saw last is on disk; after a crash the session continues at the first step
+without its event: the first missing demonstration, with the same query states (read back
+from the log, never redrawn).
+
+Driver API (the widget app, scripts and synthetic teachers all use this)::
+
+    study = StudyFolder.create("logs/pilot", load_protocol("paper-sim"))
+    session = Session.start(study, "P07")          # or Session.resume(study, "P07")
+    while not session.finished:
+        step = session.current_step()
+        if step.kind == "practice":
+            session.finish_practice(duration_s=120.0)
+        elif step.kind == "demonstration":         # step.state, step.query_states, step.guidance
+            feedback = session.submit_demonstration(action, {"time_to_first_input_s": 1.2,
+                                                             "drawing_duration_s": 0.8})
+            # feedback.optimal is the optimal action when step.guidance, else None
+        elif step.kind == "episode_end":
+            result = session.finish_episode()      # theta_hat, teaching_error, trajectory
+        else:                                      # welcome, consent, instructions,
+            session.advance()                      # phase_intro, reproduction
+    session.close()
+
+``Session.lesson(protocol, group=...)`` runs the same engine unlogged, in memory, for lessons.
+
+Event types (besides ``seq``, ``type``, ``time``, ``participant``, ``study``):
+
+- ``session_started``: software_version, protocol_hash, protocol_name, group, enrolment
+  (the enrolment record), lam, numpy_version, python_version.
+- ``session_resumed``: software_version, protocol_hash, at (the step resumed at),
+  repaired_torn_line (bytes of a torn last line ended by this resume; 0 if none).
+- ``screen_done``: screen (welcome, instructions, phase_intro, reproduction), phase_index,
+  phase, episode (where they apply).
+- ``consent_given``.
+- ``practice_started``: skill, duration_s; ``practice_finished``: duration_s (as measured
+  by the caller, seconds).
+- ``episode_started``: phase, phase_index, episode (1-based), skill, guidance (bool),
+  n_demonstrations, query_states (N x state_dim), features (N x S), theta (R x S), lam,
+  optimal (N x R), exact (bool), seed {study_seed, spawn_key}.
+- ``demonstration``: phase, phase_index, episode, index (0-based), state, action, optimal,
+  guidance_shown (bool), time_to_first_input_s, drawing_duration_s, response_time_s (from
+  the state's appearance to the submission, measured by the engine), input (method, redraws,
+  ... as given by the caller).
+- ``episode_finished``: phase, phase_index, episode, skill, guidance, actions (N x R),
+  optimal, theta_hat (R x S), teaching_error, rho1, rho2, bound, residual, contributions
+  (N,), exact, reproduction {diverged, diverged_at, final_position, duration_s}, started_at,
+  duration_s (wall clock from episode_started, interruptions included).
+- ``session_finished``.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import platform
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+import mt_widgets
+from mt_widgets.core import SKILLS, SeedSchedule, analyse_demonstrations
+
+from .log import LogError, MemoryLog, ParticipantLog, StudyFolder
+from .protocol import Phase, Protocol
+
+TEXT_STEPS = ("welcome", "consent", "instructions", "phase_intro", "reproduction", "thank_you")
+#: Timing keys ``submit_demonstration`` reads (seconds, None when unknown).
+TIMING_KEYS = ("time_to_first_input_s", "drawing_duration_s")
+
+
+class SessionStateError(RuntimeError):
+    """A driver call that does not fit the current step (e.g. a second submission)."""
+
+
+@dataclass(frozen=True)
+class _Slot:
+    kind: str
+    phase_index: int | None = None
+    episode: int | None = None   # 1-based within the phase
+    index: int | None = None     # 0-based demonstration within the episode
+
+
+def timeline(protocol: Protocol) -> list[_Slot]:
+    """The protocol unrolled into the steps a participant goes through, in order."""
+    slots = [_Slot("welcome"), _Slot("consent"), _Slot("instructions")]
+    if protocol.practice.duration_s > 0:
+        slots.append(_Slot("practice"))
+    for phase in protocol.phases:
+        slots.append(_Slot("phase_intro", phase.index))
+        for episode in range(1, phase.episodes + 1):
+            slots += [_Slot("demonstration", phase.index, episode, i) for i in range(phase.demonstrations)]
+            slots += [_Slot("episode_end", phase.index, episode), _Slot("reproduction", phase.index, episode)]
+    slots.append(_Slot("thank_you"))
+    return slots
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    """What the learner made of one episode.
+
+    Attributes:
+        theta_hat: (R, S) the learnt policy.
+        teaching_error: E = ||vec(theta_hat) - vec(theta)||.
+        rho1, rho2: the risk decomposition (see ``mt_widgets.core.analyse_demonstrations``).
+        diverged: whether the reproduction left the plant's bounds.
+        trajectory: the reproduction (a ``Trajectory``) from the skill's start.
+    """
+
+    phase: str
+    phase_index: int
+    episode: int
+    skill: str
+    theta_hat: np.ndarray
+    teaching_error: float
+    rho1: float
+    rho2: float
+    diverged: bool
+    trajectory: object = field(repr=False)
+
+
+@dataclass(frozen=True)
+class Feedback:
+    """What ``submit_demonstration`` returns: the optimal action only where guidance is shown."""
+
+    index: int
+    guidance: bool
+    optimal: np.ndarray | None
+    action: np.ndarray
+
+
+@dataclass(frozen=True)
+class Step:
+    """The step a participant is at, with what a view needs to show it.
+
+    Attributes:
+        kind: welcome, consent, instructions, practice, phase_intro, demonstration,
+            episode_end, reproduction or thank_you.
+        text: the protocol's text for this step (empty for demonstrations).
+        phase, phase_index: the phase id ("P3") and its 0-based index, or None.
+        episode, n_episodes: 1-based episode within the phase, and the phase's episodes.
+        index, n_demonstrations: 0-based demonstration within the episode, and per episode.
+        skill: the key of the skill taught (or practised).
+        query_states: (N, state_dim) the episode's query states.
+        state: (state_dim,) the current query state.
+        actions: the actions already given in this episode (to restore a view on resume).
+        guidance: whether guidance follows each demonstration in this episode.
+        duration_s: the practice time.
+        result: the ``EpisodeResult`` a reproduction step shows.
+    """
+
+    kind: str
+    text: str = ""
+    phase: str | None = None
+    phase_index: int | None = None
+    episode: int | None = None
+    n_episodes: int | None = None
+    index: int | None = None
+    n_demonstrations: int | None = None
+    skill: str | None = None
+    query_states: np.ndarray | None = None
+    state: np.ndarray | None = None
+    actions: tuple = ()
+    guidance: bool = False
+    duration_s: float | None = None
+    result: EpisodeResult | None = None
+
+
+def _parse_time(stamp: str) -> float:
+    return _dt.datetime.fromisoformat(stamp.replace("Z", "+00:00")).timestamp()
+
+
+def _check_seconds(name: str, value):
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) \
+            or not math.isfinite(value) or value < 0:
+        raise ValueError(f"timings[{name!r}]: expected None or a non-negative number of seconds, got {value!r}")
+    return float(value)
+
+
+class Session:
+    """One participant's run through a protocol. Build with ``start``, ``resume`` or ``lesson``."""
+
+    def __init__(self, protocol: Protocol, log, group: str, enrolment: dict, folder: StudyFolder | None = None):
+        self.protocol, self.log, self.group, self.enrolment, self.folder = protocol, log, group, enrolment, folder
+        self._slots = timeline(protocol)
+        self._position = 0
+        self._episodes: dict[tuple[int, int], dict] = {}
+        self._actions: dict[tuple[int, int], list[np.ndarray]] = {}
+        self._finished_episodes: dict[tuple[int, int], dict] = {}
+        self._trajectories: dict[tuple[int, int], object] = {}
+        self._entered_at = time.monotonic()
+        self._replay(log.events)
+
+    # -- construction -----------------------------------------------------------------------------
+    @classmethod
+    def start(cls, study: StudyFolder, participant_id: str, group: str | None = None) -> "Session":
+        """Enrols a new participant (validating the ID, assigning the group) and starts their log.
+
+        Args:
+            study: the study folder.
+            participant_id: a new pseudonymous ID.
+            group: None for the protocol's block randomisation, or the experimenter's choice.
+        """
+        if not isinstance(study, StudyFolder):
+            raise ValueError(f"study: expected a StudyFolder, got {type(study).__name__}")
+        enrolment = study.enrol(participant_id, group)
+        log = ParticipantLog.create(study.log_path(participant_id), study.meta["study"])
+        return cls._begin(study, log, enrolment)
+
+    @classmethod
+    def resume(cls, study: StudyFolder, participant_id: str, lock_timeout_s: float = 3.0) -> "Session":
+        """Continues an enrolled participant at the first step their log does not record.
+
+        Args:
+            study: the study folder.
+            participant_id: an enrolled participant.
+            lock_timeout_s: how long to wait for a previous kernel of the same participant to
+                let go of the log (a reloaded page's old kernel may take a moment to end).
+        """
+        if not isinstance(study, StudyFolder):
+            raise ValueError(f"study: expected a StudyFolder, got {type(study).__name__}")
+        enrolment = study.enrolment(participant_id)
+        path = study.log_path(participant_id)
+        try:
+            log = ParticipantLog.open(path, lock_timeout_s=lock_timeout_s)
+        except LogError:
+            if path.exists():
+                raise
+            # Enrolled, then stopped before the log was created: start the log now.
+            log = ParticipantLog.create(path, study.meta["study"], lock_timeout_s=lock_timeout_s)
+        log.study = study.meta["study"]
+        if not log.events:
+            return cls._begin(study, log, enrolment)
+        first = log.events[0]
+        if first.get("type") != "session_started" or first.get("protocol_hash") != study.protocol.hash:
+            log.close()
+            raise LogError(f"participant {participant_id!r}: the log was not started with this study's protocol "
+                           f"({study.protocol.hash[:19]}...); it will not be continued")
+        session = cls(study.protocol, log, first["group"], enrolment, study)
+        log.append("session_resumed", software_version=mt_widgets.__version__, protocol_hash=study.protocol.hash,
+                   at=session._describe(session._slot), repaired_torn_line=log.repaired_torn_bytes)
+        session._enter()
+        return session
+
+    @classmethod
+    def _begin(cls, study, log, enrolment) -> "Session":
+        log.append("session_started", software_version=mt_widgets.__version__, protocol_hash=study.protocol.hash,
+                   protocol_name=study.protocol.name, group=enrolment["group"], enrolment=enrolment,
+                   lam=study.protocol.lam, numpy_version=np.__version__, python_version=platform.python_version())
+        session = cls(study.protocol, log, enrolment["group"], enrolment, study)
+        session._enter()
+        return session
+
+    @classmethod
+    def lesson(cls, protocol: Protocol, group: str | None = None, participant: str = "lesson") -> "Session":
+        """The same engine, unlogged (events kept in memory): for a guided lesson.
+
+        Args:
+            protocol: what to run.
+            group: which group's conditions to show (default: the first group, which sees
+                guidance where the protocol gives any).
+        """
+        if not isinstance(protocol, Protocol):
+            raise ValueError(f"protocol: expected a Protocol, got {type(protocol).__name__}")
+        group = protocol.groups[0] if group is None else group
+        if group not in protocol.groups:
+            raise ValueError(f"group: expected one of {list(protocol.groups)}, got {group!r}")
+        log = MemoryLog(participant, protocol.name)
+        enrolment = {"participant": participant, "index": 0, "group": group, "method": "lesson"}
+        log.append("session_started", software_version=mt_widgets.__version__, protocol_hash=protocol.hash,
+                   protocol_name=protocol.name, group=group, enrolment=enrolment, lam=protocol.lam,
+                   numpy_version=np.__version__, python_version=platform.python_version())
+        session = cls(protocol, log, group, enrolment)
+        session._enter()
+        return session
+
+    # -- replay --------------------------------------------------------------------------------------
+    def _completes(self, event: dict) -> _Slot | None:
+        kind = event["type"]
+        if kind == "screen_done":
+            return _Slot(event["screen"], event.get("phase_index"), event.get("episode"))
+        if kind == "consent_given":
+            return _Slot("consent")
+        if kind == "practice_finished":
+            return _Slot("practice")
+        if kind == "demonstration":
+            return _Slot("demonstration", event["phase_index"], event["episode"], event["index"])
+        if kind == "episode_finished":
+            return _Slot("episode_end", event["phase_index"], event["episode"])
+        return None
+
+    def _replay(self, events: list[dict]) -> None:
+        for event in events:
+            slot = self._completes(event)
+            if event["type"] == "episode_started":
+                self._episodes[(event["phase_index"], event["episode"])] = event
+                continue
+            if slot is None:
+                continue
+            expected = self._slots[self._position] if self._position < len(self._slots) else None
+            if slot != expected:
+                raise LogError(f"event seq {event['seq']} ({event['type']}) completes {self._describe(slot)}, "
+                               f"but the protocol expects {self._describe(expected)} next; the log does not match "
+                               f"this protocol or holds a duplicate")
+            if slot.kind == "demonstration":
+                self._actions.setdefault((slot.phase_index, slot.episode), []).append(np.asarray(event["action"]))
+            if slot.kind == "episode_end":
+                self._finished_episodes[(slot.phase_index, slot.episode)] = event
+            self._position += 1
+
+    def _describe(self, slot: _Slot | None) -> str:
+        if slot is None:
+            return "the end of the protocol"
+        where = []
+        if slot.phase_index is not None:
+            where.append(self.protocol.phases[slot.phase_index].id)
+        if slot.episode is not None:
+            where.append(f"episode {slot.episode}")
+        if slot.index is not None:
+            where.append(f"demonstration {slot.index + 1}")
+        return slot.kind + (f" ({', '.join(where)})" if where else "")
+
+    # -- entering a step ----------------------------------------------------------------------------
+    @property
+    def _slot(self) -> _Slot:
+        return self._slots[self._position]
+
+    def _phase(self, slot: _Slot) -> Phase:
+        return self.protocol.phases[slot.phase_index]
+
+    def _enter(self) -> None:
+        """Logs what a step needs before it is shown (query states, practice start, the end)."""
+        slot = self._slot
+        self._entered_at = time.monotonic()
+        if slot.kind == "demonstration" and (slot.phase_index, slot.episode) not in self._episodes:
+            self._start_episode(slot)
+        elif slot.kind == "practice":
+            self.log.append("practice_started", skill=self.protocol.practice.skill,
+                            duration_s=self.protocol.practice.duration_s)
+        elif slot.kind == "thank_you" and not any(e["type"] == "session_finished" for e in self.log.events):
+            self.log.append("session_finished")
+
+    def _start_episode(self, slot: _Slot) -> None:
+        phase = self._phase(slot)
+        skill = SKILLS[phase.skill]
+        participant = self.enrolment["index"] if self.protocol.query_states == "per-participant" else None
+        seed = SeedSchedule(self.protocol.seed).seed(phase.states_index, slot.episode - 1, participant)
+        states = skill.query_states(seed=seed, n=phase.demonstrations)
+        features = skill.features(states)
+        # The optimal actions do not depend on the demonstrated ones: analysing zero actions
+        # gives them (and 'exact') with numpy alone, which keeps a resumed process from paying
+        # for loading a compiled kernel before the first state appears.
+        teaching = analyse_demonstrations(features, np.zeros((len(states), skill.plant.action_dim)), skill.theta,
+                                          self.protocol.lam)
+        optimal, exact = teaching.optimal, teaching.exact
+        event = self.log.append(
+            "episode_started", phase=phase.id, phase_index=phase.index, episode=slot.episode, skill=phase.skill,
+            guidance=phase.guidance_for(self.group), n_demonstrations=phase.demonstrations, query_states=states,
+            features=features, theta=skill.theta, lam=self.protocol.lam, optimal=optimal, exact=exact,
+            seed={"study_seed": self.protocol.seed, "spawn_key": list(seed.spawn_key)})
+        self._episodes[(phase.index, slot.episode)] = event
+
+    # -- reading the state ----------------------------------------------------------------------------
+    @property
+    def participant(self) -> str:
+        return self.enrolment["participant"]
+
+    @property
+    def finished(self) -> bool:
+        """True at the thank-you step: every step of the protocol is logged."""
+        return self._slot.kind == "thank_you"
+
+    @property
+    def events(self) -> list[dict]:
+        return list(self.log.events)
+
+    def progress(self) -> dict:
+        """Episodes done and in all, and demonstrations done in the current episode."""
+        done = len(self._finished_episodes)
+        slot = self._slot
+        in_episode = len(self._actions.get((slot.phase_index, slot.episode), [])) if slot.episode else 0
+        return {"episodes_done": done, "episodes_total": self.protocol.n_episodes,
+                "demonstrations_done": in_episode}
+
+    def current_step(self) -> Step:
+        """The step to show now (see ``Step``)."""
+        slot = self._slot
+        texts = self.protocol.texts
+        if slot.kind in ("welcome", "consent", "instructions", "thank_you"):
+            return Step(slot.kind, texts[slot.kind if slot.kind != "thank_you" else "thank_you"])
+        if slot.kind == "practice":
+            practice = self.protocol.practice
+            return Step("practice", practice.text, skill=practice.skill, duration_s=practice.duration_s)
+        phase = self._phase(slot)
+        common = dict(phase=phase.id, phase_index=phase.index, n_episodes=phase.episodes,
+                      n_demonstrations=phase.demonstrations, skill=phase.skill)
+        if slot.kind == "phase_intro":
+            return Step("phase_intro", phase.instructions, **common)
+        key = (slot.phase_index, slot.episode)
+        started = self._episodes[key]
+        states = np.asarray(started["query_states"], dtype=float)
+        actions = tuple(self._actions.get(key, []))
+        common.update(episode=slot.episode, query_states=states, actions=actions, guidance=started["guidance"])
+        if slot.kind == "demonstration":
+            return Step("demonstration", **common, index=slot.index, state=states[slot.index])
+        if slot.kind == "episode_end":
+            return Step("episode_end", **common)
+        return Step("reproduction", texts["reproduction"], **common, result=self._result(key))
+
+    def _result(self, key) -> EpisodeResult:
+        event = self._finished_episodes[key]
+        if key not in self._trajectories:
+            skill = SKILLS[event["skill"]]
+            self._trajectories[key] = skill.reproduce(np.asarray(event["theta_hat"]),
+                                                      duration=self.protocol.reproduction_duration_s)
+        return EpisodeResult(event["phase"], event["phase_index"], event["episode"], event["skill"],
+                             np.asarray(event["theta_hat"]), event["teaching_error"], event["rho1"], event["rho2"],
+                             event["reproduction"]["diverged"], self._trajectories[key])
+
+    # -- driving --------------------------------------------------------------------------------------
+    def _expect(self, call: str, *kinds: str) -> _Slot:
+        slot = self._slot
+        if slot.kind not in kinds:
+            raise SessionStateError(f"{call}: expected the current step to be {' or '.join(kinds)}, it is "
+                                    f"{self._describe(slot)}")
+        return slot
+
+    def _complete(self) -> None:
+        self._position += 1
+        self._enter()
+
+    def advance(self) -> Step:
+        """Completes a text step (welcome, consent, instructions, phase_intro, reproduction).
+
+        Returns:
+            The next step.
+        """
+        slot = self._expect("advance", "welcome", "consent", "instructions", "phase_intro", "reproduction")
+        if slot.kind == "consent":
+            self.log.append("consent_given")
+        else:
+            fields = {}
+            if slot.phase_index is not None:
+                fields.update(phase=self._phase(slot).id, phase_index=slot.phase_index)
+            if slot.episode is not None:
+                fields["episode"] = slot.episode
+            self.log.append("screen_done", screen=slot.kind, **fields)
+        self._complete()
+        return self.current_step()
+
+    def finish_practice(self, duration_s: float | None = None) -> Step:
+        """Completes the practice step.
+
+        Args:
+            duration_s: how long the participant practised, seconds (default: measured by the
+                engine since the practice step began in this process).
+        """
+        self._expect("finish_practice", "practice")
+        measured = time.monotonic() - self._entered_at
+        duration_s = measured if duration_s is None else _check_seconds("duration_s", duration_s)
+        self.log.append("practice_finished", duration_s=duration_s)
+        self._complete()
+        return self.current_step()
+
+    def submit_demonstration(self, action, timings: Mapping | None = None, index: int | None = None) -> Feedback:
+        """Records the action for the current query state; returns once it is on disk.
+
+        Args:
+            action: (R,) the demonstrated action, in the skill's action units.
+            timings: ``time_to_first_input_s`` and ``drawing_duration_s`` in seconds (None
+                when unknown), plus any other input details to log (method, redraws, ...).
+            index: the 0-based demonstration the caller means; if given and not the current
+                one the call is refused (a double click cannot record an action twice).
+
+        Returns:
+            ``Feedback``: the optimal action if this episode shows guidance, else None.
+        """
+        slot = self._expect("submit_demonstration", "demonstration")
+        if index is not None and index != slot.index:
+            raise SessionStateError(f"index: expected the current demonstration {slot.index}, got {index}; "
+                                    f"it was already recorded or is not reached yet")
+        key = (slot.phase_index, slot.episode)
+        started = self._episodes[key]
+        skill = SKILLS[started["skill"]]
+        try:
+            action = np.asarray(action, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise ValueError(f"action: expected {skill.plant.action_dim} numbers, got {action!r}") from None
+        if action.shape != (skill.plant.action_dim,) or not np.all(np.isfinite(action)):
+            raise ValueError(f"action: expected {skill.plant.action_dim} finite numbers, got {action.tolist()}")
+        timings = dict(timings or {})
+        if not isinstance(timings, dict):
+            raise ValueError(f"timings: expected a mapping, got {type(timings).__name__}")
+        measured = {key_: _check_seconds(key_, timings.pop(key_, None)) for key_ in TIMING_KEYS}
+        optimal = np.asarray(started["optimal"])[slot.index]
+        self.log.append("demonstration", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
+                        index=slot.index, state=np.asarray(started["query_states"])[slot.index], action=action,
+                        optimal=optimal, guidance_shown=started["guidance"], **measured,
+                        response_time_s=time.monotonic() - self._entered_at, input=timings)
+        self._actions.setdefault(key, []).append(action)
+        self._complete()
+        return Feedback(slot.index, started["guidance"], optimal.copy() if started["guidance"] else None, action)
+
+    def finish_episode(self) -> EpisodeResult:
+        """Learns from the episode's demonstrations, reproduces the skill, logs it all.
+
+        Returns:
+            The ``EpisodeResult`` (the next step is the reproduction).
+        """
+        slot = self._expect("finish_episode", "episode_end")
+        key = (slot.phase_index, slot.episode)
+        started = self._episodes[key]
+        skill = SKILLS[started["skill"]]
+        U = np.array(self._actions[key])
+        analysis = analyse_demonstrations(np.asarray(started["features"]), U, skill.theta, self.protocol.lam)
+        trajectory = skill.reproduce(analysis.theta_hat, duration=self.protocol.reproduction_duration_s)
+        self._trajectories[key] = trajectory
+        self.log.append(
+            "episode_finished", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
+            skill=started["skill"], guidance=started["guidance"], actions=U, optimal=analysis.optimal,
+            theta_hat=analysis.theta_hat, teaching_error=analysis.risk, rho1=analysis.rho1, rho2=analysis.rho2,
+            bound=analysis.bound, residual=analysis.residual, contributions=analysis.contributions,
+            exact=analysis.exact,
+            reproduction={"diverged": trajectory.diverged, "diverged_at": trajectory.diverged_at,
+                          "final_position": trajectory.final_position, "duration_s": float(trajectory.times[-1])},
+            started_at=started["time"], duration_s=max(0.0, time.time() - _parse_time(started["time"])))
+        self._finished_episodes[key] = self.log.events[-1]
+        self._complete()
+        return self._result(key)
+
+    def close(self) -> None:
+        """Releases the participant's log (the session can be resumed later)."""
+        self.log.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"Session({self.participant!r} at {self._describe(self._slot)})"

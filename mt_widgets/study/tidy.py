@@ -1,0 +1,119 @@
+"""Tidy export of a study folder: one row per episode, one row per demonstration.
+
+Rows are rebuilt from the logs alone (``study.json`` and each ``<participant>.jsonl``), with
+the standard library: analysis code may load the CSVs with pandas, the runner never needs it.
+
+episodes.csv columns (``EPISODE_COLUMNS``): study, participant, group, phase, phase_index
+(0-based), episode (1-based within the phase), skill, guidance (0/1), n_demonstrations,
+teaching_error, rho1, rho2, theta_hat (JSON list of rows), reproduction_diverged (0/1),
+started_at (ISO 8601 UTC), duration_s.
+
+demonstrations.csv columns (``DEMONSTRATION_COLUMNS``): study, participant, group, phase,
+phase_index, episode, index (0-based), skill, state (JSON list), action_1, action_2,
+optimal_1, optimal_2, guidance_shown (0/1), time_to_first_input_s, drawing_duration_s
+(empty when unknown).
+
+Only completed episodes are exported; demonstrations of an episode still in progress are
+exported (they are data), marked by the absence of their episode's row.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+from .log import STUDY_FILE, read_events
+
+EPISODE_COLUMNS = ("study", "participant", "group", "phase", "phase_index", "episode", "skill", "guidance",
+                   "n_demonstrations", "teaching_error", "rho1", "rho2", "theta_hat", "reproduction_diverged",
+                   "started_at", "duration_s")
+DEMONSTRATION_COLUMNS = ("study", "participant", "group", "phase", "phase_index", "episode", "index", "skill",
+                         "state", "action_1", "action_2", "optimal_1", "optimal_2", "guidance_shown",
+                         "time_to_first_input_s", "drawing_duration_s")
+
+
+def participant_logs(study_folder) -> list[Path]:
+    """The participant log files of a study folder, sorted by name."""
+    folder = Path(study_folder)
+    return sorted(p for p in folder.glob("*.jsonl") if not p.name.startswith("_"))
+
+
+def read_study(study_folder) -> tuple[list[dict], list[dict]]:
+    """Reads every participant log of a study folder into plain rows.
+
+    Args:
+        study_folder: a folder with ``study.json`` and ``<participant>.jsonl`` files.
+
+    Returns:
+        (episodes, demonstrations): lists of dicts keyed by ``EPISODE_COLUMNS`` and
+        ``DEMONSTRATION_COLUMNS``; numbers as Python numbers, JSON columns as JSON text,
+        unknown timings as None. Sorted by participant, then by order in the protocol.
+
+    Raises:
+        FileNotFoundError: the folder has no ``study.json``.
+    """
+    folder = Path(study_folder)
+    if not (folder / STUDY_FILE).is_file():
+        raise FileNotFoundError(f"study_folder: expected a study folder with {STUDY_FILE}, got {folder}")
+    study = json.loads((folder / STUDY_FILE).read_text(encoding="utf-8"))["study"]
+    episodes: list[dict] = []
+    demonstrations: list[dict] = []
+    for path in participant_logs(folder):
+        events, _ = read_events(path)
+        if not events or events[0]["type"] != "session_started":
+            continue
+        participant, group = events[0]["participant"], events[0]["group"]
+        started = {}
+        for event in events:
+            kind = event["type"]
+            if kind == "episode_started":
+                started[(event["phase_index"], event["episode"])] = event
+            elif kind == "demonstration":
+                episode = started[(event["phase_index"], event["episode"])]
+                demonstrations.append({
+                    "study": study, "participant": participant, "group": group, "phase": event["phase"],
+                    "phase_index": event["phase_index"], "episode": event["episode"], "index": event["index"],
+                    "skill": episode["skill"], "state": json.dumps(event["state"]),
+                    "action_1": event["action"][0], "action_2": event["action"][1],
+                    "optimal_1": event["optimal"][0], "optimal_2": event["optimal"][1],
+                    "guidance_shown": int(bool(event["guidance_shown"])),
+                    "time_to_first_input_s": event.get("time_to_first_input_s"),
+                    "drawing_duration_s": event.get("drawing_duration_s")})
+            elif kind == "episode_finished":
+                episodes.append({
+                    "study": study, "participant": participant, "group": group, "phase": event["phase"],
+                    "phase_index": event["phase_index"], "episode": event["episode"], "skill": event["skill"],
+                    "guidance": int(bool(event["guidance"])), "n_demonstrations": len(event["actions"]),
+                    "teaching_error": event["teaching_error"], "rho1": event["rho1"], "rho2": event["rho2"],
+                    "theta_hat": json.dumps(event["theta_hat"]),
+                    "reproduction_diverged": int(bool(event["reproduction"]["diverged"])),
+                    "started_at": event["started_at"], "duration_s": event["duration_s"]})
+    return episodes, demonstrations
+
+
+def _write_csv(path: Path, columns, rows) -> None:
+    with open(path, "w", newline="", encoding="utf-8") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(columns), lineterminator="\n")
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({key: "" if row[key] is None else row[key] for key in columns})
+
+
+def export_study(study_folder, out_folder=None) -> tuple[Path, Path]:
+    """Writes ``episodes.csv`` and ``demonstrations.csv`` for a study folder.
+
+    Args:
+        study_folder: the study folder.
+        out_folder: where to write (default: the study folder itself).
+
+    Returns:
+        (episodes_csv_path, demonstrations_csv_path).
+    """
+    episodes, demonstrations = read_study(study_folder)
+    out = Path(study_folder if out_folder is None else out_folder)
+    out.mkdir(parents=True, exist_ok=True)
+    episodes_path, demonstrations_path = out / "episodes.csv", out / "demonstrations.csv"
+    _write_csv(episodes_path, EPISODE_COLUMNS, episodes)
+    _write_csv(demonstrations_path, DEMONSTRATION_COLUMNS, demonstrations)
+    return episodes_path, demonstrations_path
