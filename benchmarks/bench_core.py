@@ -1,0 +1,164 @@
+"""Benchmark of the science layer, side by side with MuJoCo on the same work.
+
+Run: ``.venv/bin/python benchmarks/bench_core.py`` (needs the ``bench`` extra: mujoco).
+
+1. Agreement: the same arm as an MJCF model, RK4 at 1 ms, the joint torque computed by the
+   project's controller at each sample and held over the step (``qfrc_applied``); the final
+   states of a 10 s rollout must agree within 1e-6.
+2. Speed (a): one 10 s rollout of sim-point (``skill.reproduce``, the public path) against
+   MuJoCo's fastest single path, ``mj_step(m, d, nstep)`` with the policy compiled into site
+   actuators (affine bias on the tip's position and velocity) and gravity compensation.
+3. Speed (b): 1,000 rollouts of 1 s, each with its own theta, against ``mujoco.rollout`` with
+   one thread per core, each rollout with its own model.
+4. Latency of fit + optimal_actions after a demonstration, and the query-state sampler's cost.
+"""
+
+from __future__ import annotations
+
+import os
+import statistics
+import time
+
+import numpy as np
+
+from mt_widgets import SKILLS, RidgeLearner, TwoLinkArm, optimal_actions
+
+try:
+    import mujoco
+    import mujoco.rollout
+except ImportError as error:  # the bench extra is missing: say how to get it, do not pretend
+    raise SystemExit("benchmarks/bench_core.py needs MuJoCo: pip install -e '.[bench]'") from error
+
+
+def mjcf(arm: TwoLinkArm, theta=None) -> str:
+    """The arm as MJCF. With ``theta`` the policy is compiled into two site actuators and gravity
+    is compensated by MuJoCo (gravcomp); without, forces come only through qfrc_applied."""
+    p = arm.parameters
+    gravcomp = 'gravcomp="1"' if theta is not None else ""
+    actuators = ""
+    if theta is not None:
+        (a, _, b, _, c), (_, d, _, e, f) = theta  # sim skills: u1 = a r1 + b r1dot + c, u2 = d r2 + e r2dot + f
+        actuators = f"""
+  <actuator>
+    <general site="tip" refsite="base" gear="1 0 0 0 0 0" gainprm="0" biastype="affine" biasprm="{c} {a} {b}"/>
+    <general site="tip" refsite="base" gear="0 1 0 0 0 0" gainprm="0" biastype="affine" biasprm="{f} {d} {e}"/>
+  </actuator>"""
+    return f"""
+<mujoco model="two-link arm">
+  <option timestep="0.001" integrator="RK4" gravity="0 {-p.gravity} 0"/>
+  <worldbody>
+    <site name="base" pos="0 0 0"/>
+    <body name="link1" {gravcomp}>
+      <joint name="q1" type="hinge" axis="0 0 1"/>
+      <inertial pos="{p.lc1} 0 0" mass="{p.m1}" diaginertia="1e-9 {p.i1} {p.i1}"/>
+      <body name="link2" pos="{p.l1} 0 0" {gravcomp}>
+        <joint name="q2" type="hinge" axis="0 0 1"/>
+        <inertial pos="{p.lc2} 0 0" mass="{p.m2}" diaginertia="1e-9 {p.i2} {p.i2}"/>
+        <site name="tip" pos="{p.l2} 0 0"/>
+      </body>
+    </body>
+  </worldbody>{actuators}
+</mujoco>"""
+
+
+def best_of(function, repeat=5) -> float:
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def check_agreement(skill) -> float:
+    arm = skill.plant.arm
+    model = mujoco.MjModel.from_xml_string(mjcf(arm))
+    data = mujoco.MjData(model)
+    data.qpos[:], data.qvel[:] = skill.start[:2], skill.start[2:]
+    n_steps = 10_000
+    for _ in range(n_steps):
+        state = np.concatenate([data.qpos, data.qvel])
+        force = skill.theta @ skill.features(state[None])[0]
+        data.qfrc_applied[:] = arm.applied_torque(state[:2], force)
+        mujoco.mj_step(model, data)
+    ours = skill.reproduce(skill.theta, duration=n_steps / 1000)
+    return float(np.max(np.abs(ours.states[-1] - np.concatenate([data.qpos, data.qvel]))))
+
+
+def row(name, ours, theirs, unit, target=None):
+    ratio = ours / theirs
+    verdict = "" if target is None else (f"  (target >= {target}x: {'met' if ratio >= target else 'NOT met'})")
+    print(f"{name:<38} {ours:>12.3e} {theirs:>12.3e} {unit:<8} {ratio:>7.1f}x{verdict}")
+
+
+def main():
+    skill = SKILLS["sim-point"]
+    print(f"mt-widgets core benchmark; MuJoCo {mujoco.__version__}; {os.cpu_count()} cores")
+    started = time.perf_counter()
+    skill.reproduce(skill.theta, duration=0.01)
+    skill.reproduce(np.repeat(skill.theta[None], 16, axis=0), duration=0.01)
+    print(f"numba compile or cache load of the rollout kernels: {time.perf_counter() - started:.2f} s (once per process)")
+
+    difference = check_agreement(skill)
+    print(f"agreement with MuJoCo (RK4, 1 ms, qfrc_applied = held tau_k), 10 s of sim-point: "
+          f"max |final state difference| = {difference:.1e} ({'OK' if difference < 1e-6 else 'DISAGREE'} vs 1e-6)")
+    if difference >= 1e-6:
+        raise SystemExit(1)
+
+    print(f"\n{'':<38} {'project':>12} {'MuJoCo':>12} {'unit':<8} {'ratio':>8}")
+    # (a) one 10 s rollout
+    model = mujoco.MjModel.from_xml_string(mjcf(skill.plant.arm, skill.theta))
+    data = mujoco.MjData(model)
+
+    def mujoco_single():
+        mujoco.mj_resetData(model, data)
+        data.qpos[:], data.qvel[:] = skill.start[:2], skill.start[2:]
+        mujoco.mj_step(model, data, nstep=10_000)
+
+    mujoco_single()
+    theirs = 10_000 / best_of(mujoco_single)
+    ours = 10_000 / best_of(lambda: skill.reproduce(skill.theta, duration=10.0))
+    row("(a) one 10 s rollout", ours, theirs, "steps/s", target=4)
+
+    # (b) 1,000 rollouts of 1 s, each its own theta
+    rng = np.random.default_rng(0)
+    thetas = np.repeat(skill.theta[None], 1000, axis=0).copy()
+    for (i, j) in [(0, 0), (0, 2), (0, 4), (1, 1), (1, 3), (1, 4)]:
+        thetas[:, i, j] += rng.normal(scale=0.2, size=1000)
+    models = [mujoco.MjModel.from_xml_string(mjcf(skill.plant.arm, theta)) for theta in thetas]
+    n_threads = os.cpu_count() or 1
+    datas = [mujoco.MjData(models[0]) for _ in range(n_threads)]
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    initial = np.zeros(mujoco.mj_stateSize(models[0], spec))
+    probe = mujoco.MjData(models[0])
+    probe.qpos[:], probe.qvel[:] = skill.start[:2], skill.start[2:]
+    mujoco.mj_getState(models[0], probe, initial, spec)
+    initial = np.repeat(initial[None], 1000, axis=0)
+    with mujoco.rollout.Rollout(nthread=n_threads) as pool:
+        run = lambda: pool.rollout(models, datas, initial, nstep=1000)
+        run()
+        theirs = 1e6 / best_of(run, repeat=3)
+    ours = 1e6 / best_of(lambda: skill.reproduce(thetas, duration=1.0), repeat=3)
+    row(f"(b) 1000 rollouts of 1 s ({n_threads} threads)", ours, theirs, "steps/s", target=10)
+
+    # Teaching latency and the sampler
+    states = skill.query_states(seed=1)
+    Phi = skill.features(states)
+    U = skill.target_actions(states) + rng.normal(scale=0.5, size=(5, 2))
+    learner = RidgeLearner()
+    learner.fit(Phi, U), optimal_actions(Phi, skill.theta, learner.lam)
+    samples = []
+    for _ in range(2000):
+        start = time.perf_counter()
+        learner.fit(Phi, U)
+        optimal_actions(Phi, skill.theta, learner.lam)
+        samples.append(time.perf_counter() - start)
+    print(f"\nfit + optimal_actions (5 x 5): median {statistics.median(samples) * 1e6:.1f} us "
+          f"(target below 100 us: {'met' if statistics.median(samples) < 1e-4 else 'NOT met'})")
+    for key in ("sim-point", "uarm-point"):
+        cost = best_of(lambda: [SKILLS[key].query_states(seed=s) for s in range(100)], repeat=3) / 100
+        print(f"query-state sampler, {key}: {cost * 1e3:.2f} ms per set of {SKILLS[key].n_features} states")
+
+
+if __name__ == "__main__":
+    main()
