@@ -201,7 +201,8 @@ class ArmView:
         t = self.transform
         step = t.nice_action_step()
         length = step * t.pixels_per_action
-        x, y = t.width - 12 - length, t.height - 12
+        # Top right, above the plot area: clear of the tick labels along the bottom.
+        x, y = t.width - 12 - length, 22
         canvas.stroke_style = self.theme.text
         canvas.line_width = 2.0
         canvas.stroke_line(x, y, x + length, y)

@@ -1,0 +1,72 @@
+"""Page helpers: canvas pixels, canvas-to-page coordinates, the STATUS label."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+OKABE = {"yellow": (240, 228, 66), "vermillion": (213, 94, 0), "orange": (230, 159, 0), "blue": (0, 114, 178),
+         "black": (0, 0, 0)}
+
+
+def canvas(page, index: int):
+    return page.locator("canvas").nth(index)
+
+
+def to_page(page, index: int, x: float, y: float) -> tuple[float, float]:
+    """Canvas pixel (x, y) -> page coordinates, through the element's CSS-scaled box."""
+    element = canvas(page, index)
+    box = element.bounding_box()
+    width, height = element.evaluate("c => [c.width, c.height]")
+    return box["x"] + x * box["width"] / width, box["y"] + y * box["height"] / height
+
+
+def to_canvas(page, index: int, px: float, py: float) -> tuple[float, float]:
+    element = canvas(page, index)
+    box = element.bounding_box()
+    width, height = element.evaluate("c => [c.width, c.height]")
+    return (px - box["x"]) * width / box["width"], (py - box["y"]) * height / box["height"]
+
+
+def wait_for_color(page, index: int, x: float, y: float, rgb, tolerance: int = 40, timeout: float = 15_000,
+                   radius: int = 2) -> None:
+    """Wait until a pixel within ``radius`` of canvas pixel (x, y) has colour ``rgb``."""
+    page.wait_for_function(
+        """([index, x, y, rgb, tol, r]) => {
+            const c = document.querySelectorAll('canvas')[index];
+            if (!c) return false;
+            const d = c.getContext('2d').getImageData(Math.round(x) - r, Math.round(y) - r, 2 * r + 1, 2 * r + 1).data;
+            for (let i = 0; i < d.length; i += 4) {
+                if (Math.abs(d[i] - rgb[0]) <= tol && Math.abs(d[i + 1] - rgb[1]) <= tol
+                    && Math.abs(d[i + 2] - rgb[2]) <= tol && d[i + 3] > 200) return true;
+            }
+            return false;
+        }""", arg=[index, float(x), float(y), list(rgb), tolerance, radius], timeout=timeout)
+
+
+def status(page) -> dict:
+    text = page.locator("text=/^STATUS /").first.inner_text()
+    return json.loads(text[len("STATUS "):])
+
+
+def wait_for_status(page, predicate: str, timeout: float = 10_000) -> dict:
+    """Wait until the STATUS label's JSON satisfies a JS predicate on ``s``."""
+    page.wait_for_function(
+        """(pred) => {
+            const el = Array.from(document.querySelectorAll('.widget-label')).find(e => e.textContent.startsWith('STATUS '));
+            if (!el) return false;
+            const s = JSON.parse(el.textContent.slice(7));
+            return eval(pred);
+        }""", arg=predicate, timeout=timeout)
+    return status(page)
+
+
+def reference_episode():
+    """The same episode as the test page, built here without a kernel, for expected pixels."""
+    from mt_widgets.widgets import EpisodeWidget
+    return EpisodeWidget("sim-point", seed=0, guidance=True, duration=2.0, css_width="360px")
+
+
+def ee_pixel(episode, index: int = 0) -> np.ndarray:
+    return episode.teaching.view.end_effector_pixel(episode.query_states[index])
