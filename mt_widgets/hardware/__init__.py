@@ -1,0 +1,51 @@
+"""The uArm Swift Pro: a connector over pyserial, its safety envelope, a simulated arm.
+
+Importing this package registers the pyserial URL handler ``uarm-sim://`` (also spelled
+``uarmsim://``), so ``SwiftPro("uarm-sim://?firmware=4&latency=0.003")`` talks to the
+simulated arm exactly as ``SwiftPro("/dev/ttyACM0")`` talks to a real one.
+"""
+
+import sys
+
+import serial
+
+from .connector import SwiftPro
+from .envelope import TEACHING_HEIGHT_MM, TEACHING_MAX_YAW_DEG, TEACHING_RADIUS_MM, SafetyEnvelope
+from .errors import (
+    ERROR_CLASSES,
+    SwiftProBufferFull,
+    SwiftProCommandError,
+    SwiftProDisconnected,
+    SwiftProEncoderError,
+    SwiftProError,
+    SwiftProMotorsDetached,
+    SwiftProNotFound,
+    SwiftProOperationFailed,
+    SwiftProParameterError,
+    SwiftProPortBusy,
+    SwiftProPowerError,
+    SwiftProStopped,
+    SwiftProTimeout,
+    SwiftProUnknownCommand,
+    SwiftProUnreachable,
+    UnsafeMoveError,
+)
+from .protocol import Event
+from .simdevice import SimulatedSwiftPro, is_reachable
+from .urlhandler import protocol_uarmsim
+
+_HANDLERS = __name__ + ".urlhandler"
+if _HANDLERS not in serial.protocol_handler_packages:
+    serial.protocol_handler_packages.append(_HANDLERS)
+# pyserial imports "<package>.protocol_<scheme>"; "uarm-sim" has a hyphen, which no module
+# file name can hold, so the module is also filed under that name.
+sys.modules.setdefault(_HANDLERS + ".protocol_uarm-sim", protocol_uarmsim)
+
+__all__ = [
+    "ERROR_CLASSES", "Event", "SafetyEnvelope", "SimulatedSwiftPro", "SwiftPro", "SwiftProBufferFull",
+    "SwiftProCommandError", "SwiftProDisconnected", "SwiftProEncoderError", "SwiftProError",
+    "SwiftProMotorsDetached", "SwiftProNotFound", "SwiftProOperationFailed", "SwiftProParameterError",
+    "SwiftProPortBusy", "SwiftProPowerError", "SwiftProStopped", "SwiftProTimeout", "SwiftProUnknownCommand",
+    "SwiftProUnreachable", "TEACHING_HEIGHT_MM", "TEACHING_MAX_YAW_DEG", "TEACHING_RADIUS_MM",
+    "UnsafeMoveError", "is_reachable",
+]
