@@ -343,6 +343,8 @@ def check_folder_writable(folder) -> Path:
         LogFolderError: saying why (not a folder, permission denied, read-only, disk full).
     """
     folder = Path(folder).expanduser()
+    if folder.exists() and not folder.is_dir():
+        raise LogFolderError(f"log folder {folder}: expected a folder, found a file")
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as error:

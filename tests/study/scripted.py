@@ -1,0 +1,85 @@
+"""A scripted participant: deterministic actions, so two runs must log identical demonstrations."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mt_widgets import SKILLS
+from mt_widgets.study import load_protocol, parse_protocol
+
+#: A short protocol with every kind of step (practice, phases with and without guidance,
+#: several episodes): the engine knows no more than this file, so it is enough to test it.
+SHORT_PROTOCOL = """
+format = 1
+name = "short"
+lambda = 0.01
+seed = 11
+[assignment]
+block_size = 2
+seed = 3
+[texts]
+welcome = "Welcome."
+consent = "Consent."
+instructions = "Instructions."
+reproduction = "Reproduction."
+thank_you = "Thank you."
+[practice]
+skill = "uarm-point"
+duration_s = 5
+text = "Practice."
+[[phases]]
+id = "A"
+skill = "uarm-point"
+episodes = 1
+instructions = "Phase A."
+[[phases]]
+id = "B"
+skill = "uarm-line"
+episodes = 3
+guidance = ["target"]
+instructions = "Phase B."
+[[phases]]
+id = "C"
+skill = "uarm-point"
+episodes = 1
+instructions = "Phase C."
+"""
+
+
+def short_protocol():
+    return parse_protocol(SHORT_PROTOCOL, "short.toml")
+
+
+def scripted_action(step) -> np.ndarray:
+    """The skill's own action plus noise seeded by where the step is: same step, same action."""
+    skill = SKILLS[step.skill]
+    rng = np.random.default_rng([step.phase_index, step.episode, step.index])
+    target = skill.target_actions(step.state[None])[0]
+    return target + rng.normal(0.0, 0.2 * (1 + np.abs(target)), size=target.shape)
+
+
+def run(session, stop_after: int | None = None) -> int:
+    """Drives ``session`` to the end (or for ``stop_after`` calls); returns the calls made."""
+    calls = 0
+    while not session.finished and (stop_after is None or calls < stop_after):
+        step = session.current_step()
+        if step.kind == "practice":
+            session.finish_practice(duration_s=5.0)
+        elif step.kind == "demonstration":
+            session.submit_demonstration(scripted_action(step), {"time_to_first_input_s": 0.5,
+                                                                 "drawing_duration_s": 0.25}, index=step.index)
+        elif step.kind == "episode_end":
+            session.finish_episode()
+        else:
+            session.advance()
+        calls += 1
+    return calls
+
+
+def demonstrations(events) -> list[tuple]:
+    """The demonstrations of a log, as comparable tuples (where, state, action)."""
+    return [(e["phase"], e["episode"], e["index"], tuple(e["state"]), tuple(e["action"]))
+            for e in events if e["type"] == "demonstration"]
+
+
+__all__ = ["SHORT_PROTOCOL", "demonstrations", "load_protocol", "run", "scripted_action", "short_protocol"]

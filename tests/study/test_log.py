@@ -1,0 +1,148 @@
+"""The log: append-only, fsync-ed, never overwritten, never shared, a torn last line recovered."""
+
+import json
+import os
+
+import pytest
+
+from mt_widgets.study import LogError, LogFolderError, ParticipantLog, Session, StudyFolder, read_events
+from mt_widgets.study import log as log_module
+from mt_widgets.study.log import check_folder_writable
+
+from .scripted import demonstrations, run, short_protocol
+
+
+@pytest.fixture
+def study(tmp_path):
+    return StudyFolder.create(tmp_path / "study", short_protocol())
+
+
+def test_every_event_is_fsynced_before_append_returns(study, monkeypatch):
+    synced = []
+    real_fsync = os.fsync
+    monkeypatch.setattr(log_module.os, "fsync", lambda fd: (synced.append(fd), real_fsync(fd))[1])
+    session = Session.start(study, "P01")
+    before = len(synced)
+    session.advance()
+    assert len(synced) == before + 1
+    # What append returned is already in the file, on its own line.
+    assert json.loads(study.log_path("P01").read_text().splitlines()[-1])["type"] == "screen_done"
+    session.close()
+
+
+def test_a_log_is_never_overwritten(study):
+    Session.start(study, "P01").close()
+    size = study.log_path("P01").stat().st_size
+    with pytest.raises(LogError, match="already has a log"):
+        ParticipantLog.create(study.log_path("P01"), "short")
+    assert study.log_path("P01").stat().st_size == size
+
+
+def test_two_sessions_cannot_write_one_participant(study):
+    first = Session.start(study, "P01")
+    with pytest.raises(LogError, match="in use by another session"):
+        Session.resume(study, "P01", lock_timeout_s=0.2)
+    first.close()
+    Session.resume(study, "P01").close()
+
+
+def test_a_torn_last_line_is_dropped_on_reading_and_repaired_on_resume(study):
+    session = Session.start(study, "P01")
+    run(session, stop_after=9)
+    session.close()
+    path = study.log_path("P01")
+    complete, _ = read_events(path)
+    with open(path, "ab") as handle:
+        handle.write(b'{"seq": %d, "type": "demonstr' % len(complete))
+    events, info = read_events(path)
+    assert events == complete and info["torn_tail"] > 0
+    resumed = Session.resume(study, "P01")
+    assert resumed.events[-1]["type"] in ("session_resumed", "episode_started")
+    resumed_event = next(e for e in resumed.events if e["type"] == "session_resumed")
+    assert resumed_event["repaired_torn_line"] == info["torn_tail"]
+    run(resumed)
+    resumed.close()
+    final, info = read_events(path)
+    assert info["repaired_lines"] and final[-1]["type"] == "session_finished"
+    # The torn bytes are still there (append-only): only skipped.
+    assert b'"type": "demonstr\n' in path.read_bytes()
+
+
+def test_a_last_line_missing_only_its_newline_is_kept(study):
+    session = Session.start(study, "P01")
+    run(session, stop_after=3)
+    session.close()
+    path = study.log_path("P01")
+    data = path.read_bytes()
+    path.write_bytes(data[:-1])
+    events, info = read_events(path)
+    assert len(events) == data.count(b"\n") and info["unterminated"]
+    resumed = Session.resume(study, "P01")
+    run(resumed)
+    resumed.close()
+    assert read_events(path)[0][-1]["type"] == "session_finished"
+
+
+def test_damage_in_the_middle_of_a_log_is_reported_not_skipped(study):
+    session = Session.start(study, "P01")
+    run(session, stop_after=5)
+    session.close()
+    path = study.log_path("P01")
+    lines = path.read_bytes().split(b"\n")
+    lines[2] = lines[2][:10]
+    path.write_bytes(b"\n".join(lines))
+    with pytest.raises(LogError, match="line 3"):
+        read_events(path)
+
+
+def test_a_duplicated_event_is_detected(study):
+    session = Session.start(study, "P01")
+    run(session, stop_after=5)
+    session.close()
+    path = study.log_path("P01")
+    lines = path.read_bytes().splitlines(keepends=True)
+    path.write_bytes(b"".join(lines + lines[-1:]))
+    with pytest.raises(LogError, match="expected event seq"):
+        read_events(path)
+
+
+def test_a_folder_that_is_a_file_is_refused(tmp_path):
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(LogFolderError, match="cannot be created|expected a folder"):
+        check_folder_writable(tmp_path / "file" / "logs")
+    with pytest.raises(LogFolderError, match="expected a folder"):
+        check_folder_writable(tmp_path / "file")
+
+
+def test_a_read_only_folder_is_refused_before_the_participant_starts(tmp_path):
+    # /sys is read-only even for root, unlike a chmod-ed folder.
+    with pytest.raises(LogFolderError, match="not writable|cannot be created"):
+        StudyFolder.create("/sys/kernel", short_protocol())
+
+
+def test_a_folder_that_stops_being_writable_refuses_a_new_participant(study, monkeypatch):
+    def refuse(*args, **kwargs):
+        raise OSError(30, "Read-only file system")
+    monkeypatch.setattr(log_module.os, "open", refuse)
+    with pytest.raises(LogFolderError, match="Read-only file system"):
+        Session.start(study, "P01")
+    monkeypatch.undo()
+    assert not study.log_path("P01").exists() and study.enrolments() == []
+
+
+def test_a_folder_runs_one_protocol_only(study, tmp_path):
+    other = short_protocol().data | {"name": "other"}
+    from mt_widgets.study.protocol import protocol_from_data
+    with pytest.raises(LogError, match="use a new folder"):
+        StudyFolder.create(study.folder, protocol_from_data(other))
+    assert StudyFolder.create(study.folder, short_protocol()).protocol.hash == study.protocol.hash
+
+
+def test_demonstrations_survive_a_closed_and_reopened_session(study):
+    session = Session.start(study, "P01")
+    run(session, stop_after=12)
+    given = demonstrations(session.events)
+    session.close()
+    resumed = Session.resume(study, "P01")
+    assert demonstrations(resumed.events) == given
+    resumed.close()
