@@ -1,0 +1,127 @@
+"""The participant app: the experimenter panel stays apart, blinding holds, bad input is refused
+before the participant starts, and a new kernel resumes where the last one stopped."""
+
+import re
+
+import numpy as np
+import pytest
+
+from mt_widgets import SKILLS
+from mt_widgets.apps import StudyApp, participant_texts
+from mt_widgets.study import StudyFolder, read_events
+
+from .scripted import SHORT_PROTOCOL
+
+
+@pytest.fixture
+def protocol_file(tmp_path):
+    path = tmp_path / "short.toml"
+    path.write_text(SHORT_PROTOCOL)
+    return str(path)
+
+
+def click_primary(app):
+    buttons = [w for w in app.body.children if hasattr(w, "on_click")]
+    assert len(buttons) == 1, buttons
+    buttons[0].click()
+
+
+def act(app):
+    """One participant action through the widgets, as the buttons and the canvas would do it."""
+    step = app.session.current_step()
+    if step.kind in ("welcome", "consent", "instructions", "phase_intro"):
+        click_primary(app)
+    elif step.kind == "practice":
+        assert app._practice_done.disabled  # the practice cannot be skipped before its time
+        app._practice_done.disabled = False
+        app._practice_done.click()
+    elif step.kind in ("demonstration", "episode_end"):
+        if app.episode.phase == "guidance":
+            app.episode.next()
+        else:
+            app.episode.demonstrate(SKILLS[step.skill].target_actions(step.state[None])[0] + 0.3)
+    elif step.kind == "reproduction":
+        app._continue.click()
+
+
+WORDS = re.compile(r"\b(target|control|group|groups|condition)\b", re.IGNORECASE)
+GUIDANCE_WORDS = re.compile(r"\b(optimal|guidance|guided|correct action)\b", re.IGNORECASE)
+
+
+@pytest.mark.parametrize("group", ["target", "control"])
+def test_nothing_the_participant_view_holds_names_a_group(tmp_path, protocol_file, group):
+    app = StudyApp(protocol=protocol_file, log_folder=tmp_path / "logs")
+    app.start_participant("P01", group=group)
+    assert app.children == (app.participant_view,)  # the experimenter panel has left the page
+    guidance_seen = False
+    while not app.session.finished:
+        texts = " ".join(participant_texts(app))
+        assert not WORDS.search(texts), WORDS.search(texts).group(0)
+        step = app.session.current_step()
+        if GUIDANCE_WORDS.search(texts):
+            # Only the protocol's guidance, only for the group the protocol gives it to.
+            assert group == "target" and step.phase == "B", (step, GUIDANCE_WORDS.search(texts).group(0))
+            guidance_seen = True
+        act(app)
+    assert guidance_seen == (group == "target")
+    assert not WORDS.search(" ".join(participant_texts(app)))
+    events, _ = read_events(tmp_path / "logs" / "P01.jsonl")
+    assert events[-1]["type"] == "session_finished"
+
+
+def test_a_bad_participant_id_is_refused_in_the_panel_and_nobody_starts(tmp_path, protocol_file):
+    app = StudyApp(protocol=protocol_file, log_folder=tmp_path / "logs")
+    for bad in ("", "../P01", "P 01"):
+        app.experimenter.participant.value = bad
+        app.experimenter.start_button.click()
+        assert "participant_id" in app.experimenter.message.value
+        assert app.children == (app.experimenter,) and app.session is None
+    assert not list((tmp_path / "logs").glob("*.jsonl"))
+
+
+def test_an_unwritable_log_folder_is_refused_before_the_participant_starts(tmp_path, protocol_file):
+    (tmp_path / "a-file").write_text("")
+    app = StudyApp(protocol=protocol_file, log_folder=tmp_path / "a-file" / "logs")
+    app.experimenter.participant.value = "P01"
+    app.experimenter.start_button.click()
+    assert "log folder" in app.experimenter.message.value and app.session is None
+    assert app.children == (app.experimenter,)
+
+
+def test_a_bad_protocol_file_is_named_in_the_panel(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text(SHORT_PROTOCOL.replace('skill = "uarm-line"', 'skill = "uarm-circle"'))
+    app = StudyApp(protocol=str(path), log_folder=tmp_path / "logs")
+    assert "line" in app.experimenter.message.value and "uarm-circle" in app.experimenter.message.value
+
+
+def test_a_new_kernel_resumes_mid_episode_with_the_given_demonstrations_restored(tmp_path, protocol_file):
+    first = StudyApp(protocol=protocol_file, log_folder=tmp_path / "logs")
+    first.start_participant("P01", group="control")
+    while not (app_step := first.session.current_step()).kind == "demonstration" or app_step.index < 2:
+        act(first)
+    given = [e["action"] for e in first.session.events if e["type"] == "demonstration"]
+    first.session.close()  # the old kernel ends (a reload)
+    second = StudyApp(protocol=protocol_file, log_folder=tmp_path / "logs")
+    second.experimenter.participant.value = "P01"
+    second.experimenter.resume_button.click()
+    assert second.session is not None, second.experimenter.message.value
+    step = second.session.current_step()
+    assert (step.kind, step.phase, step.index) == ("demonstration", "A", 2)
+    np.testing.assert_allclose(second.episode.demonstrations, given)
+    assert second.episode.state_index == 2
+    while not second.session.finished:
+        act(second)
+    demos = [e for e in read_events(tmp_path / "logs" / "P01.jsonl")[0] if e["type"] == "demonstration"]
+    assert [(d["phase"], d["episode"], d["index"]) for d in demos] == sorted(
+        {(d["phase"], d["episode"], d["index"]) for d in demos}, key=lambda k: ("ABC".index(k[0]), k[1], k[2]))
+    assert len(demos) == 15
+
+
+def test_a_lesson_in_the_app_writes_no_log(tmp_path, protocol_file):
+    app = StudyApp(protocol=protocol_file, log_folder=tmp_path / "logs")
+    app.experimenter.group.value = "target"
+    app.experimenter.lesson_button.click()
+    while not app.session.finished:
+        act(app)
+    assert not (tmp_path / "logs").exists()
