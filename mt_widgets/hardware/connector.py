@@ -87,7 +87,8 @@ class SwiftPro:
         default_speed_mm_s: the speed of moves that give no ``speed``.
         timeout: seconds to wait for a reply (moves get this plus their expected duration).
         ready_timeout: seconds to wait for the arm to boot after the port opens.
-        max_in_flight: requests sent but not yet answered; 2 as in the official SDK.
+        max_in_flight: requests sent but not yet answered; 2 as in the official SDK (more than
+            20 only to provoke the firmware's E23 in tests).
         simulate_if_absent: with ``port=None``/``"auto"``, use the simulated arm when no
             Swift Pro is plugged in instead of raising :class:`SwiftProNotFound`.
 
@@ -106,8 +107,8 @@ class SwiftPro:
         for name, value in (("timeout", timeout), ("ready_timeout", ready_timeout)):
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive number of seconds, got {value!r}")
-        if not (isinstance(max_in_flight, int) and 1 <= max_in_flight <= 20):
-            raise ValueError(f"max_in_flight must be an int in 1..20, got {max_in_flight!r}")
+        if not (isinstance(max_in_flight, int) and 1 <= max_in_flight <= 32):
+            raise ValueError(f"max_in_flight must be an int in 1..32, got {max_in_flight!r}")
         self.port = port
         self.envelope = envelope if envelope is not None else SafetyEnvelope()
         if not isinstance(self.envelope, SafetyEnvelope):

@@ -1,0 +1,87 @@
+"""Helpers for the hardware tests: simulated-arm URLs and a pseudo-terminal server."""
+
+from __future__ import annotations
+
+import os
+import select
+import threading
+import time
+import tty
+
+import mt_widgets.hardware  # noqa: F401  (registers uarm-sim://)
+from mt_widgets.hardware import SwiftPro
+from mt_widgets.hardware.simdevice import SimulatedSwiftPro
+
+#: Fast defaults: a 10 ms boot, moves 100x faster than real.
+FAST = {"boot": "0.01", "motion_scale": "0.01"}
+
+
+def sim_url(**options) -> str:
+    """A uarm-sim:// URL with fast defaults, overridden by ``options``."""
+    merged = {**FAST, **{k: str(v) for k, v in options.items()}}
+    return "uarm-sim://?" + "&".join(f"{k}={v}" for k, v in merged.items())
+
+
+def device_of(arm: SwiftPro) -> SimulatedSwiftPro:
+    """The simulated arm behind a connected SwiftPro on a uarm-sim:// port."""
+    return arm._ser.device
+
+
+def sent_lines(arm: SwiftPro) -> list[str]:
+    return list(device_of(arm).received_lines)
+
+
+class PtyArm:
+    """A simulated arm served on the master side of a pseudo-terminal by a thread.
+
+    Args:
+        device: the simulated arm.
+
+    Attributes:
+        path: the slave device path, to be opened as a serial port.
+    """
+
+    def __init__(self, device: SimulatedSwiftPro):
+        self.device = device
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.slave)
+        tty.setraw(self.master)
+        self.path = os.ttyname(self.slave)
+        self._stop = threading.Event()
+        self.device.power_on(time.monotonic())
+        self.thread = threading.Thread(target=self._serve, daemon=True)
+        self.thread.start()
+
+    def _serve(self) -> None:
+        while not self._stop.is_set():
+            now = time.monotonic()
+            due = self.device.next_due(now)
+            wait = 0.02 if due is None else min(0.02, max(0.0, due - now))
+            try:
+                readable, _, _ = select.select([self.master], [], [], wait)
+                if readable:
+                    self.device.write(os.read(self.master, 4096), time.monotonic())
+                if self.device.disconnected:
+                    self.hang_up()
+                    return
+                out = self.device.read_available(time.monotonic())
+                if out:
+                    os.write(self.master, out)
+            except OSError:
+                return
+
+    def hang_up(self) -> None:
+        """Close both ends, as unplugging the cable does."""
+        self._stop.set()
+        for fd in (self.master, self.slave):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+        self.master = self.slave = -1
+
+    def close(self) -> None:
+        self._stop.set()
+        self.thread.join(timeout=1.0)
+        if self.master != -1:
+            self.hang_up()
