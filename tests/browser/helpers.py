@@ -51,7 +51,16 @@ def status(page) -> dict:
 
 
 def wait_for_status(page, predicate: str, timeout: float = 10_000) -> dict:
-    """Wait until the STATUS label's JSON satisfies a JS predicate on ``s``."""
+    """Wait until the STATUS label's JSON satisfies a JS predicate on ``s``; fail with the last one."""
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+    try:
+        _wait_status(page, predicate, timeout)
+    except PlaywrightTimeout:
+        raise AssertionError(f"STATUS never satisfied {predicate!r}; last: {status(page)}") from None
+    return status(page)
+
+
+def _wait_status(page, predicate, timeout):
     page.wait_for_function(
         """(pred) => {
             const el = Array.from(document.querySelectorAll('.widget-label')).find(e => e.textContent.startsWith('STATUS '));
@@ -59,7 +68,6 @@ def wait_for_status(page, predicate: str, timeout: float = 10_000) -> dict:
             const s = JSON.parse(el.textContent.slice(7));
             return eval(pred);
         }""", arg=predicate, timeout=timeout)
-    return status(page)
 
 
 def reference_episode():

@@ -36,10 +36,12 @@ def test_arm_state_and_target_are_drawn_and_a_drag_gives_the_action_and_guidance
     for fraction in np.linspace(0.2, 1.0, 5):
         page.mouse.move(start[0] + fraction * (end[0] - start[0]), start[1] + fraction * (end[1] - start[1]))
     page.mouse.up()
-    s = wait_for_status(page, "s.pending !== null && Math.abs(s.pending[0]) > 0.5")
     origin = reference.skill.end_effector(reference.query_states[:1])[0][0]
     expected = view.transform.action_from_drag(origin, to_canvas(page, 0, *end))
     one_pixel = 1.0 / view.transform.pixels_per_action
+    # The drag's intermediate moves arrive first: wait for the release's action, within a pixel.
+    s = wait_for_status(page, f"s.pending !== null && Math.abs(s.pending[0] - {expected[0]}) < {one_pixel}"
+                              f" && Math.abs(s.pending[1] - {expected[1]}) < {one_pixel}")
     assert np.allclose(s["pending"], expected, atol=one_pixel), (s["pending"], expected)
     page.screenshot(path=artifacts("dragged"))
 
