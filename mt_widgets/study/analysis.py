@@ -1,0 +1,132 @@
+"""One call from a study folder to every table and figure: ``analyse_study(folder)``.
+
+The default folder is the small synthetic study shipped with the package
+(``EXAMPLE_STUDY``: 8 synthetic teachers run through the paper's simulation protocol by the
+session engine, see ``write_example_study``), so the analysis notebook runs out of the box.
+"""
+
+from __future__ import annotations
+
+import shutil
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from .statistics import PAPER_CHANGES, StudyStatistics, analyse_changes
+
+#: The synthetic study shipped with the package.
+EXAMPLE_STUDY = Path(__file__).parent / "data" / "synthetic-sim"
+
+#: How the shipped study was made (``write_example_study`` uses these).
+EXAMPLE_SETTINGS = {"n_participants": 8, "protocol": "paper-sim", "seed": 2024}
+
+
+@dataclass
+class StudyAnalysis:
+    """Everything ``analyse_study`` produced.
+
+    Attributes:
+        folder: the study folder read.
+        episodes, demonstrations: the tidy rows as DataFrames.
+        statistics: the ``StudyStatistics`` (tables, tests, summary).
+        figures: {name: Figure}: "error_by_episode", "changes", and "trajectories" when made.
+        saved: files written by ``save``.
+    """
+
+    folder: Path
+    episodes: pd.DataFrame
+    demonstrations: pd.DataFrame
+    statistics: StudyStatistics
+    figures: dict = field(default_factory=dict)
+    saved: list = field(default_factory=list)
+
+    def summary(self) -> str:
+        return self.statistics.summary()
+
+    def save(self, out_folder, formats=("png", "pdf")) -> list[Path]:
+        """Writes the tables as CSV and every figure in each format into ``out_folder``."""
+        from .figures import save_figure
+        out = Path(out_folder)
+        out.mkdir(parents=True, exist_ok=True)
+        tables = {"phase_summary": self.statistics.phases, "participant_changes": self.statistics.changes,
+                  "results": self.statistics.results_table(), "between_groups": self.statistics.between,
+                  "within_groups": self.statistics.within, "baseline_posthoc": self.statistics.baseline}
+        written = []
+        for name, table in tables.items():
+            path = out / f"{name}.csv"
+            table.to_csv(path, index=False)
+            written.append(path)
+        (out / "summary.txt").write_text(self.summary() + "\n", encoding="utf-8")
+        written.append(out / "summary.txt")
+        for name, figure in self.figures.items():
+            for fmt in formats:
+                written.append(save_figure(figure, out / f"{name}.{fmt}"))
+        self.saved = written
+        return written
+
+
+def analyse_study(folder=None, alternative: str = "less", alpha: float = 0.05, changes=PAPER_CHANGES,
+                  trajectories_for=None, trajectory_duration: float | None = None) -> StudyAnalysis:
+    """Reads a study folder and computes every table and figure of the paper's analysis.
+
+    Args:
+        folder: a study folder (``study.json`` and participant logs); default ``EXAMPLE_STUDY``.
+        alternative: sidedness of the tests, target minus control ("less": the paper's
+            one-sided hypotheses; "two-sided").
+        alpha: the significance level of the summary.
+        changes: the comparisons (default the paper's three).
+        trajectories_for: participant codes for the trajectory figure (default: the first of
+            each group; an empty list skips it).
+        trajectory_duration: seconds of each rollout in that figure (default the plant's).
+
+    Returns:
+        A ``StudyAnalysis``.
+    """
+    from .figures import plot_changes, plot_error_by_episode, plot_trajectories
+    from .tidy import read_study
+    folder = EXAMPLE_STUDY if folder is None else Path(folder)
+    episodes, demonstrations = read_study(folder)
+    if not episodes:
+        raise ValueError(f"folder: expected completed episodes in {folder}, found none")
+    episodes = pd.DataFrame(episodes)
+    demonstrations = pd.DataFrame(demonstrations)
+    statistics = analyse_changes(episodes, changes, alternative=alternative, alpha=alpha)
+    figures = {"error_by_episode": plot_error_by_episode(episodes), "changes": plot_changes(episodes, changes)}
+    if trajectories_for is None:
+        firsts = episodes.groupby("group")["participant"].first()
+        trajectories_for = [firsts[g] for g in ("target", "control") if g in firsts.index]
+    if trajectories_for:
+        figures["trajectories"] = plot_trajectories(episodes, trajectories_for, duration=trajectory_duration)
+    return StudyAnalysis(folder, episodes, demonstrations, statistics, figures)
+
+
+def write_example_study(folder=EXAMPLE_STUDY, overwrite: bool = False, **settings) -> Path:
+    """(Re)generates the shipped synthetic study through the session engine.
+
+    Args:
+        folder: where (default: the package's ``data/synthetic-sim``).
+        overwrite: replace an existing folder.
+        **settings: override ``EXAMPLE_SETTINGS`` (n_participants, protocol, seed).
+
+    Returns:
+        The folder.
+    """
+    from .in_silico import run_through_sessions
+    folder = Path(folder)
+    if folder.exists():
+        if not overwrite:
+            raise FileExistsError(f"folder: {folder} exists; pass overwrite=True to regenerate it")
+        shutil.rmtree(folder)
+    options = {**EXAMPLE_SETTINGS, **settings}
+    run_through_sessions(folder, options["n_participants"], protocol=options["protocol"], seed=options["seed"])
+    # Once every session is closed the engine's lock folder holds only empty, released lock
+    # files; a shipped dataset has no use for them.
+    locks = folder / ".locks"
+    if locks.is_dir() and all(p.suffix == ".lock" and p.stat().st_size == 0 for p in locks.iterdir()):
+        shutil.rmtree(locks)
+    return folder
+
+
+if __name__ == "__main__":  # python -m mt_widgets.study.analysis  regenerates the shipped study
+    print(write_example_study(overwrite=True))
