@@ -60,3 +60,4 @@ def test_lab_draws_takes_a_drag_and_redraws_after_a_page_reload(lab_page, lab_se
     wait_for_color(page, 0, *view.transform.to_pixel(reference.skill.target.point), OKABE["vermillion"])
     wait_for_color(page, 0, *(tip + 5 * (ee - tip) / np.hypot(*(ee - tip))), OKABE["blue"], radius=1)
     page.screenshot(path=artifacts("reloaded"))
+    page.locator("canvas").first.screenshot(path=artifacts("reloaded-canvas"))
