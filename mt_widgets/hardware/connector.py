@@ -541,7 +541,9 @@ class SwiftPro:
         """
         z = self.teaching_height_mm if z is None else z
         speed = self.default_speed_mm_s if speed is None else speed
-        target = self.envelope.check_point(x, y, z)
+        # Round to the 4 decimals that go on the wire before checking, so that what is
+        # checked is exactly what is sent.
+        target = self.envelope.check_point(*(round(v, 4) for v in self.envelope.check_point(x, y, z)))
         self._check_alive()
         with self._move_lock:
             start = self._last_target if self._last_target is not None else self.position()

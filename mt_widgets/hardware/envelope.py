@@ -52,6 +52,7 @@ class SafetyEnvelope:
         max_z_mm: highest height.
         max_step_mm: longest single move, from the last known position.
         max_speed_mm_s: fastest move.
+        min_speed_mm_s: slowest move (a speed that rounds to F0 would mean "no speed" to 4.x).
         entry_speed_mm_s: fastest move when the arm starts outside the envelope (as after
             power-up): it is brought in slowly; its target must be inside.
     """
@@ -64,6 +65,7 @@ class SafetyEnvelope:
     max_step_mm: float = 200.0
     max_speed_mm_s: float = 100.0
     entry_speed_mm_s: float = 20.0
+    min_speed_mm_s: float = 1.0
 
     def __post_init__(self):
         for name in self.__dataclass_fields__:
@@ -76,9 +78,12 @@ class SafetyEnvelope:
             raise ValueError(f"max_yaw_deg must be in (0, 90), got {self.max_yaw_deg}")
         if not self.min_z_mm < self.max_z_mm:
             raise ValueError(f"need min_z_mm < max_z_mm, got {self.min_z_mm}, {self.max_z_mm}")
-        for name in ("max_step_mm", "max_speed_mm_s", "entry_speed_mm_s"):
+        for name in ("max_step_mm", "max_speed_mm_s", "entry_speed_mm_s", "min_speed_mm_s"):
             if getattr(self, name) <= 0:
                 raise ValueError(f"{name} must be positive, got {getattr(self, name)}")
+        if not self.min_speed_mm_s <= min(self.entry_speed_mm_s, self.max_speed_mm_s):
+            raise ValueError(f"min_speed_mm_s = {self.min_speed_mm_s} must not exceed entry_speed_mm_s "
+                             f"= {self.entry_speed_mm_s} nor max_speed_mm_s = {self.max_speed_mm_s}")
 
     def contains(self, x: float, y: float, z: float) -> bool:
         """Whether the point (mm) is inside; False for non-finite input."""
@@ -151,13 +156,14 @@ class SafetyEnvelope:
         """Check a speed in mm/s; ``entering`` applies the slower ``entry_speed_mm_s``.
 
         Raises:
-            UnsafeMoveError: if it is not positive or above the limit.
+            UnsafeMoveError: if it is below ``min_speed_mm_s`` or above the limit.
         """
         v = _finite("speed", speed_mm_s)
         limit = self.entry_speed_mm_s if entering else self.max_speed_mm_s
         name = "entry_speed_mm_s" if entering else "max_speed_mm_s"
-        if not 0 < v <= limit:
-            raise UnsafeMoveError(f"speed = {v} mm/s must be in (0, {name} = {limit}]",
+        if not self.min_speed_mm_s <= v <= limit:
+            raise UnsafeMoveError(f"speed = {v} mm/s must be in [min_speed_mm_s = {self.min_speed_mm_s}, "
+                                  f"{name} = {limit}]",
                                   coordinate="speed", value=v, limit=limit)
         return v
 
