@@ -372,15 +372,21 @@ def run_many_studies(n_studies: int, n_per_group: int, seed: int = 0, parameters
     show = progress if progress is not None else n_studies > 50
     bar = Progress(n_studies + len(plan), "studies", show)
     root = np.random.SeedSequence(seed)
-    study_seeds = [int(s.generate_state(1)[0]) for s in root.spawn(n_studies)]
     per_study = 2 * n_per_group
     if share_states:
         states = [query_states_for(protocol, step)[None] for step in plan]
         bar.update(n_studies)
     else:
         by_study = []
-        for k, study_seed in enumerate(study_seeds):
-            by_study.append([query_states_for(protocol, step, study_seed=study_seed) for step in plan])
+        while len(by_study) < n_studies:
+            study_seed = int(root.spawn(1)[0].generate_state(1)[0])
+            try:
+                by_study.append([query_states_for(protocol, step, study_seed=study_seed) for step in plan])
+            except ValueError:
+                # The greedy sampler can paint itself into a corner (S - 1 states no
+                # candidate completes under the threshold); a real study would redraw its
+                # seed, so the simulated one does too (the next spawned seed, reproducibly).
+                continue
             bar.update()
         states = [np.stack([by_study[k][e] for k in range(n_studies)]) for e in range(len(plan))]
     seeds = [teacher_seed(seed, p) for p in range(n_studies * per_study)]
