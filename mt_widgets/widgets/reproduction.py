@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from ipywidgets import HTML, Button, HBox, Layout, VBox
 
-from .animation import DEFAULT_FPS, frame_times, play_frames, sample_at
+from .animation import DEFAULT_FPS, frame_times, play_frames, sample_at, set_style_now
 from .arm_view import ArmView
 from .redraw import drawing_batch
 
@@ -121,9 +121,9 @@ class ReproductionPlayer(VBox):
                 # Two fill-style changes per frame (about 45 bytes; the opacity rides in the
                 # colour, not in global_alpha, to save two more) buy the ghost marker.
                 x, y = ghost_pixels[index]
-                canvas.fill_style = ghost_fill
+                set_style_now(canvas, "fill_style", ghost_fill)
                 canvas.fill_circle(x, y, 7)
-                canvas.fill_style = robot_fill
+                set_style_now(canvas, "fill_style", robot_fill)
             painter.draw_frame(canvas, frames[index])
 
         diverged = bool(self.trajectory.diverged)
