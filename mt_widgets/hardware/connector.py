@@ -379,6 +379,7 @@ class SwiftPro:
         if not self._slots.acquire(timeout=self.timeout):
             raise SwiftProTimeout(
                 f"{self.max_in_flight} requests still unanswered after {self.timeout} s; {command!r} not sent")
+        pending = None
         try:
             self._check_alive()
             with self._lock:
@@ -386,13 +387,15 @@ class SwiftPro:
                 pending = _Pending(number, command, threading.Event())
                 self._pending[number] = pending
                 self._order.append(number)
-            line = protocol.build_request(number, command, *params)
-            self._send(line)
+            self._send(protocol.build_request(number, command, *params))
         except BaseException:
-            with self._lock:
-                if self._pending.pop(locals().get("number", -1), None) is not None:
-                    self._order.remove(number)
-            self._slots.release()
+            if pending is None:
+                self._slots.release()
+            else:
+                with self._lock:
+                    if self._pending.pop(pending.number, None) is not None:
+                        self._order.remove(pending.number)
+                self._release(pending)
             raise
         return pending
 
