@@ -62,10 +62,12 @@ class ExperimenterPanel(VBox):
         self.participant = Text(value="", description="Participant", placeholder="pseudonymous code, e.g. P07",
                                 layout=Layout(width="320px"))
         self.group = Dropdown(options=group_options, value=None, description="Group", layout=Layout(width="320px"))
-        self.start_button = Button(description="Start new participant", button_style="primary", icon="play")
-        self.resume_button = Button(description="Resume participant", icon="repeat")
-        self.lesson_button = Button(description="Lesson (not logged)", icon="graduation-cap")
-        self.list_button = Button(description="List participants", icon="list")
+        wide = dict(width="auto")
+        self.start_button = Button(description="Start new participant", button_style="primary", icon="play",
+                                   layout=Layout(**wide))
+        self.resume_button = Button(description="Resume participant", icon="repeat", layout=Layout(**wide))
+        self.lesson_button = Button(description="Lesson (not logged)", icon="graduation-cap", layout=Layout(**wide))
+        self.list_button = Button(description="List participants", icon="list", layout=Layout(**wide))
         self.message = HTML()
         self.listing = HTML()
         super().__init__([

@@ -287,12 +287,12 @@ class UArmBridge:
         """Move the arm to a query state (r1, r2) cm, so the real arm shows what the screen shows.
 
         Raises:
-            SwiftProStopped: :meth:`stop` was called (before or during the move).
+            SwiftProStopped: :meth:`stop` was called (during the move, or before it and
+                :meth:`resume` was not called since).
             SwiftProError, UnsafeMoveError: the connector's errors, unchanged.
         """
         target = self.state_to_arm_mm(state_cm)
         with self._busy:
-            self._stop_requested.clear()
             self._travel_to(target)
 
     def execute(self, trajectory, on_step: Callable[[int, tuple[float, float]], None] | None = None
@@ -309,7 +309,8 @@ class UArmBridge:
             on_step: ``callback(k, (x_mm, y_mm))`` after the arm reached step k (0 = the start).
 
         Returns:
-            An :class:`ExecutionReport`; ``stopped`` or ``error`` say why it ended early.
+            An :class:`ExecutionReport`; ``stopped`` or ``error`` say why it ended early. After
+            :meth:`stop`, nothing moves (``stopped``, no step done) until :meth:`resume`.
         """
         units = getattr(trajectory, "units", None)
         if units != "cm":
@@ -320,7 +321,6 @@ class UArmBridge:
         report = ExecutionReport(steps_planned=len(positions) - 1)
         started = time.monotonic()
         with self._busy:
-            self._stop_requested.clear()
             try:
                 start = self.state_to_arm_mm(positions[0])
                 self._travel_to(start)
@@ -356,7 +356,8 @@ class UArmBridge:
         return report
 
     def stop(self, grace_s: float = 0.05, attempts: int = 20) -> str | None:
-        """Halt now: no further moves start, and the arm's stop command cuts the current one.
+        """Halt now: no further moves start until :meth:`resume`, and the arm's stop command
+        cuts the current one.
 
         A move whose pre-checks (the M2222 question) were under way when the stop command went
         out is sent after it; so while a move is still in progress after ``grace_s`` the stop
@@ -382,7 +383,7 @@ class UArmBridge:
         return message
 
     def resume(self) -> None:
-        """Allow moves again after :meth:`stop` (the next ``show_state`` or ``execute`` also does)."""
+        """Allow moves again after :meth:`stop` (a person decided it is safe)."""
         self._stop_requested.clear()
 
     def beep(self, frequency_hz: float, duration_ms: float) -> str | None:

@@ -15,8 +15,9 @@ A study folder holds:
 Every event is written with one ``os.write`` on an ``O_APPEND`` descriptor and ``fsync``-ed
 before ``append`` returns, so the interface moves on only once the event is on disk (as
 PsychoPy's experiment handler saves each trial as it completes). A log file is created with
-``O_EXCL`` (never overwritten) and written only while holding its participant's lock (never
-written by two processes). A crash can leave at most the last line torn; loading drops it,
+``O_EXCL`` (never overwritten) and each event is written under its participant's lock after
+checking that nobody else wrote since, so two processes never interleave events in one log:
+a newer session (a reloaded page) takes over, and the older one is refused. A crash can leave at most the last line torn; loading drops it,
 and reopening for writing first ends it with a newline so the next event starts on a line of
 its own; the ``session_resumed`` event that follows records the repair, and only such
 repaired lines are tolerated in the middle of a log.
@@ -109,6 +110,7 @@ class _Lock:
 
     def __init__(self, path: Path, what: str, timeout_s: float = 0.0):
         path.parent.mkdir(exist_ok=True)
+        self.path = path
         self.fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
         deadline = time.monotonic() + timeout_s
         while True:
@@ -206,10 +208,13 @@ def read_events(path) -> tuple[list[dict], dict]:
 # -- writing --------------------------------------------------------------------------------------
 
 class ParticipantLog:
-    """One participant's append-only log, held open and locked while a session writes to it.
+    """One participant's append-only log, held open by the session that writes to it.
 
-    Build it with ``StudyFolder.create_log`` / ``StudyFolder.open_log`` (or the class methods
-    ``create`` / ``open``); ``close`` releases the lock.
+    Build it with ``create`` (a new participant) or ``open`` (to continue). Each ``append``
+    takes the participant's lock, checks that the file is exactly as this session left it,
+    writes, fsyncs and lets go. So a session can always take over a participant whose old
+    kernel is still alive (a reloaded page), and the old session, if it ever tries to write
+    again, is refused instead of interleaving its events with the new one's.
 
     Attributes:
         path: the log file.
@@ -218,38 +223,40 @@ class ParticipantLog:
             appended event should record it (``session_resumed`` does).
     """
 
-    def __init__(self, path: Path, fd: int, lock: _Lock, events: list[dict], repaired_torn_bytes: int):
-        self.path, self._fd, self._lock = path, fd, lock
+    def __init__(self, path: Path, fd: int, lock_path: Path, events: list[dict], repaired_torn_bytes: int,
+                 lock_timeout_s: float):
+        self.path, self._fd, self._lock_path = path, fd, lock_path
         self.events = events
         self.repaired_torn_bytes = repaired_torn_bytes
         self.participant = path.stem
         self.study = events[0]["study"] if events else None
+        self.lock_timeout_s = lock_timeout_s
+        self._size = os.fstat(fd).st_size
+
+    @staticmethod
+    def _lock(path: Path, timeout_s: float) -> _Lock:
+        return _Lock(path.parent / LOCK_FOLDER / (path.stem + ".lock"), f"participant {path.stem!r}", timeout_s)
 
     @classmethod
-    def create(cls, path, study: str, lock_timeout_s: float = 0.0) -> "ParticipantLog":
+    def create(cls, path, study: str, lock_timeout_s: float = 5.0) -> "ParticipantLog":
         """Creates a new log; refuses if the file exists (a log is never overwritten)."""
         path = Path(path)
-        lock = _Lock(path.parent / LOCK_FOLDER / (path.stem + ".lock"), f"participant {path.stem!r}", lock_timeout_s)
-        try:
-            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_APPEND, 0o644)
-        except FileExistsError:
-            lock.release()
-            raise LogError(f"participant {path.stem!r} already has a log at {path}; resume them instead "
-                           f"(a log is never overwritten)") from None
-        except BaseException:
-            lock.release()
-            raise
-        _fsync_folder(path.parent)
-        log = cls(path, fd, lock, [], 0)
+        with cls._lock(path, lock_timeout_s) as lock:
+            try:
+                fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_APPEND, 0o644)
+            except FileExistsError:
+                raise LogError(f"participant {path.stem!r} already has a log at {path}; resume them instead "
+                               f"(a log is never overwritten)") from None
+            _fsync_folder(path.parent)
+            log = cls(path, fd, lock.path, [], 0, lock_timeout_s)
         log.study = study
         return log
 
     @classmethod
-    def open(cls, path, lock_timeout_s: float = 0.0) -> "ParticipantLog":
+    def open(cls, path, lock_timeout_s: float = 5.0) -> "ParticipantLog":
         """Opens an existing log to continue it, repairing a torn last line."""
         path = Path(path)
-        lock = _Lock(path.parent / LOCK_FOLDER / (path.stem + ".lock"), f"participant {path.stem!r}", lock_timeout_s)
-        try:
+        with cls._lock(path, lock_timeout_s) as lock:
             if not path.is_file():
                 raise LogError(f"participant {path.stem!r} has no log at {path}")
             events, info = read_events(path)
@@ -260,10 +267,7 @@ class ParticipantLog:
                 # (append-only) and the session_resumed event records the repair.
                 _write_all(fd, b"\n")
                 os.fsync(fd)
-        except BaseException:
-            lock.release()
-            raise
-        return cls(path, fd, lock, events, torn)
+            return cls(path, fd, lock.path, events, torn, lock_timeout_s)
 
     def append(self, event_type: str, **fields) -> dict:
         """Appends one event and returns once it is on disk (written and fsync-ed).
@@ -274,24 +278,33 @@ class ParticipantLog:
 
         Returns:
             The event as written, with ``seq``, ``type``, ``time``, ``participant`` and ``study``.
+
+        Raises:
+            LogError: the log is closed, or another session has continued this participant
+                since (this session is stale and must stop).
         """
         if self._fd is None:
             raise LogError(f"the log of participant {self.participant!r} is closed")
         event = {"seq": len(self.events), "type": event_type, "time": utc_now(),
                  "participant": self.participant, "study": self.study}
         event.update(to_jsonable(fields))
-        line = json.dumps(event, separators=(",", ":"), allow_nan=False, ensure_ascii=True) + "\n"
-        _write_all(self._fd, line.encode("ascii"))
-        os.fsync(self._fd)
+        line = (json.dumps(event, separators=(",", ":"), allow_nan=False, ensure_ascii=True) + "\n").encode("ascii")
+        with _Lock(self._lock_path, f"participant {self.participant!r}", self.lock_timeout_s):
+            if os.fstat(self._fd).st_size != self._size:
+                raise LogError(f"participant {self.participant!r} was continued by another session (a reloaded "
+                               f"page or a second tab) since this one last wrote; this one stops here, nothing "
+                               f"was written")
+            _write_all(self._fd, line)
+            os.fsync(self._fd)
+            self._size += len(line)
         self.events.append(event)
         return event
 
     def close(self) -> None:
-        """Closes the file and releases the participant's lock (idempotent)."""
+        """Closes the file (idempotent); the session can be resumed later."""
         if self._fd is not None:
             os.close(self._fd)
             self._fd = None
-        self._lock.release()
 
     @property
     def closed(self) -> bool:

@@ -230,8 +230,9 @@ class Session:
         Args:
             study: the study folder.
             participant_id: an enrolled participant.
-            lock_timeout_s: how long to wait for a previous kernel of the same participant to
-                let go of the log (a reloaded page's old kernel may take a moment to end).
+            lock_timeout_s: how long to wait for the participant's lock, which a writer holds
+                only while it writes one event. An older session of the same participant (a
+                reloaded page's kernel still alive) is taken over: its next write is refused.
         """
         if not isinstance(study, StudyFolder):
             raise ValueError(f"study: expected a StudyFolder, got {type(study).__name__}")

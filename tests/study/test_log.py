@@ -38,12 +38,30 @@ def test_a_log_is_never_overwritten(study):
     assert study.log_path("P01").stat().st_size == size
 
 
-def test_two_sessions_cannot_write_one_participant(study):
-    first = Session.start(study, "P01")
-    with pytest.raises(LogError, match="in use by another session"):
-        Session.resume(study, "P01", lock_timeout_s=0.2)
-    first.close()
-    Session.resume(study, "P01").close()
+def test_two_sessions_never_interleave_in_one_log_the_newer_one_takes_over(study):
+    stale = Session.start(study, "P01")   # e.g. the kernel of a page that was then reloaded
+    stale.advance()
+    current = Session.resume(study, "P01")
+    size = study.log_path("P01").stat().st_size
+    with pytest.raises(LogError, match="continued by another session"):
+        stale.advance()
+    assert study.log_path("P01").stat().st_size == size  # nothing written by the stale session
+    run(current)
+    current.close()
+    events, _ = read_events(study.log_path("P01"))
+    assert events[-1]["type"] == "session_finished"
+    assert [e["type"] for e in events].count("consent_given") == 1
+
+
+def test_a_writer_holding_the_participants_lock_makes_others_wait_then_fail(study):
+    from mt_widgets.study.log import LOCK_FOLDER, _Lock
+    session = Session.start(study, "P01")
+    session.log.lock_timeout_s = 0.2
+    with _Lock(study.folder / LOCK_FOLDER / "P01.lock", "participant 'P01'"):
+        with pytest.raises(LogError, match="in use by another session"):
+            session.advance()
+    session.advance()
+    session.close()
 
 
 def test_a_torn_last_line_is_dropped_on_reading_and_repaired_on_resume(study):
