@@ -19,3 +19,7 @@ def arm():
 @pytest.fixture
 def bridge(arm):
     return UArmBridge(arm)
+
+
+# The canvas recorder of the kernel-free widget tests, reused rather than copied.
+from widgets.conftest import recorder  # noqa: E402,F401

@@ -168,16 +168,27 @@ def test_stop_halts_the_reproduction_and_no_move_is_sent_after_it():
         assert device_of(arm).position_at(time.monotonic()) == pytest.approx(held)
         # Stopped means stopped: the arm is short of where the skill would have taken it.
         assert np.linalg.norm(np.array(held[:2]) - plant_to_arm_mm(trajectory.final_position)) > 20.0
-        # And the next reproduction may run again.
-        assert bridge.execute(skill.reproduce(skill.theta, duration=1.0)).completed
+        # Stop is sticky: nothing moves until someone resumes.
+        before = len(received(arm))
+        again = bridge.execute(skill.reproduce(skill.theta, duration=1.0))
+        assert again.stopped and again.steps_done == 0 and not any(is_move(x) for x in received(arm)[before:])
+        bridge.resume()
+        here_cm = arm_to_plant_cm(np.array(held))
+        positions = np.array([here_cm, here_cm + [1.0, 0.0]])  # one 1 cm step, 0.5 s
+        short = Trajectory(np.array([0.0, 0.5]), positions, positions, 0 * positions, 0 * positions, False, None, "cm")
+        assert bridge.execute(short).completed
+        np.testing.assert_allclose(arm_to_plant_cm(arm.position()), positions[-1], atol=1e-3)
 
 
-def test_stop_before_a_move_means_the_move_never_starts(bridge, arm):
+def test_after_stop_no_query_state_is_shown_until_resume(bridge, arm):
     bridge.stop()
     before = len(received(arm))
     with pytest.raises(SwiftProStopped):
-        bridge._move(210.0, 0.0, 50.0)
+        bridge.show_state([21.0, 0.0])
     assert not any(is_move(line) for line in received(arm)[before:])
+    bridge.resume()
+    bridge.show_state([21.0, 0.0])
+    assert arm.position()[:2] == pytest.approx((210.0, 0.0), abs=0.01)
 
 
 def test_a_disconnection_mid_reproduction_gives_a_message_not_a_crash(bridge, arm):
