@@ -76,18 +76,22 @@ def browser_figures() -> dict:
             page.evaluate("""() => { const c = document.querySelectorAll('canvas')[0];
                 window._moves = []; c.addEventListener('mousemove', () => window._moves.push(performance.now())); }""")
             start = to_page(page, 0, *ee)
+            page.locator("canvas").first.scroll_into_view_if_needed()
             page.mouse.move(*start)
             page.mouse.down()
             latencies = []
             for k in range(1, 16):
-                tip = ee + np.array([4.0 * k + 20, -3.0 * k - 10])
+                tip = ee + np.array([6.0 * k + 30, -40.0 - 2.0 * k])
                 probe = tip + 4 * (ee - tip) / np.hypot(*(ee - tip))
-                page.evaluate("""([x, y]) => new Promise(resolve => {
-                    window._seen = null; const c = document.querySelectorAll('canvas')[0];
+                # Poll every animation frame until the canvas differs from what it showed before.
+                page.evaluate("""() => { window._seen = null; const c = document.querySelectorAll('canvas')[0];
                     const ctx = c.getContext('2d');
-                    const poll = () => { const d = ctx.getImageData(Math.round(x), Math.round(y), 1, 1).data;
-                        if (d[2] > 120 && d[0] < 120) { window._seen = performance.now(); } else { requestAnimationFrame(poll); } };
-                    requestAnimationFrame(poll); resolve(); })""", [float(probe[0]), float(probe[1])])
+                    const hash = () => { const d = ctx.getImageData(0, 0, c.width, c.height).data;
+                        let h = 0; for (let i = 0; i < d.length; i += 16) { h = (h * 31 + d[i]) | 0; } return h; };
+                    const before = hash();
+                    const poll = () => { if (hash() !== before) { window._seen = performance.now(); }
+                                         else { requestAnimationFrame(poll); } };
+                    requestAnimationFrame(poll); }""")
                 page.mouse.move(*to_page(page, 0, *tip))
                 page.wait_for_function("() => window._seen !== null", timeout=5000)
                 latencies.append(page.evaluate("() => window._seen - window._moves[window._moves.length - 1]"))
