@@ -1,0 +1,125 @@
+"""The arm wired to teaching episodes and to the study runner, kernel-free, on the simulated arm."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from ipywidgets import Button
+
+from mt_widgets.apps.study_app import participant_texts
+from mt_widgets.apps.uarm_bridge import arm_to_plant_cm
+from mt_widgets.apps.uarm_study import UArmEpisodePage, UArmStudyApp, UArmTeaching
+from mt_widgets.hardware import SwiftPro
+
+from .helpers import device_of, is_move, received, sim_url
+
+ONE_EPISODE = """
+format = 1
+name = "one-uarm-episode"
+lambda = 0.01
+seed = 5
+[assignment]
+block_size = 2
+seed = 3
+[texts]
+welcome = "Welcome."
+consent = "Consent."
+instructions = "Instructions."
+reproduction = "Reproduction."
+thank_you = "Thank you."
+[practice]
+skill = "uarm-point"
+duration_s = 0
+text = "Practice."
+[[phases]]
+id = "P1"
+skill = "uarm-point"
+episodes = 1
+instructions = "Skill 1."
+"""
+
+
+@pytest.fixture
+def teaching():
+    arm = SwiftPro(sim_url(), timeout=1.0)
+    arm.connect()
+    wired = UArmTeaching(arm)
+    yield wired
+    wired.close()
+
+
+def test_each_query_state_is_shown_on_the_arm_and_the_reproduction_played_on_it(teaching):
+    page = UArmEpisodePage(teaching, "uarm-point", seed=0, guidance=True)
+    episode = page.episode
+    for index, state in enumerate(episode.query_states):
+        teaching.wait(5)
+        np.testing.assert_allclose(arm_to_plant_cm(teaching.bridge.position_mm()), state, atol=1e-3)
+        assert teaching.panel.position_label.value == "arm at x = {:.1f} mm, y = {:.1f} mm".format(*state * 10)
+        episode.demonstrate(episode.skill.target_actions(state[None])[0])
+        episode.next()
+    teaching.wait(10)
+    report = teaching.last_report
+    assert report.completed
+    np.testing.assert_allclose(arm_to_plant_cm(teaching.bridge.position_mm()),
+                               episode.result.trajectory.final_position, atol=0.06)
+    assert "finished its reproduction" in teaching.panel.message.value
+    # Effort cues: one per demonstration, rising, then the episode's end, in the browser and on the buzzer.
+    pitches = [f for f, _ in teaching.cues.played]
+    assert len(pitches) == 4 and pitches == sorted(pitches)
+    assert [f for f, _ in device_of(teaching.bridge.arm).beeps] == pytest.approx(pitches, abs=1e-3)
+
+
+def test_the_stop_button_halts_the_arm_until_resume(teaching):
+    page = UArmEpisodePage(teaching, "uarm-line", seed=1, guidance=False)
+    teaching.wait(5)
+    teaching.panel.stop_button.click()
+    assert teaching.panel.resume_button.layout.display is None
+    assert "stopped" in teaching.panel.message.value
+    before = len(received(teaching.bridge.arm))
+    episode = page.episode
+    episode.demonstrate(episode.skill.target_actions(episode.query_states[:1])[0])  # next state: no move
+    teaching.wait(5)
+    assert not any(is_move(line) for line in received(teaching.bridge.arm)[before:])
+    teaching.panel.resume_button.click()
+    teaching.wait(5)
+    np.testing.assert_allclose(arm_to_plant_cm(teaching.bridge.position_mm()), episode.query_states[1], atol=1e-3)
+
+
+def _click(app, description):
+    buttons = [w for w in app.body.children if isinstance(w, Button) and w.description == description]
+    assert buttons, f"no {description!r} button among {[type(w).__name__ for w in app.body.children]}"
+    buttons[0].click()
+
+
+def test_in_the_study_a_lost_arm_gives_a_message_and_the_demonstrations_are_logged(tmp_path):
+    protocol = tmp_path / "one.toml"
+    protocol.write_text(ONE_EPISODE)
+    arm = SwiftPro(sim_url(), timeout=0.5)
+    arm.connect()
+    app = UArmStudyApp(protocol=str(protocol), log_folder=tmp_path / "logs", arm=arm)
+    try:
+        assert "simulated arm" in app.arm_status.value
+        app.start_participant("P01", group="control")
+        for label in ("Continue", "I agree", "Start", "Start"):
+            _click(app, label)
+        episode = app.episode
+        app.arm_teaching.wait(5)
+        for state in episode.query_states[:-1]:
+            episode.demonstrate(episode.skill.target_actions(state[None])[0])
+        app.arm_teaching.wait(5)
+        device_of(arm).disconnect_on_command(1)  # the cable goes as the last arrow is confirmed
+        episode.demonstrate(episode.skill.target_actions(episode.query_states[-1:])[0])
+        app.arm_teaching.wait(10)
+        message = app.arm_teaching.panel.message.value
+        assert "disconnected" in message and "nothing is lost" in message
+        log_file = next((tmp_path / "logs").rglob("P01*.jsonl"))
+        events = [json.loads(line) for line in log_file.read_text().splitlines()]
+        assert sum(e["type"] == "demonstration" for e in events) == len(episode.query_states)
+        assert any(e["type"] == "episode_finished" for e in events)
+        # Single-blind: the arm's texts name no group.
+        texts = " ".join(participant_texts(app.participant_view)).lower()
+        assert "control" not in texts and "target group" not in texts
+    finally:
+        app.arm_teaching.close()
