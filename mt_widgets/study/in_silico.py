@@ -344,7 +344,8 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
 
 
 def run_many_studies(n_studies: int, n_per_group: int, seed: int = 0, parameters: TeacherParameters | None = None,
-                     changes=None, progress: bool | None = None, protocol=None, share_states: bool = False) -> dict:
+                     changes=None, progress: bool | None = None, protocol=None, share_states: bool = False,
+                     workers: int | None = None) -> dict:
     """Many independent studies at once, reduced to each participant's changes.
 
     Every study has its own participants and its own query states (its own study seed), and
@@ -360,6 +361,8 @@ def run_many_studies(n_studies: int, n_per_group: int, seed: int = 0, parameters
         protocol: the ``Protocol`` (default the paper's simulation protocol).
         share_states: use the protocol's own query states in every study (isolates the
             teachers' variability; used when fitting).
+        workers: processes drawing the studies' query states, the slow part (default: up to
+            2 for 100 studies or more, else 1). The result does not depend on it.
 
     Returns:
         {change name: {group: (n_studies, n_per_group) array of after - before}}.
@@ -371,28 +374,57 @@ def run_many_studies(n_studies: int, n_per_group: int, seed: int = 0, parameters
     plan = episode_plan(protocol)
     show = progress if progress is not None else n_studies > 50
     bar = Progress(n_studies + len(plan), "studies", show)
-    root = np.random.SeedSequence(seed)
     per_study = 2 * n_per_group
     if share_states:
         states = [query_states_for(protocol, step)[None] for step in plan]
         bar.update(n_studies)
     else:
-        by_study = []
-        while len(by_study) < n_studies:
-            study_seed = int(root.spawn(1)[0].generate_state(1)[0])
-            try:
-                by_study.append([query_states_for(protocol, step, study_seed=study_seed) for step in plan])
-            except ValueError:
-                # The greedy sampler can paint itself into a corner (S - 1 states no
-                # candidate completes under the threshold); a real study would redraw its
-                # seed, so the simulated one does too (the next spawned seed, reproducibly).
-                continue
-            bar.update()
+        by_study = _states_of_studies(protocol, n_studies, seed, workers, bar)
         states = [np.stack([by_study[k][e] for k in range(n_studies)]) for e in range(len(plan))]
     seeds = [teacher_seed(seed, p) for p in range(n_studies * per_study)]
     population = TeacherPopulation.draw(parameters, seeds, len(plan), max(step["demonstrations"] for step in plan))
     return simulate_changes(protocol, population, n_studies, n_per_group, states, changes, bar,
                             shared=share_states)
+
+
+def _study_query_states(arguments):
+    """The query states of every episode of one simulated study, or None if the sampler fails."""
+    protocol, study_seed = arguments
+    try:
+        return [query_states_for(protocol, step, study_seed=study_seed) for step in episode_plan(protocol)]
+    except ValueError:
+        # The greedy sampler can paint itself into a corner (S - 1 states that no candidate
+        # completes under the threshold); a real study would redraw its seed, and so does this.
+        return None
+
+
+def _states_of_studies(protocol, n_studies: int, seed: int, workers: int | None, bar: Progress) -> list:
+    """Query states for n_studies studies, each with its own study seed, drawn in parallel.
+
+    Candidate study seeds are spawned in order from ``seed``; the first n_studies whose
+    schedules can be drawn are used, so the result is the same for any number of workers.
+    """
+    import os
+    root = np.random.SeedSequence(seed)
+    if workers is None:
+        workers = min(2, os.cpu_count() or 1) if n_studies >= 100 else 1
+    chosen: list = []
+    while len(chosen) < n_studies:
+        wanted = n_studies - len(chosen)
+        # A few spares per batch: about 1 schedule in 200 cannot be completed.
+        candidates = [int(s.generate_state(1)[0]) for s in root.spawn(wanted + wanted // 50 + 2)]
+        jobs = [(protocol, study_seed) for study_seed in candidates]
+        if workers > 1:
+            from concurrent.futures import ProcessPoolExecutor
+            with ProcessPoolExecutor(max_workers=workers) as pool:
+                drawn = list(pool.map(_study_query_states, jobs, chunksize=max(1, len(jobs) // (8 * workers))))
+        else:
+            drawn = [_study_query_states(job) for job in jobs]
+        for states in drawn:
+            if states is not None and len(chosen) < n_studies:
+                chosen.append(states)
+                bar.update()
+    return chosen
 
 
 def simulate_changes(protocol, population: TeacherPopulation, n_studies: int, n_per_group: int,

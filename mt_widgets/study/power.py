@@ -136,7 +136,8 @@ def _hedges_g_columns(target: np.ndarray, control: np.ndarray) -> np.ndarray:
 
 def simulated_power(n_per_group: int = 16, n_studies: int = 1000, alpha: float = 0.05,
                     alternative: str = "less", seed: int = 0, parameters=None, changes=None,
-                    progress: bool | None = None, protocol=None, share_states: bool = False) -> SimulatedPower:
+                    progress: bool | None = None, protocol=None, share_states: bool = False,
+                    workers: int | None = None) -> SimulatedPower:
     """Power by simulation: ``n_studies`` in-silico studies of synthetic teachers, each analysed.
 
     Every study draws its own participants and its own query states (a study seed per study),
@@ -155,6 +156,7 @@ def simulated_power(n_per_group: int = 16, n_studies: int = 1000, alpha: float =
         protocol: the ``Protocol`` (default the paper's).
         share_states: give every study the protocol's own query states (faster; the estimate
             then leaves out the chance of the query states).
+        workers: processes drawing query states (default: up to 2 for 100 studies or more).
 
     Returns:
         A ``SimulatedPower``: the power of Welch's t-test ("welch") and of the Mann-Whitney U
@@ -166,7 +168,8 @@ def simulated_power(n_per_group: int = 16, n_studies: int = 1000, alpha: float =
     alternative = _check_alternative(alternative)
     changes = PAPER_CHANGES if changes is None else tuple(changes)
     deltas = run_many_studies(n_studies, n_per_group, seed=seed, parameters=parameters, changes=changes,
-                              progress=progress, protocol=protocol, share_states=share_states)
+                              progress=progress, protocol=protocol, share_states=share_states,
+                              workers=workers)
     power, p_values, effect = {}, {}, {}
     for change in changes:
         target, control = deltas[change.name]["target"], deltas[change.name]["control"]
