@@ -20,13 +20,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from mt_widgets.core.uarm_plant import UARM_WORKSPACE_CM
+
 from .errors import UnsafeMoveError
 
 #: Fixed height of the teaching plane (mm), see the module docstring.
 TEACHING_HEIGHT_MM = 80.0
-#: The teaching plant's workspace: radius (mm) and yaw (degrees) it may use.
-TEACHING_RADIUS_MM = (140.0, 300.0)
-TEACHING_MAX_YAW_DEG = 60.0
+#: The teaching plant's workspace (``mt_widgets.core.UARM_WORKSPACE_CM``, the one definition),
+#: converted to the arm's millimetres: radius (mm) and yaw (degrees) it may use.
+TEACHING_RADIUS_MM = (10.0 * UARM_WORKSPACE_CM.r_min, 10.0 * UARM_WORKSPACE_CM.r_max)
+TEACHING_MAX_YAW_DEG = UARM_WORKSPACE_CM.max_yaw_deg
 
 
 def _finite(name: str, value: float) -> float:
