@@ -1,0 +1,226 @@
+"""A scripted participant takes part in the study page in Voila, in a real Chromium.
+
+Every phase kind (practice, an episode without guidance, an episode with guidance) is done
+with real mouse drags; the page is reloaded in the middle of an episode, the experimenter
+resumes the participant, and the log ends complete: every demonstration once, in order.
+"""
+
+import json
+import re
+import time
+
+import numpy as np
+import pytest
+
+from mt_widgets.study import read_events, read_study
+from mt_widgets.widgets import ArmView
+from mt_widgets import SKILLS
+
+pytestmark = pytest.mark.browser
+
+PROTOCOL = """
+format = 1
+name = "browser"
+lambda = 0.01
+seed = 5
+reproduction_duration_s = 2.0
+[assignment]
+block_size = 2
+seed = 1
+[texts]
+welcome = "Welcome to the test study."
+consent = "Consent text."
+instructions = "How to teach."
+reproduction = "This is what the robot learnt."
+thank_you = "Thank you, all done."
+[practice]
+skill = "sim-point"
+duration_s = 3
+text = "Practice freely."
+[[phases]]
+id = "P1"
+skill = "sim-point"
+episodes = 1
+demonstrations = 3
+instructions = "First part: teach skill 1."
+[[phases]]
+id = "P3"
+skill = "sim-point"
+episodes = 1
+demonstrations = 3
+guidance = ["target"]
+instructions = "Second part: teach skill 1 again."
+"""
+PAGE = "/voila/render/study_sim.ipynb"
+
+
+def button(page, name):
+    # Icons add to a button's accessible name: match the words, nothing else.
+    return page.get_by_role("button", name=re.compile(rf"^\W*{re.escape(name)}\s*$"))
+
+
+def open_and_fill(page, server, protocol_path, participant):
+    page.goto(server.url(PAGE), timeout=60_000)
+    page.get_by_text("Experimenter", exact=True).wait_for(timeout=60_000)
+    protocol = page.get_by_placeholder("paper-sim, paper-uarm or a .toml/.json file")
+    protocol.fill(str(protocol_path))
+    protocol.press("Enter")
+    page.get_by_text("Protocol 'browser'").wait_for(timeout=10_000)
+    page.get_by_placeholder("pseudonymous code, e.g. P07").fill(participant)
+
+
+def log_events(server, participant):
+    path = server.logs / f"{participant}.jsonl"
+    return read_events(path)[0] if path.exists() else []
+
+
+def wait_for_log(server, participant, predicate, timeout=15.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        events = log_events(server, participant)
+        if predicate(events):
+            return events
+        time.sleep(0.05)
+    raise AssertionError(f"the log never satisfied the condition; last event: {log_events(server, participant)[-1:]}")
+
+
+def drag(page, ee_pixel, offset):
+    """A real drag from the end-effector, through the CSS-scaled canvas box."""
+    element = page.locator("canvas").first
+    box = element.bounding_box()
+    width, height = element.evaluate("c => [c.width, c.height]")
+
+    def to_page(x, y):
+        return box["x"] + x * box["width"] / width, box["y"] + y * box["height"] / height
+
+    start = to_page(*ee_pixel)
+    end = to_page(ee_pixel[0] + offset[0], ee_pixel[1] + offset[1])
+    page.mouse.move(*start)
+    page.mouse.down()
+    for fraction in np.linspace(0.25, 1.0, 4):
+        page.mouse.move(start[0] + fraction * (end[0] - start[0]), start[1] + fraction * (end[1] - start[1]))
+    page.mouse.up()
+
+
+YELLOW = (240, 228, 66)  # the end-effector marker (Okabe-Ito yellow)
+
+
+def wait_for_marker(page, ee_pixel, timeout=15_000):
+    """Waits until the page holds one episode (two canvases: teaching, reproduction) and the
+    teaching canvas shows the end-effector marker at ``ee_pixel``: drawn, not just present."""
+    page.wait_for_function(
+        """([x, y, rgb]) => {
+            const all = document.querySelectorAll('canvas');
+            if (all.length !== 2) return false;
+            const d = all[0].getContext('2d').getImageData(Math.round(x) - 2, Math.round(y) - 2, 5, 5).data;
+            for (let i = 0; i < d.length; i += 4) {
+                if (Math.abs(d[i] - rgb[0]) < 40 && Math.abs(d[i + 1] - rgb[1]) < 40
+                    && Math.abs(d[i + 2] - rgb[2]) < 40 && d[i + 3] > 200) return true;
+            }
+            return false;
+        }""", arg=[float(ee_pixel[0]), float(ee_pixel[1]), list(YELLOW)], timeout=timeout)
+
+
+def current_episode(server, participant):
+    started = [e for e in log_events(server, participant) if e["type"] == "episode_started"]
+    return started[-1]
+
+
+def demonstrate(page, server, participant, index, offset):
+    """Draws and confirms the arrow at query state ``index``; waits until it is on disk."""
+    episode = current_episode(server, participant)
+    view = ArmView(SKILLS[episode["skill"]])
+    ee = view.end_effector_pixel(np.asarray(episode["query_states"][index]))
+    wait_for_marker(page, ee)
+    confirm = button(page, "Confirm")
+    for _ in range(3):  # the canvas takes the drag once the state is drawn: retry a missed one
+        drag(page, ee, offset)
+        try:
+            page.wait_for_function("b => !b.disabled", arg=confirm.element_handle(), timeout=3_000)
+            break
+        except Exception:
+            continue
+    confirm.click()
+    key = (episode["phase"], episode["episode"], index)
+    return wait_for_log(server, participant, lambda events: any(
+        (e["phase"], e["episode"], e["index"]) == key for e in events if e["type"] == "demonstration"))
+
+
+def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resumes(page, voila_study, shot,
+                                                                                      tmp_path):
+    protocol_path = tmp_path / "browser.toml"
+    protocol_path.write_text(PROTOCOL)
+    participant = "B01"
+    open_and_fill(page, voila_study, protocol_path, participant)
+    page.get_by_label("Group").select_option(label="target")
+    page.screenshot(path=shot("experimenter"))
+    button(page, "Start new participant").click()
+
+    page.get_by_text("Welcome to the test study.").wait_for(timeout=15_000)
+    assert page.get_by_text("Experimenter", exact=True).count() == 0  # the panel has left the page
+    page.screenshot(path=shot("welcome"))
+    button(page, "Continue").click()
+    button(page, "I agree").click()
+    button(page, "Start the practice").click()
+
+    # Practice: free drawing; the study cannot be entered before the practice time is over.
+    page.get_by_text("Practice freely.").wait_for()
+    assert button(page, "Continue to the study").is_disabled()
+    practice_view = ArmView(SKILLS["sim-point"])
+    practice_states = SKILLS["sim-point"].query_states(seed=np.random.SeedSequence(12345).spawn(1)[0])
+    wait_for_marker(page, practice_view.end_effector_pixel(practice_states[0]))
+    drag(page, practice_view.end_effector_pixel(practice_states[0]), (60, -30))
+    page.screenshot(path=shot("practice"))
+    page.get_by_text("Practice time is over.").wait_for(timeout=10_000)
+    button(page, "Continue to the study").click()
+
+    # P1: an episode without guidance, then the reproduction.
+    page.get_by_text("First part: teach skill 1.").wait_for()
+    button(page, "Start").click()
+    page.get_by_text("Part 1 of 2, round 1 of 1").wait_for()
+    for index in range(3):
+        demonstrate(page, voila_study, participant, index, (50 - 20 * index, -40))
+    assert page.get_by_text("optimal action").count() == 0
+    wait_for_log(voila_study, participant, lambda events: events[-1]["type"] == "episode_finished")
+    page.get_by_text("This is what the robot learnt.").wait_for()
+    page.screenshot(path=shot("reproduction"))
+    button(page, "Continue").click()
+
+    # P3 (target group): guidance after each demonstration.
+    page.get_by_text("Second part: teach skill 1 again.").wait_for()
+    button(page, "Start").click()
+    demonstrate(page, voila_study, participant, 0, (40, 30))
+    page.get_by_text("optimal action", exact=False).first.wait_for()
+    page.screenshot(path=shot("guidance"))
+    button(page, "Next state").click()
+    demonstrate(page, voila_study, participant, 1, (-40, 30))
+
+    # A reload mid-episode: a new kernel; the experimenter resumes the participant.
+    page.reload()
+    page.get_by_text("Experimenter", exact=True).wait_for(timeout=60_000)
+    open_and_fill(page, voila_study, protocol_path, participant)
+    button(page, "Resume participant").click()
+    try:
+        page.get_by_text("Part 2 of 2, round 1 of 1").wait_for(timeout=15_000)
+    except Exception:
+        page.screenshot(path=shot("resume-failed"))
+        raise AssertionError(f"resume failed; the page says: {page.inner_text('body')[:1500]}") from None
+    page.screenshot(path=shot("resumed"))
+    demonstrate(page, voila_study, participant, 2, (30, 50))
+    button(page, "Finish and watch").click()
+    page.get_by_text("This is what the robot learnt.").wait_for()
+    button(page, "Continue").click()
+    page.get_by_text("Thank you, all done.").wait_for()
+    page.screenshot(path=shot("thank-you"))
+
+    events = wait_for_log(voila_study, participant, lambda events: events[-1]["type"] == "session_finished")
+    demos = [(e["phase"], e["episode"], e["index"]) for e in events if e["type"] == "demonstration"]
+    assert demos == [("P1", 1, 0), ("P1", 1, 1), ("P1", 1, 2), ("P3", 1, 0), ("P3", 1, 1), ("P3", 1, 2)]
+    assert [e["guidance_shown"] for e in events if e["type"] == "demonstration"] == [False] * 3 + [True] * 3
+    assert any(e["type"] == "session_resumed" for e in events)
+    drawn = [e for e in events if e["type"] == "demonstration"]
+    assert all(e["input"]["method"] == "pointer" and e["time_to_first_input_s"] is not None for e in drawn)
+    episodes, demonstrations = read_study(voila_study.logs)
+    assert [(r["phase"], r["group"]) for r in episodes] == [("P1", "target"), ("P3", "target")]
+    assert len(demonstrations) == 6
+    json.dumps(episodes)
