@@ -205,6 +205,8 @@ def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resum
     except Exception:
         page.screenshot(path=shot("resume-failed"))
         raise AssertionError(f"resume failed; the page says: {page.inner_text('body')[:1500]}") from None
+    episode = current_episode(voila_study, participant)
+    wait_for_marker(page, ArmView(SKILLS["sim-point"]).end_effector_pixel(np.asarray(episode["query_states"][2])))
     page.screenshot(path=shot("resumed"))
     demonstrate(page, voila_study, participant, 2, (30, 50))
     button(page, "Finish and watch").click()
