@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import asyncio
 import html
+import math
 import os
 import time
 from pathlib import Path
@@ -267,7 +268,8 @@ class StudyApp(VBox):
             self._practice_left.value = "<b>Practice time is over.</b> Continue when you are ready."
             self._practice_done.disabled = False
             return
-        self._practice_left.value = f"<b>Practice time left: {int(left // 60)}:{int(left % 60):02d}</b>"
+        shown = int(math.ceil(left))  # never "0:00" while time is left
+        self._practice_left.value = f"<b>Practice time left: {shown // 60}:{shown % 60:02d}</b>"
         try:
             loop = asyncio.get_event_loop()
         except RuntimeError:  # no event loop (a script): the button stays for code to press
