@@ -16,6 +16,7 @@ and for colour-blind readers.
 from __future__ import annotations
 
 import json
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -383,7 +384,10 @@ def teaching_report(episodes, demonstrations, participant, changes=PAPER_CHANGES
 
     text = figure.add_subplot(grid[3, :])
     text.set_axis_off()
-    text.text(0, 1, "\n".join(_report_sentences(frame, participant, changes)), va="top", fontsize=10, wrap=True)
+    # Wrapped here rather than by matplotlib: wrap=True ignores the page margin under a
+    # constrained layout, and a take-home page must not lose the ends of its sentences.
+    lines = [textwrap.fill(line, 100, subsequent_indent="  ") for line in _report_sentences(frame, participant, changes)]
+    text.text(0, 1, "\n".join(lines), va="top", fontsize=9.5)
     return figure
 
 
@@ -423,6 +427,6 @@ def _report_sentences(frame: pd.DataFrame, participant: str, changes) -> list[st
     lines.append("")
     lines.append("Teaching error measures how far the skill the robot learnt from your arrows is from the "
                  "true skill (0 = perfect).")
-    lines.append("Tip: the best arrows grow with the distance to the target and also brake the arm's motion -")
-    lines.append("the length matters as much as the direction.")
+    lines.append("Tip: the best arrows grow with the distance to the target and also brake the arm's motion - "
+                 "the length matters as much as the direction.")
     return lines
