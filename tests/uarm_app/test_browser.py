@@ -1,0 +1,67 @@
+"""The uArm teaching view in Voila, in a real browser, against the simulated arm."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from mt_widgets import SKILLS, RidgeLearner
+from mt_widgets.core import DEFAULT_LAMBDA
+
+from browser.helpers import OKABE, status, to_page, wait_for_color, wait_for_status
+
+# The page's screen: 600 x 400 mm at 1200 x 800 px (2 px per mm, 20 px per cm), the arm's base
+# at canvas pixel (600, 690), its +X pointing up the screen.
+PX_PER_CM, BASE = 20.0, np.array([600.0, 690.0])
+# ipycanvas 0.14 composites a MultiCanvas into one <canvas>: the teaching view is the first.
+ROBOT = BACKGROUND = ARROWS = 0
+
+
+def pixel(point_cm) -> np.ndarray:
+    r1, r2 = point_cm
+    return BASE + PX_PER_CM * np.array([-r2, -r1])
+
+
+@pytest.mark.browser
+def test_the_uarm_view_draws_takes_a_real_drag_and_moves_the_simulated_arm(uarm_voila, tall_page, artifacts):
+    page = tall_page
+    skill = SKILLS["uarm-point"]
+    states = skill.query_states(seed=0)
+    page.goto(uarm_voila.url("/voila/render/uarm_view.ipynb"), timeout=60_000)
+    # Drawn pixels: the black dot at the first query state, the red target at (23, 11) cm.
+    wait_for_color(page, ROBOT, *pixel(states[0]), OKABE["black"], timeout=60_000)
+    wait_for_color(page, BACKGROUND, *pixel((23.0, 11.0)), (255, 0, 0))
+    page.screenshot(path=artifacts("first-state"))
+    label = page.locator("text=/^arm at x = /").first
+    x, y = map(float, re.findall(r"-?\d+\.\d", label.inner_text()))
+    assert (x, y) == pytest.approx(tuple(states[0] * 10), abs=0.06)  # the arm shows the query state
+
+    for index, state in enumerate(states):
+        wait_for_color(page, ROBOT, *pixel(state), OKABE["black"])
+        start = pixel(state)
+        page.mouse.move(*to_page(page, ARROWS, *start))
+        page.mouse.down()
+        for fraction in (0.25, 0.5, 0.75, 1.0):  # 40 px up the screen: +2 cm in r1
+            page.mouse.move(*to_page(page, ARROWS, start[0], start[1] - 40 * fraction))
+        page.mouse.up()
+        # The readout follows the drag; the final position of the pointer is the action.
+        pending = wait_for_status(page, "s.pending !== null && s.pending[0] > 1.9")["pending"]
+        assert pending == pytest.approx([2.0, 0.0], abs=0.1)
+        if index == 0:
+            wait_for_color(page, ARROWS, start[0], start[1] - 20, (124, 252, 0), tolerance=60)  # the user's arrow
+            page.screenshot(path=artifacts("drag"))
+        page.get_by_role("button", name="Confirm").click()
+        wait_for_status(page, f"s.demonstrations.length === {index + 1}")
+
+    # The reproduction of what was learnt runs on the simulated arm; its position is read back.
+    wait_for_status(page, "s.phase === 'finished'")
+    demonstrations = np.array(status(page)["demonstrations"])
+    theta_hat = RidgeLearner(lam=DEFAULT_LAMBDA).fit(skill.features(states), demonstrations)
+    final_mm = skill.reproduce(theta_hat).final_position * 10
+    page.wait_for_function("() => document.body.innerText.includes('finished its reproduction')", timeout=30_000)
+    x, y = map(float, re.findall(r"-?\d+\.\d", label.inner_text()))
+    assert np.hypot(x - final_mm[0], y - final_mm[1]) < 0.6  # min_move_mm: tiny last steps are not sent
+    assert np.hypot(x - states[-1][0] * 10, y - states[-1][1] * 10) > 5.0  # it did move
+    page.screenshot(path=artifacts("reproduced"))
