@@ -33,9 +33,29 @@ def make_rng(seed) -> np.random.Generator:
     raise ValueError(f"seed: expected a non-negative int, a numpy SeedSequence or Generator, or None, got {seed!r}")
 
 
+_CHUNK = 8
+
+
+def _condition_numbers(rows: np.ndarray, candidates: np.ndarray) -> np.ndarray:
+    """Condition number of ``rows`` with each candidate row appended: (k, S), (m, S) -> (m,)."""
+    if len(rows) == 0:  # one row: a single singular value, its norm
+        return np.where(np.linalg.norm(candidates, axis=1) > 0, 1.0, np.inf)
+    stacks = np.concatenate([np.broadcast_to(rows, (len(candidates),) + rows.shape), candidates[:, None, :]], axis=1)
+    singular = np.linalg.svd(stacks, compute_uv=False)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(singular[:, -1] > 0, singular[:, 0] / singular[:, -1], np.inf)
+
+
 def sample_query_states(plant, feature_map, n: int, seed=None, max_condition: float = 20.0,
-                        max_candidates: int = 10_000) -> np.ndarray:
+                        max_candidates: int = 20_000, block: int = 32, patience: int = 256) -> np.ndarray:
     """Draws n query states, each accepted only while the features stay well conditioned.
+
+    Candidates are drawn in blocks of ``block`` and tested together (one batched SVD), then
+    accepted in the order drawn, so the result depends only on the seed. When ``patience``
+    candidates in a row fail to extend the current set (the states so far leave no
+    well-conditioned way to continue, which happens for a few seeds in a thousand), the
+    most recently accepted state is dropped and the search goes on: a protocol's seed never
+    dead-ends.
 
     Args:
         plant: where candidates come from (``plant.sample_states``) and what is valid.
@@ -44,6 +64,8 @@ def sample_query_states(plant, feature_map, n: int, seed=None, max_condition: fl
         seed: int, SeedSequence, Generator or None.
         max_condition: the largest condition number the partial feature matrix may reach.
         max_candidates: give up after this many candidates (raises ValueError).
+        block: candidates drawn and tested at once.
+        patience: consecutive failures before backtracking one state.
 
     Returns:
         states: (n, state_dim).
@@ -52,19 +74,42 @@ def sample_query_states(plant, feature_map, n: int, seed=None, max_condition: fl
     max_condition = as_positive("max_condition", max_condition)
     if max_condition < 1:
         raise ValueError(f"max_condition: expected a condition number >= 1, got {max_condition}")
+    block = as_count("block", block)
+    patience = as_count("patience", patience)
     rng = make_rng(seed)
-    accepted: list[np.ndarray] = []
-    rows: list[np.ndarray] = []
-    for _ in range(max_candidates):
-        candidate = plant.sample_states(rng, 1)
-        if not plant.is_valid_state(candidate)[0]:
-            continue
-        phi = feature_map(candidate)[0]
-        if condition_number(np.array(rows + [phi])) <= max_condition:
-            accepted.append(candidate[0])
-            rows.append(phi)
+    accepted = np.empty((0, plant.state_dim))
+    rows = np.empty((0, feature_map.dim))
+    drawn = failures = 0
+    while drawn < max_candidates:
+        candidates = plant.sample_states(rng, block)
+        drawn += block
+        candidates = candidates[plant.is_valid_state(candidates)]
+        features = feature_map(candidates)
+        start = 0
+        while start < len(candidates):
+            # Test a few candidates at a time: usually one of the first few passes, and an SVD
+            # of candidates that are never looked at is wasted.
+            chunk = features[start:start + _CHUNK]
+            passing = np.flatnonzero(_condition_numbers(rows, chunk) <= max_condition)
+            if passing.size == 0:
+                failures += len(chunk)
+                start += len(chunk)
+                continue
+            chosen = start + passing[0]
+            failures += passing[0]
+            if failures >= patience and len(accepted) > 0:
+                # Backtrack instead of accepting: the current set has proved hard to extend.
+                accepted, rows, failures = accepted[:-1], rows[:-1], 0
+                start = chosen
+                continue
+            accepted = np.vstack([accepted, candidates[chosen]])
+            rows = np.vstack([rows, features[chosen]])
+            failures = 0
             if len(accepted) == n:
-                return np.array(accepted)
+                return accepted
+            start = chosen + 1
+        if failures >= patience and len(accepted) > 0:
+            accepted, rows, failures = accepted[:-1], rows[:-1], 0
     raise ValueError(f"max_condition: found only {len(accepted)} of {n} states with a condition number under "
                      f"{max_condition} in {max_candidates} candidates; raise max_condition or lower n")
 
