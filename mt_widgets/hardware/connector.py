@@ -129,6 +129,11 @@ class SwiftPro:
         self._lock = threading.Lock()
         self._write_lock = threading.Lock()
         self._move_lock = threading.Lock()
+        # Every stop() starts a new generation; a move is sent only if no stop came since its
+        # move_to() began. Checked and sent under _stop_lock, so a stop either finds the move
+        # already on the wire (and cuts it) or the move finds the stop (and is never sent).
+        self._stop_lock = threading.Lock()
+        self._stop_generation = 0
         self._slots = threading.Semaphore(max_in_flight)
         self._pending: dict[int, _Pending] = {}
         self._order: deque[int] = deque()
@@ -372,9 +377,13 @@ class SwiftPro:
             self._events_cond.notify_all()
 
     # ================================================================== requests
-    def _submit(self, command: str, *params: tuple[str, float]) -> _Pending:
+    def _submit(self, command: str, *params: tuple[str, float], move_generation: int | None = None) -> _Pending:
         """Send a numbered request; returns its pending record. Private: no raw G-code
-        reaches a participant-facing UI."""
+        reaches a participant-facing UI.
+
+        With ``move_generation`` the request is a move: it is sent only if no :meth:`stop`
+        came since that generation, and it becomes the current move that a stop cuts.
+        """
         self._check_alive()
         if not self._slots.acquire(timeout=self.timeout):
             raise SwiftProTimeout(
@@ -382,12 +391,17 @@ class SwiftPro:
         pending = None
         try:
             self._check_alive()
-            with self._lock:
-                number = self._allocate_number()
-                pending = _Pending(number, command, threading.Event())
-                self._pending[number] = pending
-                self._order.append(number)
-            self._send(protocol.build_request(number, command, *params))
+            with self._stop_lock:
+                if move_generation is not None and move_generation != self._stop_generation:
+                    raise SwiftProStopped(f"{command!r} was not sent: stop() came before it")
+                with self._lock:
+                    number = self._allocate_number()
+                    pending = _Pending(number, command, threading.Event())
+                    self._pending[number] = pending
+                    self._order.append(number)
+                if move_generation is not None:
+                    self._current_move = pending
+                self._send(protocol.build_request(number, command, *params))
         except BaseException:
             if pending is None:
                 self._slots.release()
@@ -547,6 +561,7 @@ class SwiftPro:
         # Round to the 4 decimals that go on the wire before checking, so that what is
         # checked is exactly what is sent.
         target = self.envelope.check_point(*(round(v, 4) for v in self.envelope.check_point(x, y, z)))
+        generation = self._stop_generation
         self._check_alive()
         with self._move_lock:
             start = self._last_target if self._last_target is not None else self.position()
@@ -568,8 +583,8 @@ class SwiftPro:
             duration = math.dist(start, target) / speed
             self._stopped = False
             self._last_target = None  # unknown until the move is confirmed
-            pending = self._submit(word, ("X", target[0]), ("Y", target[1]), ("Z", target[2]), ("F", feed))
-            self._current_move = pending
+            pending = self._submit(word, ("X", target[0]), ("Y", target[1]), ("Z", target[2]), ("F", feed),
+                                   move_generation=generation)
             try:
                 self._wait(pending, self.timeout + 1.5 * duration)
                 if self.firmware_major == 3:
@@ -597,7 +612,10 @@ class SwiftPro:
         :meth:`resume` to go on); 3.x ``G2203``. UNCERTAIN (the doc): whether the firmware
         ever answers the cut move, so its number is retired here.
         """
-        self._stopped = True
+        with self._stop_lock:
+            self._stop_generation += 1
+            self._stopped = True
+            move = self._current_move
         version = self.firmware_version or (4, 0, 0)
         if version[0] == 3:
             self._request("G2203")
@@ -605,7 +623,6 @@ class SwiftPro:
             self._request("S1100")
         else:
             self._request("S1000", ("V", 0))
-        move = self._current_move
         if move is not None:
             with self._lock:
                 if self._pending.pop(move.number, None) is not None:

@@ -295,3 +295,25 @@ def test_numbers_are_sent_in_fixed_decimal_form(arm4):
     arm4.move_to(200.00001, 1e-5, 80.0)
     line = moves_sent(arm4)[-1]
     assert "e" not in line.lower().replace("#", "") and " Y0 " in line
+
+
+def test_a_stop_while_the_arm_checks_reachability_means_the_move_is_never_sent():
+    # The window between the reachability answer (M2222) and the move: stop() must win.
+    with SwiftPro(sim_url(), timeout=1.0) as arm:
+        ask_arm = arm.is_reachable
+
+        def reachable_then_stopped(*target):
+            answer = ask_arm(*target)
+            arm.stop()
+            return answer
+
+        arm.is_reachable = reachable_then_stopped
+        with pytest.raises(SwiftProStopped, match="not sent"):
+            arm.move_to(250.0, 20.0)
+        lines = sent_lines(arm)
+        last_stop = max(i for i, line in enumerate(lines) if line.split()[1:2] in (["S1100"], ["S1000"], ["G2203"]))
+        assert not any(line.split()[1] in ("G0", "G1") for line in lines[last_stop:])
+        assert not any(line.split()[1] in ("G0", "G1") for line in lines if "X250" in line.replace(" ", ""))
+        arm.is_reachable = ask_arm
+        arm.move_to(250.0, 20.0)  # a new move after the stop goes through
+        assert arm.position()[:2] == pytest.approx((250.0, 20.0), abs=0.01)
