@@ -45,6 +45,19 @@ def default_log_folder(protocol_name: str = "paper-sim") -> Path:
     return Path.home() / "mt-widgets-studies" / protocol_name
 
 
+def _kernel_loop():
+    """The kernel's running asyncio loop (timers in Voila and Lab), or None in a plain script."""
+    try:
+        return asyncio.get_running_loop()
+    except RuntimeError:
+        pass
+    try:
+        loop = asyncio.get_event_loop_policy().get_event_loop()
+    except RuntimeError:
+        return None
+    return loop if loop.is_running() else None
+
+
 def _paragraphs(text: str) -> str:
     """Protocol text (paragraphs separated by blank lines) as escaped HTML paragraphs."""
     blocks = [" ".join(block.split()) for block in text.strip().split("\n\n") if block.strip()]
@@ -261,6 +274,8 @@ class StudyApp(VBox):
 
     def _practice_round_over(self) -> None:
         self._practice_again.layout.display = None
+        result = self.episode.result if self.episode is not None else None
+        self._enable_after(self._practice_again, float(result.trajectory.times[-1]) if result else 0.0)
 
     def _tick(self, duration_s: float) -> None:
         left = duration_s - (time.monotonic() - self._practice_started)
@@ -270,9 +285,8 @@ class StudyApp(VBox):
             return
         shown = int(math.ceil(left))  # never "0:00" while time is left
         self._practice_left.value = f"<b>Practice time left: {shown // 60}:{shown % 60:02d}</b>"
-        try:
-            loop = asyncio.get_event_loop()
-        except RuntimeError:  # no event loop (a script): the button stays for code to press
+        loop = _kernel_loop()
+        if loop is None:  # no running event loop (a script): the button stays for code to press
             return
         self._timer = loop.call_later(min(1.0, left), self._tick, duration_s)
 
@@ -349,7 +363,22 @@ class StudyApp(VBox):
     def _show_reproduction_controls(self) -> None:
         self._reproduction_text.value = _paragraphs(self.session.protocol.texts["reproduction"])
         self._continue.layout.display = None
-        self._continue.disabled = False
+        trajectory = self.episode.result.trajectory if self.episode is not None and self.episode.result else None
+        self._enable_after(self._continue, 0.0 if trajectory is None else float(trajectory.times[-1]))
+
+    def _enable_after(self, button: Button, seconds: float) -> None:
+        """Enables ``button`` once the reproduction has played (``seconds`` plus a margin).
+
+        The participant watches the whole reproduction (it is the study's feedback), and the
+        browser's canvas manager plays an animation's frames in order, so a new episode's
+        drawing is never queued behind the old one's frames while its view is replaced.
+        """
+        button.disabled = True
+        loop = _kernel_loop()
+        if loop is None or seconds <= 0:  # code driving the app (no kernel event loop): at once
+            button.disabled = False
+            return
+        loop.call_later(seconds + 0.75, lambda: setattr(button, "disabled", False))
 
 
 def participant_texts(widget) -> list[str]:

@@ -126,12 +126,19 @@ def current_episode(server, participant):
     return started[-1]
 
 
-def demonstrate(page, server, participant, index, offset):
-    """Draws and confirms the arrow at query state ``index``; waits until it is on disk."""
+def demonstrate(page, server, participant, phase, index, offset):
+    """Draws and confirms the arrow at query state ``index`` of ``phase``; waits until it is on disk."""
+    # The episode's query states are logged when the kernel enters it: wait for that first.
+    wait_for_log(server, participant, lambda events: any(
+        e["type"] == "episode_started" and e["phase"] == phase for e in events))
     episode = current_episode(server, participant)
     view = ArmView(SKILLS[episode["skill"]])
     ee = view.end_effector_pixel(np.asarray(episode["query_states"][index]))
-    wait_for_marker(page, ee)
+    try:
+        wait_for_marker(page, ee)
+    except Exception:
+        page.screenshot(path=f"/work/main/test-artifacts/study-page-no-marker-{episode['phase']}-{index}.png")
+        raise
     confirm = button(page, "Confirm")
     for _ in range(3):  # the canvas takes the drag once the state is drawn: retry a missed one
         drag(page, ee, offset)
@@ -179,7 +186,7 @@ def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resum
     button(page, "Start").click()
     page.get_by_text("Part 1 of 2, round 1 of 1").wait_for()
     for index in range(3):
-        demonstrate(page, voila_study, participant, index, (50 - 20 * index, -40))
+        demonstrate(page, voila_study, participant, "P1", index, (50 - 20 * index, -40))
     assert page.get_by_text("optimal action").count() == 0
     wait_for_log(voila_study, participant, lambda events: events[-1]["type"] == "episode_finished")
     page.get_by_text("This is what the robot learnt.").wait_for()
@@ -189,11 +196,11 @@ def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resum
     # P3 (target group): guidance after each demonstration.
     page.get_by_text("Second part: teach skill 1 again.").wait_for()
     button(page, "Start").click()
-    demonstrate(page, voila_study, participant, 0, (40, 30))
+    demonstrate(page, voila_study, participant, "P3", 0, (40, 30))
     page.get_by_text("optimal action", exact=False).first.wait_for()
     page.screenshot(path=shot("guidance"))
     button(page, "Next state").click()
-    demonstrate(page, voila_study, participant, 1, (-40, 30))
+    demonstrate(page, voila_study, participant, "P3", 1, (-40, 30))
 
     # A reload mid-episode: a new kernel; the experimenter resumes the participant.
     page.reload()
@@ -208,7 +215,7 @@ def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resum
     episode = current_episode(voila_study, participant)
     wait_for_marker(page, ArmView(SKILLS["sim-point"]).end_effector_pixel(np.asarray(episode["query_states"][2])))
     page.screenshot(path=shot("resumed"))
-    demonstrate(page, voila_study, participant, 2, (30, 50))
+    demonstrate(page, voila_study, participant, "P3", 2, (30, 50))
     button(page, "Finish and watch").click()
     page.get_by_text("This is what the robot learnt.").wait_for()
     button(page, "Continue").click()

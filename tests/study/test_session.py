@@ -175,3 +175,12 @@ def test_the_export_has_one_row_per_episode_and_per_demonstration(study, tmp_pat
         assert analysis.risk == pytest.approx(episode["teaching_error"], rel=1e-9)
         np.testing.assert_allclose(analysis.theta_hat, json.loads(episode["theta_hat"]), rtol=1e-9)
         assert episode["started_at"].endswith("Z") and episode["duration_s"] >= 0
+
+
+def test_the_study_package_imports_no_widgets_and_no_serial():
+    import subprocess
+    import sys
+    code = ("import sys, mt_widgets.study; bad = [m for m in sys.modules if m.split('.')[0] in "
+            "('ipywidgets', 'ipycanvas', 'serial', 'pandas', 'mt_widgets.apps')]; print(bad); sys.exit(bool(bad))")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert result.returncode == 0, result.stdout + result.stderr
