@@ -316,6 +316,14 @@ class StudyApp(VBox):
         episode.player.error_label.layout.display = "none"
         episode.player.status.layout.display = "none"
         episode.on_finished(lambda _: self._silence_player(episode))
+        return self.prepare_episode(episode)
+
+    def prepare_episode(self, episode: EpisodeWidget) -> EpisodeWidget:
+        """Called with every episode (practice included) once it is built; returns the one to show.
+
+        The hook for apps built on this one: the uArm app wires each episode to the arm here.
+        The default shows the episode as it is.
+        """
         return episode
 
     @staticmethod

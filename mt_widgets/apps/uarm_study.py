@@ -250,10 +250,9 @@ class UArmStudyApp(StudyApp):
         self.arm_status = HTML(f"<div><b>Arm:</b> {arm_view.panel.port.value}</div>")
         self.children = [self.arm_status, *self.children]
 
-    def _episode_widget(self, *args, **kwargs) -> EpisodeWidget:
-        # The study engineer's factory builds the episode (blinding, hidden labels); the arm is
-        # wired around it. See NOTES_FOR_UARM.md for a public hook that would replace this.
-        return self.arm_teaching.attach(super()._episode_widget(*args, **kwargs))
+    def prepare_episode(self, episode: EpisodeWidget) -> EpisodeWidget:
+        # StudyApp builds the episode (blinding, hidden labels); the arm is wired around it.
+        return self.arm_teaching.attach(episode)
 
 
 __all__ = ["ArmPanel", "UArmEpisodePage", "UArmStudyApp", "UArmTeaching"]
