@@ -4,6 +4,7 @@
 - ``TeachingCanvas``: query states one after another, an arrow drawn at each.
 - ``ArmView``: the workspace, target and robot on layered canvases.
 - ``ReproductionPlayer``: the learnt skill's rollout as an animation.
+- ``DemoPage``: the visitors' one-click page (skill chooser, guidance switch, try again).
 - ``EffortProgress``, ``GuidancePanel``: the progress bars and the guidance in words.
 - ``ViewTransform``: world <-> pixel mapping; ``draw_arrow``: arrow rendering;
   ``play_frames``: animation; ``THEMES``: colour-blind-safe default and the paper's look.
@@ -15,6 +16,7 @@ from .animation import frame_times, play_frames, sample_at
 from .arm_view import LAYERS, ArmView
 from .arrows import draw_arrow
 from .coords import ViewTransform
+from .demo import DEMO_SKILLS, DemoPage
 from .episode import DemonstrationRecord, EpisodeResult, EpisodeWidget
 from .guidance import GuidancePanel, explain_difference, legend_html
 from .progress import EffortProgress
@@ -25,7 +27,7 @@ from .teaching import ConfirmedAction, TeachingCanvas, describe_action
 from .theme import DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, ArrowStyle, Theme, get_theme
 
 __all__ = [
-    "ArmView", "ArrowStyle", "ConfirmedAction", "DEFAULT_THEME", "DemonstrationRecord", "EffortProgress",
+    "ArmView", "ArrowStyle", "ConfirmedAction", "DEFAULT_THEME", "DEMO_SKILLS", "DemoPage", "DemonstrationRecord", "EffortProgress",
     "EpisodeResult", "EpisodeWidget", "GuidancePanel", "LAYERS", "PAPER_THEME", "PAPER_UARM_THEME",
     "ReproductionPlayer", "SimArmPainter", "THEMES", "TeachingCanvas", "Theme", "UArmPainter", "ViewTransform",
     "describe_action", "draw_arrow", "drawing_batch", "explain_difference", "frame_times", "get_theme",

@@ -27,6 +27,12 @@ from .theme import get_theme
 
 LAYERS = ("background", "ghost", "robot", "arrows")
 
+# Text sizes in CSS pixels as the user sees them. A canvas shown narrower than its pixel
+# width (``css_width``) shrinks its text too: at 360 px for 480 canvas pixels the first
+# version's 11 px tick labels read as 8 px, too small for a novice to read the scale.
+TICK_FONT_PX = 12.0
+LABEL_FONT_PX = 13.0
+
 # Default arrow lengths, in world units per action unit: chosen so that a typical action
 # of each robot is a clearly visible arrow (sim: about 1-3 N -> 0.35-1 m; uArm: about
 # 1-4 cm of displacement per step -> 2-8 cm on screen). The scale bar shows the value.
@@ -38,6 +44,23 @@ def default_canvas_size(xlim, ylim, max_width: int = 480, max_height: int = 480,
     span_x, span_y = xlim[1] - xlim[0], ylim[1] - ylim[0]
     scale = min((max_width - 2 * margin) / span_x, (max_height - 2 * margin) / span_y)
     return int(round(span_x * scale + 2 * margin)), int(round(span_y * scale + 2 * margin))
+
+
+def _text_scale(css_width: str | None, width: int) -> float:
+    """Canvas pixels per CSS pixel when the width is given in pixels (e.g. "360px"), else 1.
+
+    A relative width ("100%") is unknown until the page lays it out; such canvases are
+    usually shown near their own size, so their text is drawn at its nominal size.
+    """
+    if css_width and css_width.strip().endswith("px"):
+        try:
+            shown = float(css_width.strip()[:-2])
+        except ValueError:
+            raise ValueError(f"css_width: expected e.g. '360px' or '100%', got {css_width!r}") from None
+        if shown > 0:
+            # Capped so that a very small view does not get labels wider than its margins.
+            return min(max(width / shown, 1.0), 1.5)
+    return 1.0
 
 
 class ArmView:
@@ -67,6 +90,7 @@ class ArmView:
         self.transform = ViewTransform(tuple(box.xlim), tuple(box.ylim), width, height, 34.0,
                                        float(action_length))
         layout = Layout(width=css_width, height="auto") if css_width else Layout()
+        self.text_scale = _text_scale(css_width, width)
         self.canvas = MultiCanvas(len(LAYERS), width=width, height=height, layout=layout)
         self.painter = painter_for(skill)
         self._painters: dict[str, Callable[[object], None]] = {}
@@ -130,7 +154,7 @@ class ArmView:
         (a, b), (c, d) = t.to_pixel([[x0, y0], [x1, y1]])
         canvas.stroke_rect(a, d, c - a, b - d)
         canvas.fill_style = theme.text
-        canvas.font = "11px sans-serif"
+        canvas.font = self._font(TICK_FONT_PX)
         canvas.text_align = "center"
         canvas.text_baseline = "top"
         for x in xs:
@@ -143,10 +167,13 @@ class ArmView:
             canvas.fill_text(f"{y:g}", px - 4, py)
         canvas.text_align = "left"
         canvas.text_baseline = "top"
-        canvas.fill_text(f"{self.skill.units}", 4, 4)
+        canvas.fill_text(f"positions in {self.skill.units}", 4, 4)
         self._draw_workspace_outline(canvas)
         self._draw_target(canvas)
         self._draw_scale_bar(canvas)
+
+    def _font(self, css_px: float) -> str:
+        return f"{round(css_px * self.text_scale)}px sans-serif"
 
     def _draw_workspace_outline(self, canvas) -> None:
         sector = getattr(getattr(self.skill, "plant", None), "workspace", None)
@@ -192,7 +219,7 @@ class ArmView:
         else:
             label_at = t.to_pixel(target.point)
             canvas.fill_circle(float(label_at[0]), float(label_at[1]), 7.0)
-        canvas.font = "12px sans-serif"
+        canvas.font = self._font(LABEL_FONT_PX)
         canvas.text_align = "left"
         canvas.text_baseline = "bottom"
         canvas.fill_text("target", float(label_at[0]) + 9, float(label_at[1]) - 6)
@@ -209,7 +236,7 @@ class ArmView:
         canvas.stroke_line(x, y - 4, x, y + 4)
         canvas.stroke_line(x + length, y - 4, x + length, y + 4)
         canvas.fill_style = self.theme.text
-        canvas.font = "11px sans-serif"
+        canvas.font = self._font(TICK_FONT_PX)
         canvas.text_align = "right"
         canvas.text_baseline = "bottom"
         canvas.fill_text(f"arrows: {step:g} {self.skill.action_units}", t.width - 12, y - 5)

@@ -152,8 +152,11 @@ class ReproductionPlayer(VBox):
         trajectory, units = self.trajectory, self.skill.units
         end = trajectory.positions[-1]
         if self.error is not None:
+            # Fixed decimals: the optimal demonstration gives an error like 3.3e-15, which a
+            # novice reads as a large number; 0.000 says what it is.
             self.error_label.value = (f"<b>Teaching error</b> E = ||vec(&Theta;&#770;) &minus; vec(&Theta;)|| = "
-                                      f"<b>{self.error:.3g}</b>")
+                                      f"<b>{self.error:.3f}</b> <small>(0 = the robot learnt the skill "
+                                      f"exactly)</small>")
         if trajectory.diverged:
             when = "" if trajectory.diverged_at is None else f" at t = {trajectory.diverged_at:.2f} s"
             self.status.value = (

@@ -19,7 +19,7 @@ def test_background_is_drawn_once_and_shows_the_point_target(recorder):
     circles = [args for name, args in background if name == "fillCircle"]
     assert any(np.allclose(args[:2], target_px) for args in circles), "a dot at the target point"
     texts = [args[0] for name, args in background if name == "fillText"]
-    assert "m" in texts and any(t.startswith("arrows: ") and t.endswith(" N") for t in texts)
+    assert "positions in m" in texts and any(t.startswith("arrows: ") and t.endswith(" N") for t in texts)
     recorder.clear()
     view.show_state(skill.start)
     assert recorder.on(view.layer("background")) == [], "showing a state leaves the background alone"
@@ -193,3 +193,16 @@ def test_a_diverging_skill_is_shown_as_diverged(recorder):
     assert "diverged" in player.status.value
     strokes = [a for n, a in recorder.on(player.view.layer("robot")) if n == "strokeLine"]
     assert len(strokes) >= 2, "a cross at the point of divergence"
+
+
+def test_canvas_text_keeps_its_size_on_screen_when_the_canvas_is_shown_smaller(recorder):
+    # 480 canvas pixels shown 360 px wide: text drawn at 12 px would read as 9 px.
+    skill = SKILLS["sim-point"]
+    fonts = {}
+    for css_width in (None, "360px"):
+        recorder.clear()
+        view = ArmView(skill, css_width=css_width)
+        fonts[css_width] = {args[1] for name, args in recorder.on(view.layer("background"))
+                            if name == "set" and isinstance(args[1], str) and args[1].endswith("px sans-serif")}
+    assert fonts[None] == {"12px sans-serif", "13px sans-serif"}
+    assert fonts["360px"] == {"16px sans-serif", "17px sans-serif"}          # 12 and 13 px times 480 / 360

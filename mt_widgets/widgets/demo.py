@@ -1,0 +1,101 @@
+"""The visitors' demo: one page, no code, an episode with a skill chooser and a guidance switch.
+
+``notebooks/demo.ipynb`` shows a ``DemoPage`` and nothing else, so Voila (or Binder with
+``?urlpath=voila/render/notebooks/demo.ipynb``) gives a one-click page. The page only
+composes ``EpisodeWidget``: choosing a skill, switching guidance or asking for new states
+starts a fresh episode; the teaching error comes from the episode's result.
+"""
+
+from __future__ import annotations
+
+from ipywidgets import HTML, Box, Button, Checkbox, Layout, ToggleButtons, VBox
+
+from mt_widgets.core import SKILLS
+
+from .episode import EpisodeResult, EpisodeWidget
+
+#: The four skills of the paper, as a visitor reads them on the chooser.
+DEMO_SKILLS = (
+    ("Arm: reach a point", "sim-point"),
+    ("Arm: reach a line", "sim-line"),
+    ("uArm: reach a point", "uarm-point"),
+    ("uArm: reach a line", "uarm-line"),
+)
+
+WELCOME = (
+    "<h2 style='margin:4px 0'>Teach a robot by showing it what to do</h2>"
+    "<div style='max-width:760px'>At each state of the robot, press on its hand and drag an arrow: the "
+    "push you would give it there. After your last arrow the robot learns from them and shows what "
+    "it learnt. With guidance on, you also see the best arrow after each of yours.</div>"
+)
+
+
+def _close_tree(widget) -> None:
+    """Close ``widget`` and every widget under it (``close()`` alone leaves the children open)."""
+    for child in (*getattr(widget, "children", ()), *getattr(widget, "_canvases", ())):
+        _close_tree(child)
+    widget.close()
+
+
+class DemoPage(VBox):
+    """A welcome line, a skill chooser, a guidance switch, an episode and a "try again" button.
+
+    Args:
+        skill: Key of the first skill shown (one of ``DEMO_SKILLS``).
+        guidance: Whether guidance starts on.
+        seed: Seed of the first query states; "Try again with new states" adds one.
+        episode_options: Further keyword arguments for every ``EpisodeWidget`` (e.g. ``duration``).
+    """
+
+    def __init__(self, skill: str = "sim-point", guidance: bool = True, seed: int = 0, **episode_options):
+        keys = [key for _, key in DEMO_SKILLS]
+        if skill not in keys:
+            raise ValueError(f"skill: expected one of {keys}, got {skill!r}")
+        self.seed = int(seed)
+        self.episode_options = episode_options
+        self.errors: list[tuple[str, bool, float]] = []
+        self.skill_chooser = ToggleButtons(options=list(DEMO_SKILLS), value=skill, description="Skill:",
+                                           style={"button_width": "150px"},
+                                           tooltips=[SKILLS[key].title for key in keys])
+        self.guidance_switch = Checkbox(value=bool(guidance), description="Guidance: show the best arrow after "
+                                        "each of mine", indent=False, layout=Layout(width="auto"))
+        self.new_states_button = Button(description="Try again with new states", icon="refresh",
+                                        layout=Layout(width="auto"))
+        self.result_line = HTML(value="")
+        self.episode_slot = Box()
+        self.episode: EpisodeWidget | None = None
+        self.skill_chooser.observe(lambda _: self.start_episode(), names="value")
+        self.guidance_switch.observe(lambda _: self.start_episode(), names="value")
+        self.new_states_button.on_click(lambda _: self.start_episode(new_states=True))
+        # The result and "try again" come after the episode: that is where a visitor's eyes are
+        # when the reproduction ends.
+        super().__init__([HTML(WELCOME), self.skill_chooser, self.guidance_switch, self.episode_slot,
+                          self.result_line, self.new_states_button])
+        self.start_episode()
+
+    def start_episode(self, new_states: bool = False) -> EpisodeWidget:
+        """Replace the episode with a fresh one for the chosen skill and guidance setting."""
+        if new_states:
+            self.seed += 1
+        if self.episode is not None:
+            # A kiosk page may run for hours: the replaced episode's widgets leave the kernel too.
+            _close_tree(self.episode)
+        self.episode = EpisodeWidget(self.skill_chooser.value, seed=self.seed, guidance=self.guidance_switch.value,
+                                     on_finished=self._on_finished, **self.episode_options)
+        self.episode_slot.children = [self.episode]
+        self.result_line.value = ""
+        return self.episode
+
+    def _on_finished(self, result: EpisodeResult) -> None:
+        guided = self.guidance_switch.value
+        self.errors.append((result.skill_key, guided, result.error))
+        earlier = [error for key, with_guidance, error in self.errors[:-1]
+                   if key == result.skill_key and with_guidance == guided]
+        history = (f" Your best before on this skill ({'with' if guided else 'without'} guidance): "
+                   f"{min(earlier):.3f}." if earlier else "")
+        advice = ("Switch guidance off and try again: can you teach as well without help?" if guided
+                  else "Switch guidance on to see the best arrow after each of yours.")
+        self.result_line.value = (
+            f"<div style='font-size:1.15em;margin:6px 0;max-width:760px'><b>Your teaching error: "
+            f"{result.error:.3f}</b> (0 means the robot learnt the skill exactly; it is the distance between "
+            f"what the robot learnt and the skill).{history} {advice}</div>")

@@ -1,0 +1,56 @@
+"""The visitors' demo page: choosing a skill, guidance or new states starts a fresh episode."""
+
+import numpy as np
+import pytest
+
+from mt_widgets.widgets import DEMO_SKILLS, DemoPage
+
+
+def finish(episode):
+    while episode.phase != "finished":
+        if episode.phase == "guidance":
+            episode.next()
+        else:
+            episode.demonstrate(episode.optimal[episode.state_index] + [0.3, -0.2])
+
+
+def test_the_page_offers_the_four_skills_and_starts_with_the_chosen_one(recorder):
+    page = DemoPage(skill="uarm-line", guidance=False, duration=1.0)
+    assert [key for _, key in DEMO_SKILLS] == ["sim-point", "sim-line", "uarm-point", "uarm-line"]
+    assert page.episode.skill.key == "uarm-line" and page.episode.guidance is False
+    with pytest.raises(ValueError, match="skill"):
+        DemoPage(skill="sim-circle")
+
+
+def test_switching_the_skill_or_guidance_replaces_the_episode_and_closes_the_old_one(recorder):
+    page = DemoPage(duration=1.0)
+    first = page.episode
+    first_canvas = first.teaching.view.canvas
+    page.skill_chooser.value = "uarm-point"
+    assert page.episode is not first and page.episode.skill.key == "uarm-point"
+    assert page.episode_slot.children == (page.episode,)
+    assert first_canvas.comm is None and first_canvas[0].comm is None          # closed, not leaked
+    page.guidance_switch.value = False
+    assert page.episode.guidance is False and page.episode.skill.key == "uarm-point"
+
+
+def test_try_again_gives_new_query_states_of_the_same_skill(recorder):
+    page = DemoPage(duration=1.0)
+    before = page.episode.query_states
+    page.new_states_button.click()
+    assert page.episode.skill.key == "sim-point"
+    assert page.episode.query_states.shape == before.shape and not np.allclose(page.episode.query_states, before)
+
+
+def test_the_teaching_error_is_shown_after_the_episode_and_compared_with_earlier_tries(recorder):
+    page = DemoPage(duration=1.0)
+    assert page.result_line.value == ""
+    finish(page.episode)
+    first = page.episode.result.error
+    assert first > 0.01
+    assert f"{first:.3f}" in page.result_line.value and "best before" not in page.result_line.value
+    page.new_states_button.click()
+    assert page.result_line.value == ""
+    finish(page.episode)
+    assert f"{page.episode.result.error:.3f}" in page.result_line.value
+    assert f"best before on this skill (with guidance): {first:.3f}" in page.result_line.value
