@@ -59,9 +59,44 @@ def main() -> None:
         print(f"  {change}: Welch {tests['welch']:.3f}, Mann-Whitney {tests['mannwhitney']:.3f} "
               f"(mean Hedges' g {power.mean_effect[change]:.2f})")
 
-    print("in-silico (32 participants, seed 0) against the paper:")
-    print(compare_with_paper(study).round(3).to_string(index=False))
+    print_comparisons(simulation=study)
 
+
+def print_comparisons(simulation=None, large_per_group: int = 2000) -> None:
+    """The in-silico runs against the paper, for both experiments: 32 participants on seed 0 and
+    a large run (the fit's population moments), then the baselines and the P1 vs P2 check."""
+    from mt_widgets.study.in_silico import (
+        baseline_comparison,
+        compare_with_paper,
+        experiment_of,
+        paper_results,
+        run_in_silico,
+        run_many_studies,
+    )
+    from mt_widgets.study.statistics import posthoc_baseline
+    for protocol in ("paper-sim", "paper-uarm"):
+        experiment = experiment_of(protocol)
+        study = simulation if protocol == "paper-sim" and simulation is not None else \
+            run_in_silico(32, protocol=protocol, seed=0, reproduce=False, progress=False)
+        table = compare_with_paper(study)
+        large = run_many_studies(1, large_per_group, seed=7, share_states=True, progress=False, protocol=protocol)
+        table["large_mean"] = [float(large[r.change][r.group].mean()) for r in table.itertuples()]
+        table["large_sd"] = [float(large[r.change][r.group].std(ddof=1)) for r in table.itertuples()]
+        columns = ["change", "group", "paper_mean", "paper_sd", "in_silico_mean", "in_silico_sd", "large_mean",
+                   "large_sd"]
+        print(f"\n{experiment} experiment ({protocol}): 32 participants on seed 0 (in_silico_*) and "
+              f"2 x {large_per_group} on the protocol's query states (large_*); every row later minus "
+              f"earlier, negative = better")
+        print(table[columns].round(2).to_string(index=False))
+        baselines = baseline_comparison(study)
+        baselines["large_mean"] = [float(large["P1_to_P3E8" if ph == "P1" else "P2_to_P5"]["before"].mean())
+                                   for ph in baselines.phase]
+        print("baselines (paper: implied by its changes and % reductions):")
+        print(baselines.round(2).to_string(index=False))
+        posthoc = posthoc_baseline(study.episodes)
+        reported = paper_results()[experiment].get("p1_vs_p2_posthoc_p")
+        print(f"P1 vs P2 post-hoc check, seed 0 (paper: {reported if reported else 'not reported'}):")
+        print(posthoc.round(4).to_string(index=False))
 
 if __name__ == "__main__":
     main()

@@ -25,7 +25,14 @@ import pandas as pd
 
 from mt_widgets.core import SKILLS, SeedSchedule
 
-from .synthetic_teachers import TeacherParameters, TeacherPopulation, naive_offsets, position_gain
+from .synthetic_teachers import (
+    TeacherParameters,
+    TeacherPopulation,
+    along_line_offsets,
+    naive_offsets,
+    paper_fit,
+    position_gain,
+)
 
 
 # -- the protocol, as far as the engine needs it ---------------------------------------------------
@@ -68,6 +75,40 @@ def query_states_for(protocol, step: dict, participant: int | None = None, study
     who = participant if protocol.query_states == "per-participant" else None
     seed = schedule.seed(step["states_index"], step["episode_index"], who)
     return SKILLS[step["skill"]].query_states(seed=seed, n=step["demonstrations"])
+
+
+def imagined_line_target(protocol, phase_index: int):
+    """The point a novice takes for a line skill's target in phase ``phase_index`` (model item 1b).
+
+    It is the point target they last practised or taught on the same robot before this phase
+    (the practice skill counts first): in the paper's protocols skill 1's point, practised for
+    two minutes and taught in P1 just before the line appears in P2.
+
+    Args:
+        protocol: the ``Protocol``.
+        phase_index: the 0-based index of the phase in ``protocol.phases``.
+
+    Returns:
+        (2,) the point in the skill's units, or None (a point skill, or no point taught before).
+    """
+    phase = protocol.phases[phase_index]
+    skill = SKILLS[phase.skill]
+    if not hasattr(skill.target, "direction"):
+        return None
+    before = [protocol.practice.skill] if protocol.practice.duration_s > 0 else []
+    before += [p.skill for p in protocol.phases[:phase_index]]
+    anchor = None
+    for key in before:
+        other = SKILLS[key]
+        if type(other.plant) is type(skill.plant) and other.target is not None \
+                and not hasattr(other.target, "direction"):
+            anchor = np.asarray(other.target.point, dtype=float)
+    return anchor
+
+
+def default_parameters(protocol) -> TeacherParameters:
+    """The fitted teacher parameters for a protocol: ``PAPER_FIT_UARM`` for a uArm protocol, else ``PAPER_FIT``."""
+    return paper_fit(resolve_protocol(protocol))
 
 
 def teacher_seed(seed: int, participant: int) -> np.random.SeedSequence:
@@ -198,6 +239,8 @@ def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study
         A, U_bar, rho1 = ridge_maps(Phi, skill.theta, protocol.lam)
         positions, _ = skill.end_effector(states)
         offsets = naive_offsets(positions, skill.target)[study_of]                  # (B, N, 2)
+        anchor = imagined_line_target(protocol, step["phase_index"])
+        along = None if anchor is None else along_line_offsets(positions, skill.target, anchor)[study_of]
         optimal = U_bar[study_of]                                                    # (B, N, R)
         gain = position_gain(skill.theta)
         n = states.shape[1]
@@ -205,7 +248,8 @@ def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study
         first = np.empty(optimal.shape[:2]) if keep_demonstrations else None
         drawing = np.empty(optimal.shape[:2]) if keep_demonstrations else None
         for d in range(n):
-            actions[:, d] = population.act(e, d, offsets[:, d], optimal[:, d], gain, skill.key, guided)
+            actions[:, d] = population.act(e, d, offsets[:, d], optimal[:, d], gain, skill.key, guided,
+                                           None if along is None else along[:, d])
             if keep_demonstrations:
                 first[:, d], drawing[:, d] = population.timings(e, d, guided)
             population.see_guidance(skill.key, guided)
@@ -259,7 +303,8 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
     Args:
         n_participants: how many participants.
         protocol: a ``Protocol``, a shipped name ("paper-sim", "paper-uarm") or a file path.
-        parameters: the teacher model's parameters (default ``PAPER_FIT``).
+        parameters: the teacher model's parameters (default: the protocol's fit, ``PAPER_FIT`` or
+            ``PAPER_FIT_UARM``; see ``default_parameters``).
         seed: root seed of the teachers (and of the group assignment when ``groups`` is None).
         groups: a group name per participant (default: the protocol's block randomisation,
             seeded).
@@ -274,6 +319,7 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
     protocol = resolve_protocol(protocol)
     if isinstance(n_participants, bool) or not isinstance(n_participants, (int, np.integer)) or n_participants < 1:
         raise ValueError(f"n_participants: expected a whole number >= 1, got {n_participants!r}")
+    parameters = default_parameters(protocol) if parameters is None else parameters
     if groups is None:
         groups = assign_groups(n_participants, protocol.groups, protocol.block_size, seed)
     groups = np.asarray(list(groups), dtype=object)
@@ -355,7 +401,7 @@ def run_many_studies(n_studies: int, n_per_group: int, seed: int = 0, parameters
         n_studies: studies to simulate.
         n_per_group: participants per group in each.
         seed: root seed.
-        parameters: ``TeacherParameters`` (default ``PAPER_FIT``).
+        parameters: ``TeacherParameters`` (default: the protocol's fit, ``default_parameters``).
         changes: ``Change`` comparisons (default the paper's three).
         progress: show a progress bar (default: for more than 50 studies).
         protocol: the ``Protocol`` (default the paper's simulation protocol).
@@ -368,6 +414,7 @@ def run_many_studies(n_studies: int, n_per_group: int, seed: int = 0, parameters
         {change name: {group: (n_studies, n_per_group) array of after - before}}.
     """
     protocol = resolve_protocol(protocol)
+    parameters = default_parameters(protocol) if parameters is None else parameters
     for name, value in (("n_studies", n_studies), ("n_per_group", n_per_group)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
             raise ValueError(f"{name}: expected a whole number >= 1, got {value!r}")
@@ -473,13 +520,50 @@ def simulate_changes(protocol, population: TeacherPopulation, n_studies: int, n_
 
 # -- how near the paper ---------------------------------------------------------------------------
 
-def compare_with_paper(result, reference: dict | None = None, experiment: str = "simulation") -> pd.DataFrame:
+#: The paper's rows whose names differ from ``PAPER_CHANGES``' and whose sign is flipped: the
+#: physical experiment prints its P1 -> P4 row as an improvement (positive = better).
+_PRINTED_AS_IMPROVEMENT = {"P1_to_P4_improvement": "P1_to_P4"}
+
+
+def paper_changes(reference: dict | None = None, experiment: str = "simulation") -> dict:
+    """The paper's changes of one experiment, every row as later minus earlier (negative = better).
+
+    Args:
+        reference: the paper's results (default: ``paper_results()``).
+        experiment: "simulation" or "physical".
+
+    Returns:
+        {change name (as in ``PAPER_CHANGES``): {group: {"mean", "sd"}}}; a row printed as an
+        improvement has its mean negated and keeps its SD.
+    """
+    reference = paper_results() if reference is None else reference
+    if experiment not in reference:
+        raise ValueError(f"experiment: expected one of {sorted(k for k in reference if 'changes' in reference[k])}, "
+                         f"got {experiment!r}")
+    out = {}
+    for name, groups in reference[experiment]["changes"].items():
+        flip = name in _PRINTED_AS_IMPROVEMENT
+        out[_PRINTED_AS_IMPROVEMENT.get(name, name)] = {
+            group: {"mean": -values["mean"] if flip else values["mean"], "sd": values["sd"]}
+            for group, values in groups.items() if isinstance(values, dict)}
+    return out
+
+
+def experiment_of(protocol) -> str:
+    """The paper's experiment a protocol replicates: "physical" on the uArm, else "simulation"."""
+    from .synthetic_teachers import runs_on_uarm
+    return "physical" if runs_on_uarm(resolve_protocol(protocol)) else "simulation"
+
+
+def compare_with_paper(result, reference: dict | None = None, experiment: str | None = None) -> pd.DataFrame:
     """Row-by-row comparison of an in-silico study's changes with the paper's.
 
     Args:
         result: an ``InSilicoStudy``, or episode rows.
         reference: the paper's results (default: ``paper_results()``).
-        experiment: "simulation" (the only one whose rows all read later minus earlier).
+        experiment: "simulation" or "physical" (default: the study's protocol's, else
+            "simulation"). The physical experiment's P1 -> P4 row, printed as an improvement,
+            is compared as later minus earlier like the others (``paper_changes``).
 
     Returns:
         One row per (change, group): the paper's mean and SD, the in-silico mean and SD, and
@@ -487,11 +571,12 @@ def compare_with_paper(result, reference: dict | None = None, experiment: str = 
         of the paper's SD), ``sd_ratio`` (in-silico / paper).
     """
     from .statistics import change_summary, participant_changes
-    reference = paper_results() if reference is None else reference
+    if experiment is None:
+        experiment = experiment_of(result.protocol) if isinstance(result, InSilicoStudy) else "simulation"
     episodes = result.episodes if isinstance(result, InSilicoStudy) else result
     summary = change_summary(participant_changes(episodes)).set_index(["change", "group"])
     rows = []
-    for name, groups in reference[experiment]["changes"].items():
+    for name, groups in paper_changes(reference, experiment).items():
         for group, values in groups.items():
             if (name, group) not in summary.index:
                 continue
@@ -504,23 +589,66 @@ def compare_with_paper(result, reference: dict | None = None, experiment: str = 
     return pd.DataFrame(rows)
 
 
-#: The paper's printed summary figures, as in /work/shared/reference/paper_results.json (the
-#: simulation experiment's rows, which the teacher model is fitted to).
-PAPER_SIMULATION_RESULTS = {
+def baseline_comparison(result, reference: dict | None = None, experiment: str | None = None) -> pd.DataFrame:
+    """The baselines (P1 and P2 teaching errors) of an in-silico study against the paper's.
+
+    The paper prints no baseline means; they follow from each target-group change and its
+    percentage reduction (baseline = -change / percent), e.g. P2 in simulation 1.47 / 50.03 %
+    = 2.94. Groups are pooled in silico (the randomisation makes them alike at baseline).
+
+    Args:
+        result: an ``InSilicoStudy``, or episode rows.
+        reference: the paper's results (default: ``paper_results()``).
+        experiment: "simulation" or "physical" (default: as ``compare_with_paper``).
+
+    Returns:
+        One row per baseline phase: ``phase``, ``paper_mean`` (implied), ``in_silico_mean``,
+        ``in_silico_sd``, ``n``.
+    """
+    from .synthetic_teachers import implied_baselines
+    if experiment is None:
+        experiment = experiment_of(result.protocol) if isinstance(result, InSilicoStudy) else "simulation"
+    episodes = result.episodes if isinstance(result, InSilicoStudy) else result
+    frame = pd.DataFrame(episodes)
+    rows = []
+    for phase, paper in implied_baselines(reference, experiment).items():
+        errors = frame[(frame.phase == phase) & (frame.episode == 1)].teaching_error.to_numpy(dtype=float)
+        rows.append({"phase": phase, "paper_mean": paper, "in_silico_mean": float(errors.mean()),
+                     "in_silico_sd": float(errors.std(ddof=1)) if errors.size > 1 else float("nan"),
+                     "n": int(errors.size)})
+    return pd.DataFrame(rows)
+
+
+#: The paper's printed summary figures, as in /work/shared/reference/paper_results.json: per
+#: experiment the changes (mean and SD per group) and the target group's percentage reductions.
+PAPER_RESULTS = {
     "simulation": {
+        "p1_vs_p2_posthoc_p": [0.0989, 0.1148],
         "changes": {
             "P1_to_P3E8": {"target": {"mean": -2.03, "sd": 0.82}, "control": {"mean": 0.025, "sd": 0.53}},
             "P1_to_P4": {"target": {"mean": -1.51, "sd": 0.84}, "control": {"mean": -0.22, "sd": 0.56}},
             "P2_to_P5": {"target": {"mean": -1.47, "sd": 0.80}, "control": {"mean": -0.06, "sd": 0.64}},
         },
         "percent_reduction_target": {"during_P3": 69.40, "P4_vs_P1": 51.47, "P5_vs_P2": 50.03},
-    }
+    },
+    "physical": {
+        "changes": {
+            "P1_to_P3E8": {"target": {"mean": -5.30, "sd": 1.79}, "control": {"mean": -1.54, "sd": 3.44}},
+            # Printed as an improvement (positive = better), unlike the other rows.
+            "P1_to_P4_improvement": {"target": {"mean": 4.55, "sd": 1.80}, "control": {"mean": -0.35, "sd": 2.46}},
+            "P2_to_P5": {"target": {"mean": -6.32, "sd": 2.92}, "control": {"mean": 2.21, "sd": 5.54}},
+        },
+        "percent_reduction_target": {"P3E8_vs_P1": 88.26, "P5_vs_P2": 77.34},
+    },
 }
+
+#: The simulation experiment alone (kept for code that read it before the physical rows came).
+PAPER_SIMULATION_RESULTS = {"simulation": PAPER_RESULTS["simulation"]}
 
 
 def paper_results() -> dict:
-    """The paper's reported simulation results (means and SDs of the changes, % reductions)."""
-    return json.loads(json.dumps(PAPER_SIMULATION_RESULTS))
+    """The paper's reported results of both experiments (a fresh copy: changes, % reductions)."""
+    return json.loads(json.dumps(PAPER_RESULTS))
 
 
 # -- through the session engine: real logs ---------------------------------------------------------
@@ -534,7 +662,7 @@ class SessionTeacher:
 
     Args:
         protocol: the ``Protocol``.
-        parameters: ``TeacherParameters`` (default ``PAPER_FIT``).
+        parameters: ``TeacherParameters`` (default: the protocol's fit, ``default_parameters``).
         seed: the teacher's seed (``teacher_seed(run_seed, participant)``).
     """
 
@@ -542,6 +670,7 @@ class SessionTeacher:
         self.protocol = protocol
         self.plan = episode_plan(protocol)
         self._episode_of = {(step["phase_index"], step["episode"]): e for e, step in enumerate(self.plan)}
+        parameters = default_parameters(protocol) if parameters is None else parameters
         self.population = TeacherPopulation.draw(parameters, [seed], len(self.plan),
                                                  max(step["demonstrations"] for step in self.plan))
         self._episode = None
@@ -572,12 +701,14 @@ class SessionTeacher:
             # position, and the optimal arrows its understanding blends in.
             positions, _ = skill.end_effector(step.query_states)
             optimal = optimal_actions(skill.features(step.query_states), skill.theta, self.protocol.lam)
-            self._episode = (e, naive_offsets(positions, skill.target), optimal)
-        _, offsets, optimal = self._episode
+            anchor = imagined_line_target(self.protocol, step.phase_index)
+            along = None if anchor is None else along_line_offsets(positions, skill.target, anchor)
+            self._episode = (e, naive_offsets(positions, skill.target), optimal, along)
+        _, offsets, optimal, along = self._episode
         d = step.index
         guided = np.array([bool(step.guidance)])
         action = self.population.act(e, d, offsets[d][None], optimal[d][None], position_gain(skill.theta),
-                                     skill.key, guided)[0]
+                                     skill.key, guided, None if along is None else along[d][None])[0]
         first, drawing = self.population.timings(e, d, guided)
         session.submit_demonstration(action, {"time_to_first_input_s": float(first[0]),
                                               "drawing_duration_s": float(drawing[0]), "method": "synthetic"},
@@ -599,7 +730,7 @@ def run_through_sessions(folder, n_participants: int = 8, protocol=None, paramet
         folder: the study folder (created; must not hold another protocol's study).
         n_participants: participants to run, coded "S001", "S002", ...
         protocol: a ``Protocol``, a shipped name or a path (default "paper-sim").
-        parameters: ``TeacherParameters`` (default ``PAPER_FIT``).
+        parameters: ``TeacherParameters`` (default: the protocol's fit, ``default_parameters``).
         seed: root seed of the teachers.
         groups: a group per participant, or None for the protocol's randomisation.
         progress: show a progress bar (default: for more than 16 participants).

@@ -8,10 +8,16 @@ import pandas as pd
 import pytest
 
 from mt_widgets.core import SKILLS
+from scipy import stats
+
 from mt_widgets.study.in_silico import (
     Progress,
+    baseline_comparison,
     compare_with_paper,
     episode_plan,
+    imagined_line_target,
+    paper_changes,
+    paper_results,
     resolve_protocol,
     run_in_silico,
     run_many_studies,
@@ -22,9 +28,13 @@ from mt_widgets.study.power import simulated_power
 from mt_widgets.study.synthetic_teachers import (
     OPTIMAL_TEACHER,
     PAPER_FIT,
+    PAPER_FIT_UARM,
     TeacherParameters,
     TeacherPopulation,
+    implied_baselines,
+    line_foot,
     naive_offsets,
+    paper_fit,
     with_parameters,
 )
 
@@ -116,13 +126,114 @@ def test_batched_engine_and_session_engine_give_the_same_study(tmp_path):
     assert logged_demos.drawing_duration_s.to_numpy() == pytest.approx(batched_demos.drawing_duration_s.to_numpy())
 
 
-def test_the_fitted_teachers_land_near_the_papers_changes():
-    deltas = run_many_studies(1, 600, seed=21, share_states=True, progress=False)
-    from mt_widgets.study.in_silico import paper_results
-    for name, groups in paper_results()["simulation"]["changes"].items():
+@pytest.mark.parametrize("protocol", ["paper-sim", "paper-uarm"])
+def test_the_fitted_teachers_land_near_the_papers_changes(protocol):
+    # A large run on another seed than the fit's (0): each change's mean lies within half the
+    # paper's SD of the paper's, and its SD between 0.4 and 1.6 times the paper's (the control
+    # groups' SDs come out low, 0.6-0.8 times: see README). Two exceptions,
+    # both the uArm control group, whose printed changes move (-1.54 better by P3E8, +2.21 worse
+    # by P5) where teachers who only turn their arrows cannot move on average: its P1 -> P3E8
+    # mean is allowed 0.75 SD (the model gives about +0.8, the P3E8 states being a little harder
+    # for the same habit), and its P2 -> P5 SD (paper 5.54) is not checked (about 1.5).
+    experiment = "physical" if protocol == "paper-uarm" else "simulation"
+    deltas = run_many_studies(1, 600, seed=21, share_states=True, progress=False, protocol=protocol)
+    for name, groups in paper_changes(paper_results(), experiment).items():
         for group, paper in groups.items():
-            assert abs(deltas[name][group].mean() - paper["mean"]) < 0.5 * paper["sd"], (name, group)
-            assert 0.4 < deltas[name][group].std(ddof=1) / paper["sd"] < 1.6, (name, group)
+            allowed = 0.75 if (experiment, name, group) == ("physical", "P1_to_P3E8", "control") else 0.5
+            assert abs(deltas[name][group].mean() - paper["mean"]) < allowed * paper["sd"], (name, group)
+            if (experiment, name, group) != ("physical", "P2_to_P5", "control"):
+                assert 0.4 < deltas[name][group].std(ddof=1) / paper["sd"] < 1.6, (name, group)
+
+
+@pytest.mark.parametrize("protocol", ["paper-sim", "paper-uarm"])
+def test_the_fitted_baselines_are_the_ones_the_papers_percentages_imply(protocol):
+    experiment = "physical" if protocol == "paper-uarm" else "simulation"
+    deltas = run_many_studies(1, 600, seed=21, share_states=True, progress=False, protocol=protocol)
+    implied = implied_baselines(paper_results(), experiment)
+    # P1 is the baseline of P1 -> P3E8, P2 of P2 -> P5; within 5 % of the paper's.
+    assert deltas["P1_to_P3E8"]["before"].mean() == pytest.approx(implied["P1"], rel=0.05)
+    assert deltas["P2_to_P5"]["before"].mean() == pytest.approx(implied["P2"], rel=0.05)
+
+
+def test_the_papers_baselines_follow_from_its_changes_and_percentages():
+    simulation = implied_baselines(paper_results(), "simulation")
+    assert simulation["P1"] == pytest.approx((2.03 / 0.6940 + 1.51 / 0.5147) / 2)
+    assert simulation["P2"] == pytest.approx(1.47 / 0.5003)
+    physical = implied_baselines(paper_results(), "physical")
+    assert physical == pytest.approx({"P1": 5.30 / 0.8826, "P2": 6.32 / 0.7734})
+
+
+def test_in_the_simulation_the_two_baselines_do_not_differ_as_in_the_paper():
+    # The paper's post-hoc check finds no difference between the P1 and P2 errors (p = 0.0989,
+    # 0.1148). Over 150 studies of 2 x 16 with their own query states, the paired t-test of
+    # P1 against P2 within a group is significant at 0.05 in only a few of them (a model whose
+    # line baseline sat at 2.2 against P1's 3.0 made it significant in nearly every study).
+    deltas = run_many_studies(150, 16, seed=3, progress=False, workers=1)
+    p1, p2 = deltas["P1_to_P3E8"]["before"], deltas["P2_to_P5"]["before"]
+    for members in (slice(0, 16), slice(16, 32)):
+        p = stats.ttest_rel(p1[:, members], p2[:, members], axis=1).pvalue
+        assert np.mean(p < 0.05) < 0.25
+        assert np.median(p) > 0.1
+
+
+def test_novices_aim_at_the_point_they_taught_when_asked_for_a_line():
+    # Model item 1b: on the line skill the arrow aims at (1 - s) * foot + s * anchor, the
+    # anchor being skill 1's point (0.8, 1.2) m, which lies on the line r1 = 0.8.
+    protocol = resolve_protocol("paper-sim")
+    assert np.array_equal(imagined_line_target(protocol, 1), [0.8, 1.2])
+    assert imagined_line_target(protocol, 0) is None
+    steady = with_parameters(QUIET, exploration=0.0)
+    for share in (0.0, 0.6):
+        study = run_in_silico(4, parameters=with_parameters(steady, line_as_point=share), groups=["control"] * 4,
+                              reproduce=False, protocol=protocol)
+        p2 = study.demonstrations[study.demonstrations.phase == "P2"]
+        states = np.array([np.array(eval(s)) for s in p2.state])
+        positions, _ = SKILLS["sim-line"].end_effector(states)
+        aim = np.column_stack([np.full(len(positions), 0.8), (1 - share) * positions[:, 1] + share * 1.2])
+        offsets = aim - positions
+        actions = p2[["action_1", "action_2"]].to_numpy()
+        cross = offsets[:, 0] * actions[:, 1] - offsets[:, 1] * actions[:, 0]
+        assert np.abs(cross).max() < 1e-9 * np.abs(actions).max() * np.abs(offsets).max()
+        assert np.all(np.sum(offsets * actions, axis=1) > 0)
+
+
+def test_the_uarm_line_is_taken_for_skill_1s_point_projected_onto_it():
+    anchor = imagined_line_target(resolve_protocol("paper-uarm"), 1)
+    assert np.array_equal(anchor, [23.0, 11.0])
+    # (23, 11) cm is 0.4 cm off r1 = 2 r2; the teacher aims at its foot on the line.
+    assert line_foot(anchor, SKILLS["uarm-line"].target) == pytest.approx([22.8, 11.4])
+
+
+def test_each_protocol_runs_with_its_own_fit():
+    assert paper_fit("paper-sim") is PAPER_FIT
+    assert paper_fit("paper-uarm") is PAPER_FIT_UARM
+    assert PAPER_FIT_UARM != PAPER_FIT
+    assert run_in_silico(4, protocol="paper-uarm", reproduce=False).parameters is PAPER_FIT_UARM
+
+
+def test_the_physical_p1_to_p4_row_is_compared_as_later_minus_earlier():
+    # The paper prints it as an improvement, 4.55 +- 1.80 for the target group.
+    physical = paper_changes(paper_results(), "physical")
+    assert physical["P1_to_P4"]["target"] == {"mean": -4.55, "sd": 1.80}
+    assert physical["P1_to_P4"]["control"] == {"mean": 0.35, "sd": 2.46}
+    assert physical["P2_to_P5"]["control"] == {"mean": 2.21, "sd": 5.54}
+    table = compare_with_paper(run_in_silico(16, protocol="paper-uarm", reproduce=False))
+    assert len(table) == 6
+    row = table[(table.change == "P1_to_P4") & (table.group == "target")].iloc[0]
+    assert row.paper_mean == -4.55 and row.in_silico_mean < 0
+
+
+def test_an_unknown_experiment_is_named_in_the_error():
+    with pytest.raises(ValueError, match="experiment"):
+        paper_changes(paper_results(), "orbital")
+
+
+def test_baseline_comparison_reads_the_first_episode_of_p1_and_p2():
+    study = run_in_silico(8, reproduce=False)
+    table = baseline_comparison(study).set_index("phase")
+    rows = study.episodes
+    assert table.loc["P2", "in_silico_mean"] == pytest.approx(rows[rows.phase == "P2"].teaching_error.mean())
+    assert table.loc["P1", "paper_mean"] == pytest.approx(implied_baselines(paper_results(), "simulation")["P1"])
 
 
 def test_compare_with_paper_has_one_row_per_change_and_group():
