@@ -21,6 +21,10 @@ EXAMPLE_STUDY = Path(__file__).parent / "data" / "synthetic-sim"
 #: How the shipped study was made (``write_example_study`` uses these).
 EXAMPLE_SETTINGS = {"n_participants": 8, "protocol": "paper-sim", "seed": 2024}
 
+#: The synthetic uArm study shipped with the package: the same, on the physical protocol.
+EXAMPLE_UARM_STUDY = Path(__file__).parent / "data" / "synthetic-uarm"
+EXAMPLE_UARM_SETTINGS = {"n_participants": 8, "protocol": "paper-uarm", "seed": 2024}
+
 
 @dataclass
 class StudyAnalysis:
@@ -128,5 +132,6 @@ def write_example_study(folder=EXAMPLE_STUDY, overwrite: bool = False, **setting
     return folder
 
 
-if __name__ == "__main__":  # python -m mt_widgets.study.analysis  regenerates the shipped study
+if __name__ == "__main__":  # python -m mt_widgets.study.analysis  regenerates the shipped studies
     print(write_example_study(overwrite=True))
+    print(write_example_study(EXAMPLE_UARM_STUDY, overwrite=True, **EXAMPLE_UARM_SETTINGS))

@@ -285,3 +285,18 @@ def test_the_plan_follows_the_protocol():
     plan = episode_plan(resolve_protocol("paper-sim"))
     assert [f"{s['phase']}E{s['episode']}" for s in plan][:4] == ["P1E1", "P2E1", "P3E1", "P3E2"]
     assert len(plan) == 12
+
+
+@pytest.mark.parametrize("which", ["sim", "uarm"])
+def test_the_shipped_synthetic_studies_are_what_the_current_model_writes(which, tmp_path):
+    # Fails when the teacher model or a fit changes without ``python -m mt_widgets.study.analysis``.
+    from mt_widgets.study import analysis
+    from mt_widgets.study.tidy import read_study
+    folder, settings = {"sim": (analysis.EXAMPLE_STUDY, analysis.EXAMPLE_SETTINGS),
+                        "uarm": (analysis.EXAMPLE_UARM_STUDY, analysis.EXAMPLE_UARM_SETTINGS)}[which]
+    fresh = analysis.write_example_study(tmp_path / which, **settings)
+    key = ["participant", "phase_index", "episode"]
+    shipped = pd.DataFrame(read_study(folder)[0]).sort_values(key)
+    rewritten = pd.DataFrame(read_study(fresh)[0]).sort_values(key)
+    assert set(shipped.skill) == set(rewritten.skill)
+    assert shipped.teaching_error.to_numpy() == pytest.approx(rewritten.teaching_error.to_numpy(), rel=1e-9)
