@@ -164,7 +164,8 @@ class ArmView:
         canvas.text_baseline = "middle"
         for y in ys:
             px, py = t.to_pixel([x0, y])
-            canvas.fill_text(f"{y:g}", px - 4, py)
+            # 9 px clear of the plot's left edge: the uArm's base dot sits on it at y = 0.
+            canvas.fill_text(f"{y:g}", px - 9, py)
         canvas.text_align = "left"
         canvas.text_baseline = "top"
         canvas.fill_text(f"positions in {self.skill.units}", 4, 4)

@@ -274,8 +274,9 @@ class TeachingCanvas(VBox):
         if self.current_state is None:
             self.readout.value = f"<b>All {self.n_states} demonstrations given.</b>"
         elif self.pending_action is None:
-            self.readout.value = (f"<b>State {n + 1} of {self.n_states}</b>: press on the end-effector and drag "
-                                  f"to draw the action.")
+            # "the robot's hand (the dot)": novices and visitors do not know "end-effector".
+            self.readout.value = (f"<b>State {n + 1} of {self.n_states}</b>: press on the robot's hand (the dot) "
+                                  f"and drag to draw the action.")
         else:
             self.readout.value = (f"<b>State {n + 1} of {self.n_states}</b>: your arrow "
                                   f"{describe_action(self.pending_action, units)}")
@@ -316,7 +317,7 @@ class TeachingCanvas(VBox):
         near_tip = (self.pending_action is not None and np.hypot(
             *(pointer - view.transform.action_tip(origin, self.pending_action))) <= self.grab_radius)
         if not (near_origin or near_tip):
-            self.hint.value = "<small>Press on the end-effector (the marker) to start an arrow.</small>"
+            self.hint.value = "<small>Press on the robot's hand (the dot) to start an arrow.</small>"
             return
         self.hint.value = ""
         self._dragging = True

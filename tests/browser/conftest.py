@@ -21,6 +21,7 @@ from pathlib import Path
 import pytest
 
 PAGES = Path(__file__).parent / "pages"
+DEMO = Path(__file__).resolve().parents[2] / "notebooks" / "demo.ipynb"      # the visitors' page, served as is
 ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
 CHROMIUM = os.environ.get("MT_WIDGETS_CHROMIUM", "/usr/bin/chromium")
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
@@ -92,7 +93,7 @@ class Server:
 def _copy_pages(root: Path) -> None:
     notebooks = root / "notebooks"
     notebooks.mkdir(parents=True, exist_ok=True)
-    for page in PAGES.glob("*.ipynb"):
+    for page in [*PAGES.glob("*.ipynb"), DEMO]:
         shutil.copy(page, notebooks / page.name)
 
 
@@ -135,8 +136,12 @@ def voila_server(tmp_path_factory):
     root = tmp_path_factory.mktemp("voila")
     _copy_pages(root)
     port = _free_port()
+    # Preheated kernels: Voila runs each page's notebook before it is asked for, so opening a
+    # page takes about 3 s instead of 5-6 s here. The widgets must then draw into views that
+    # attach after the kernel ran, which is the ipycanvas #322 case these tests are about.
     server = Server([str(BIN / "voila"), str(root / "notebooks"), "--no-browser", f"--port={port}",
-                     "--Voila.ip=127.0.0.1"], port, root, "voila", f"http://127.0.0.1:{port}")
+                     "--Voila.ip=127.0.0.1", "--preheat_kernel=True", "--pool_size=1"],
+                    port, root, "voila", f"http://127.0.0.1:{port}")
     yield server
     server.stop()
 

@@ -70,11 +70,42 @@ def _wait_status(page, predicate, timeout):
         }""", arg=predicate, timeout=timeout)
 
 
-def reference_episode():
-    """The same episode as the test page, built here without a kernel, for expected pixels."""
+# The episodes the test pages build (pages/*.ipynb), to compute expected pixels without a kernel.
+PAGE_EPISODES = {
+    "episode_sim.ipynb": dict(skill="sim-point", seed=0, guidance=True, duration=2.0, css_width="360px"),
+    "episode_uarm.ipynb": dict(skill="uarm-point", seed=0, guidance=True, css_width="260px"),
+}
+
+
+def reference_episode(page_name: str = "episode_sim.ipynb"):
+    """The same episode as a test page, built here without a kernel, for expected pixels."""
     from mt_widgets.widgets import EpisodeWidget
-    return EpisodeWidget("sim-point", seed=0, guidance=True, duration=2.0, css_width="360px")
+    return EpisodeWidget(**PAGE_EPISODES[page_name])
 
 
 def ee_pixel(episode, index: int = 0) -> np.ndarray:
     return episode.teaching.view.end_effector_pixel(episode.query_states[index])
+
+
+def drag(page, index: int, start_px, end_px, steps: int = 5) -> tuple[float, float]:
+    """A real drag on canvas ``index`` from canvas pixel ``start_px`` to ``end_px``; returns the page end.
+
+    Chromium reports whole CSS pixels (clientX is truncated), so the drag ends on a whole one.
+    """
+    start = to_page(page, index, *start_px)
+    end = tuple(float(round(v)) for v in to_page(page, index, *end_px))
+    page.mouse.move(*start)
+    page.mouse.down()
+    for fraction in np.linspace(1.0 / steps, 1.0, steps):
+        page.mouse.move(start[0] + fraction * (end[0] - start[0]), start[1] + fraction * (end[1] - start[1]))
+    page.mouse.up()
+    return end
+
+
+def wait_for_pending(page, expected, tolerance: float) -> dict:
+    """Wait until Python's pending action is ``expected`` (2,) within ``tolerance``.
+
+    A drag's intermediate moves reach the kernel first; this waits for the release's action.
+    """
+    return wait_for_status(page, f"s.pending !== null && Math.abs(s.pending[0] - {expected[0]}) < {tolerance}"
+                                 f" && Math.abs(s.pending[1] - {expected[1]}) < {tolerance}")

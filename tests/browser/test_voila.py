@@ -5,16 +5,13 @@ import time
 import numpy as np
 import pytest
 
-from .helpers import (OKABE, canvas, ee_pixel, reference_episode, to_canvas, to_page, wait_for_color,
-                      wait_for_status)
+from .helpers import (OKABE, drag, ee_pixel, reference_episode, to_canvas, to_page, wait_for_color,
+                      wait_for_pending, wait_for_status)
 
 pytestmark = pytest.mark.browser
 
-PAGE = "/voila/render/episode_sim.ipynb"
-
-
-def open_page(page, voila_server):
-    page.goto(voila_server.url(PAGE), timeout=60_000)
+def open_page(page, voila_server, name: str = "episode_sim.ipynb"):
+    page.goto(voila_server.url(f"/voila/render/{name}"), timeout=60_000)
     page.wait_for_selector("canvas", timeout=60_000)
 
 
@@ -28,20 +25,11 @@ def test_arm_state_and_target_are_drawn_and_a_drag_gives_the_action_and_guidance
     page.screenshot(path=artifacts("drawn"))
 
     # A real drag, in page coordinates of the CSS-scaled canvas (480 canvas px shown as 360 px).
-    # Chromium reports whole CSS pixels (clientX is truncated), so the test moves to whole ones.
-    start = to_page(page, 0, *ee)
-    end = tuple(float(round(v)) for v in to_page(page, 0, ee[0] + 70, ee[1] - 45))
-    page.mouse.move(*start)
-    page.mouse.down()
-    for fraction in np.linspace(0.2, 1.0, 5):
-        page.mouse.move(start[0] + fraction * (end[0] - start[0]), start[1] + fraction * (end[1] - start[1]))
-    page.mouse.up()
+    end = drag(page, 0, ee, (ee[0] + 70, ee[1] - 45))
     origin = reference.skill.end_effector(reference.query_states[:1])[0][0]
     expected = view.transform.action_from_drag(origin, to_canvas(page, 0, *end))
     one_pixel = 1.0 / view.transform.pixels_per_action
-    # The drag's intermediate moves arrive first: wait for the release's action, within a pixel.
-    s = wait_for_status(page, f"s.pending !== null && Math.abs(s.pending[0] - {expected[0]}) < {one_pixel}"
-                              f" && Math.abs(s.pending[1] - {expected[1]}) < {one_pixel}")
+    s = wait_for_pending(page, expected, one_pixel)
     assert np.allclose(s["pending"], expected, atol=one_pixel), (s["pending"], expected)
     page.screenshot(path=artifacts("dragged"))
 
@@ -106,3 +94,28 @@ def test_reproduction_plays_to_its_last_frame_and_a_reload_draws_again(page, voi
     wait_for_color(page, 0, *ee_pixel(reference), OKABE["yellow"])
     wait_for_color(page, 1, *start, OKABE["yellow"])
     page.screenshot(path=artifacts("reloaded"))
+
+
+def test_uarm_top_view_shows_state_and_target_and_a_real_drag_gives_an_action_in_cm(page, voila_server, artifacts):
+    name = "episode_uarm.ipynb"
+    reference = reference_episode(name)
+    view = reference.teaching.view
+    open_page(page, voila_server, name)
+    ee = ee_pixel(reference)
+    wait_for_color(page, 0, *ee, OKABE["black"], tolerance=20)                       # the current state
+    wait_for_color(page, 0, *view.transform.to_pixel(reference.skill.target.point), OKABE["vermillion"])
+    page.screenshot(path=artifacts("drawn"))
+
+    # 304 x 480 canvas pixels shown 260 px wide: the drag is mapped through the scaled box.
+    end = drag(page, 0, ee, (ee[0] + 45, ee[1] - 60))
+    origin = reference.query_states[0]
+    expected = view.transform.action_from_drag(origin, to_canvas(page, 0, *end))
+    one_pixel = 1.0 / view.transform.pixels_per_action
+    s = wait_for_pending(page, expected, one_pixel)
+    assert expected[0] > 2 and expected[1] > 3, expected          # right and up, several centimetres
+    assert np.allclose(s["pending"], expected, atol=one_pixel)
+    readout = f"({expected[0]:+.2f}, {expected[1]:+.2f}) cm"
+    page.get_by_text(readout).wait_for(timeout=10_000)            # the action in words, in centimetres
+    tip = view.transform.action_tip(origin, expected)
+    wait_for_color(page, 0, *(tip + 5 * (ee - tip) / np.hypot(*(ee - tip))), OKABE["blue"], radius=1)
+    page.screenshot(path=artifacts("dragged"))

@@ -118,7 +118,7 @@ def test_moves_without_a_press_send_nothing_and_presses_away_from_the_marker_do_
     assert recorder.messages == []
     pointer(teach.view.canvas, "mouse_down", ee[0] + 100, ee[1] + 100)
     pointer(teach.view.canvas, "mouse_move", ee[0] + 120, ee[1] + 100)
-    assert teach.pending_action is None and "end-effector" in teach.hint.value
+    assert teach.pending_action is None and "robot's hand" in teach.hint.value
 
 
 def test_an_arrow_can_be_redrawn_before_it_is_confirmed_and_then_the_next_state_shows():
