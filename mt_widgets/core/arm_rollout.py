@@ -14,6 +14,7 @@ nanoseconds a step.
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 from numba import njit, prange
@@ -151,6 +152,7 @@ def rollout_parallel(thetas, start, params, compensate, dt, n_steps, record_ever
 
 #: Batches at least this large are spread over cores; below it threads cost more than they save.
 PARALLEL_FROM = 8
+_PARALLEL_LAUNCH = threading.Lock()
 
 
 def rollout(thetas, start, params, compensate, dt, n_steps, record_every, max_joint_speed):
@@ -162,6 +164,11 @@ def rollout(thetas, start, params, compensate, dt, n_steps, record_every, max_jo
     batch, n_samples = thetas.shape[0], n_steps // record_every + 1
     outputs = (np.empty((batch, n_samples, 4)), np.empty((batch, n_samples, 2)), np.empty((batch, n_samples, 2)),
                np.empty((batch, n_samples, 2)), np.empty(batch, dtype=np.int64), np.empty(batch, dtype=np.int64))
-    kernel = rollout_parallel if batch >= PARALLEL_FROM else rollout_serial
-    kernel(thetas, start, params, compensate, dt, n_steps, record_every, max_joint_speed, *outputs)
+    if batch >= PARALLEL_FROM:
+        # Where numba falls back to its workqueue threading layer (no OpenMP or TBB), two Python
+        # threads launching parallel kernels at once abort the process; one launch at a time.
+        with _PARALLEL_LAUNCH:
+            rollout_parallel(thetas, start, params, compensate, dt, n_steps, record_every, max_joint_speed, *outputs)
+    else:
+        rollout_serial(thetas, start, params, compensate, dt, n_steps, record_every, max_joint_speed, *outputs)
     return outputs

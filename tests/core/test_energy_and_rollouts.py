@@ -121,3 +121,14 @@ def test_bad_rollout_input_is_refused_by_name():
         skill.reproduce(np.full((2, 5), np.nan))
     with pytest.raises(ValueError, match="duration"):
         skill.reproduce(skill.theta, duration=-1)
+
+
+def test_batches_rolled_out_from_several_threads_at_once_are_right():
+    from concurrent.futures import ThreadPoolExecutor
+
+    skill = SKILLS["sim-point"]
+    thetas = skill.theta + np.random.default_rng(3).normal(scale=0.3, size=(4, 16, 2, 5))
+    with ThreadPoolExecutor(4) as pool:
+        batches = list(pool.map(lambda t: skill.reproduce(t, duration=0.5), thetas))
+    for t, batch in zip(thetas, batches):
+        np.testing.assert_array_equal(batch.states, skill.reproduce(t, duration=0.5).states)
