@@ -164,8 +164,9 @@ class ArmView:
         canvas.text_baseline = "middle"
         for y in ys:
             px, py = t.to_pixel([x0, y])
-            # 9 px clear of the plot's left edge: the uArm's base dot sits on it at y = 0.
-            canvas.fill_text(f"{y:g}", px - 9, py)
+            # 5 px clear of the plot's left edge, beside the uArm's base dot (radius 4) at y = 0,
+            # and still inside the 34 px margin for "-0.5" in 16 px text (a CSS-scaled canvas).
+            canvas.fill_text(f"{y:g}", px - 5, py)
         canvas.text_align = "left"
         canvas.text_baseline = "top"
         canvas.fill_text(f"positions in {self.skill.units}", 4, 4)
@@ -195,7 +196,7 @@ class ArmView:
         canvas.stroke()
         canvas.set_line_dash([])
         canvas.fill_style = self.theme.arm
-        canvas.fill_circle(float(centre[0]), float(centre[1]), 6.0)
+        canvas.fill_circle(float(centre[0]), float(centre[1]), 4.0)
 
     def _draw_target(self, canvas) -> None:
         target = self.skill.target
