@@ -304,18 +304,14 @@ class StudyApp(VBox):
                         on_demonstration=None, on_finished=None) -> EpisodeWidget:
         protocol = self.session.protocol
         # ghost=False: the target skill's own motion would show the participant the answer.
+        # Blinding: no group word on the canvas ("target" names a group), and neither the skill's
+        # formula (the answer), the target skill's ghost, nor the teaching error and distance to the
+        # goal, none of which the paper's participants saw.
         episode = EpisodeWidget(skill, query_states=states, guidance=guidance, lam=protocol.lam, theme=self.theme,
-                                duration=protocol.reproduction_duration_s, ghost=False,
+                                duration=protocol.reproduction_duration_s, ghost=False, target_label="goal",
+                                show_description=False, show_outcome=False,
                                 episode_index=index, episodes_total=total, on_demonstration=on_demonstration,
                                 on_finished=on_finished, title="")
-        # The skill's description states its formula (the answer) and the player reports the
-        # teaching error and the distance to the goal: the paper's participants saw none of them.
-        # Hidden and emptied, so they are not in the page at all.
-        episode.header.value = ""
-        episode.header.layout.display = "none"
-        episode.player.error_label.layout.display = "none"
-        episode.player.status.layout.display = "none"
-        episode.on_finished(lambda _: self._silence_player(episode))
         return self.prepare_episode(episode)
 
     def prepare_episode(self, episode: EpisodeWidget) -> EpisodeWidget:
@@ -325,11 +321,6 @@ class StudyApp(VBox):
         The default shows the episode as it is.
         """
         return episode
-
-    @staticmethod
-    def _silence_player(episode) -> None:
-        episode.player.error_label.value = ""
-        episode.player.status.value = ""
 
     def _show_episode(self, step) -> None:
         key = (step.phase_index, step.episode)

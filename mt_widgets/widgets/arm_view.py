@@ -75,10 +75,15 @@ class ArmView:
         action_length: World units of arrow per action unit (default per robot).
         css_width: CSS width of the canvas element (e.g. "100%"); the canvas is then
             stretched by the browser and pointer events are still mapped to canvas pixels.
+        target_label: the word written beside the skill's target, or None for none. "goal" by
+            default: "target" also names a study group, which a blinded participant must not see.
     """
 
     def __init__(self, skill, width: int | None = None, height: int | None = None, theme=None,
-                 action_length: float | None = None, css_width: str | None = None):
+                 action_length: float | None = None, css_width: str | None = None, target_label: str | None = "goal"):
+        if target_label is not None and not isinstance(target_label, str):
+            raise ValueError(f"target_label: expected a short text or None, got {target_label!r}")
+        self.target_label = target_label
         self.skill = skill
         self.theme = get_theme(theme)
         box = skill.workspace
@@ -221,10 +226,11 @@ class ArmView:
         else:
             label_at = t.to_pixel(target.point)
             canvas.fill_circle(float(label_at[0]), float(label_at[1]), 7.0)
-        canvas.font = self._font(LABEL_FONT_PX)
-        canvas.text_align = "left"
-        canvas.text_baseline = "bottom"
-        canvas.fill_text("target", float(label_at[0]) + 9, float(label_at[1]) - 6)
+        if self.target_label:
+            canvas.font = self._font(LABEL_FONT_PX)
+            canvas.text_align = "left"
+            canvas.text_baseline = "bottom"
+            canvas.fill_text(self.target_label, float(label_at[0]) + 9, float(label_at[1]) - 6)
 
     def _draw_scale_bar(self, canvas) -> None:
         t = self.transform

@@ -140,6 +140,10 @@ class EpisodeWidget(VBox):
         title: Heading shown above the episode (default: the skill's title).
         fps: Reproduction frames per second.
         width, height, css_width, action_length: As for ``ArmView``.
+        target_label: the word beside the target on the canvas (None for none), as for ``ArmView``.
+        show_description: show the skill's description (its formula) under the title.
+        show_outcome: show the teaching error and where the robot ended after the reproduction.
+            A blinded study sets both to False: the paper's participants saw the reproduction only.
     """
 
     phase = Unicode("teaching", help="One of 'teaching', 'guidance', 'finished'.")
@@ -152,7 +156,8 @@ class EpisodeWidget(VBox):
                  demonstrations=None, episode_index: int = 0, episodes_total: int = 1,
                  on_demonstration: Callable | None = None, on_finished: Callable | None = None,
                  title: str | None = None, fps: float = 60.0, width=None, height=None, css_width=None,
-                 action_length=None):
+                 action_length=None, target_label: str | None = "goal", show_description: bool = True,
+                 show_outcome: bool = True):
         self.skill = _resolve_skill(skill)
         if not (np.isfinite(lam) and lam >= 0):
             raise ValueError(f"lam: expected a finite number >= 0, got {lam!r}")
@@ -181,10 +186,11 @@ class EpisodeWidget(VBox):
         if on_finished is not None:
             self.on_finished(on_finished)
 
-        view_args = dict(theme=theme, width=width, height=height, css_width=css_width, action_length=action_length)
+        view_args = dict(theme=theme, width=width, height=height, css_width=css_width, action_length=action_length,
+                         target_label=target_label)
         self.teaching = TeachingCanvas(self.skill, states, auto_advance=False, **view_args)
         self.theme = self.teaching.theme
-        self.player = ReproductionPlayer(self.skill, fps=fps, **view_args)
+        self.player = ReproductionPlayer(self.skill, fps=fps, show_outcome=show_outcome, **view_args)
         self.progress = EffortProgress(len(states), max(int(episodes_total), self.episode_index + 1),
                                        episodes_done=self.episode_index)
         self.guidance_panel = GuidancePanel(self.theme, self.skill.action_units)
@@ -192,8 +198,9 @@ class EpisodeWidget(VBox):
                                   layout=Layout(display="none"))
         self.next_button.on_click(lambda _: self.next())
         heading = title if title is not None else self.skill.title
-        self.header = HTML(f"<h3 style='margin:4px 0'>{heading}</h3>"
-                           f"<div style='max-width:760px'>{self.skill.description}</div>")
+        # The description states the skill's formula, i.e. the answer: a study hides it.
+        description = f"<div style='max-width:760px'>{self.skill.description}</div>" if show_description else ""
+        self.header = HTML(f"<h3 style='margin:4px 0'>{heading}</h3>{description}" if heading or description else "")
         self.teaching.on_confirm(self._on_confirm)
         self.teaching.observe(self._sync_traits, names=["state_index", "demonstrations"])
         super().__init__([self.header, self.progress, self.teaching, self.guidance_panel, self.next_button,

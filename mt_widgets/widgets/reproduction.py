@@ -44,20 +44,25 @@ class ReproductionPlayer(VBox):
         skill: The skill whose robot and target are drawn.
         theme: A ``Theme`` or theme name.
         fps: Playback frames per second.
-        width, height, css_width, action_length: As for ``ArmView``.
+        width, height, css_width, action_length, target_label: As for ``ArmView``.
+        show_outcome: write the teaching error and where the robot ended under the animation.
+            A blinded study shows the reproduction only, as the paper's participants saw it.
     """
 
     def __init__(self, skill, theme=None, fps: float = DEFAULT_FPS, width=None, height=None, css_width=None,
-                 action_length=None):
+                 action_length=None, target_label: str | None = "goal", show_outcome: bool = True):
         self.skill = skill
+        self.show_outcome = bool(show_outcome)
         self.fps = float(fps)
         self.view = ArmView(skill, width=width, height=height, theme=theme, action_length=action_length,
-                            css_width=css_width)
+                            css_width=css_width, target_label=target_label)
         self.theme = self.view.theme
         self.replay_button = Button(description="Replay", icon="repeat", disabled=True,
                                     tooltip="Play the reproduction again")
         self.replay_button.on_click(lambda _: self.replay())
         self.status = HTML(value="<i>The robot reproduces what it learnt here after the last demonstration.</i>")
+        if not self.show_outcome:
+            self.status.layout.display = "none"
         self.error_label = HTML(value="")
         self.trajectory = None
         self.ghost = None
@@ -149,6 +154,8 @@ class ReproductionPlayer(VBox):
         self.replay_button.disabled = False
 
     def _update_labels(self) -> None:
+        if not self.show_outcome:
+            return
         trajectory, units = self.trajectory, self.skill.units
         end = trajectory.positions[-1]
         if self.error is not None:
@@ -165,7 +172,7 @@ class ReproductionPlayer(VBox):
                 f"there (red cross). The demonstrations did not teach a stable skill.</div>")
         else:
             distance = self.skill.target.distance(end) if self.skill.target is not None else None
-            extra = "" if distance is None else f", {float(distance):.3g} {units} from the target"
+            extra = "" if distance is None else f", {float(distance):.3g} {units} from the goal"
             self.status.value = (f"After {trajectory.times[-1]:.1f} s the end-effector is at "
                                  f"({end[0]:.2f}, {end[1]:.2f}) {units}{extra}. "
                                  + ("The faint dashed path is the target skill's own motion."

@@ -98,7 +98,7 @@ class TeachingCanvas(VBox):
     locked = Bool(False, help="True while input is disabled (guidance shown, episode over).")
 
     def __init__(self, skill, query_states, theme=None, grab_radius: float = 28.0, auto_advance: bool = True, width=None, height=None,
-                 css_width=None, action_length=None):
+                 css_width=None, action_length=None, target_label: str | None = "goal"):
         states = np.array(query_states, dtype=float)
         if states.ndim != 2 or states.shape[1] != skill.state_dim or len(states) == 0:
             raise ValueError(f"query_states: expected shape (N, {skill.state_dim}) with N >= 1, got {states.shape}")
@@ -107,7 +107,7 @@ class TeachingCanvas(VBox):
         self.grab_radius = float(grab_radius)
         self.auto_advance = bool(auto_advance)
         self.view = ArmView(skill, width=width, height=height, theme=theme, action_length=action_length,
-                            css_width=css_width)
+                            css_width=css_width, target_label=target_label)
         self.theme = self.view.theme
         self._confirm_callbacks = CallbackDispatcher()
         self._dragging = False

@@ -206,3 +206,44 @@ def test_canvas_text_keeps_its_size_on_screen_when_the_canvas_is_shown_smaller(r
                             if name == "set" and isinstance(args[1], str) and args[1].endswith("px sans-serif")}
     assert fonts[None] == {"12px sans-serif", "13px sans-serif"}
     assert fonts["360px"] == {"16px sans-serif", "17px sans-serif"}          # 12 and 13 px times 480 / 360
+
+
+def _canvas_texts(recorder) -> list[str]:
+    return [str(args[0]) for _, name, args in recorder.commands() if name in ("fillText", "strokeText")]
+
+
+def test_the_canvas_never_writes_a_group_word_and_the_label_can_go(recorder):
+    # "target" also names a study group: a blinded participant must not read it on the canvas.
+    from mt_widgets.widgets import EpisodeWidget
+
+    EpisodeWidget("sim-point", seed=0)
+    texts = _canvas_texts(recorder)
+    assert "goal" in texts and not any("target" in t.lower() for t in texts)
+    recorder.clear()
+    EpisodeWidget("uarm-line", seed=0, target_label=None)
+    texts = _canvas_texts(recorder)
+    assert texts and "goal" not in texts and not any("target" in t.lower() for t in texts)
+    with pytest.raises(ValueError, match="target_label"):
+        EpisodeWidget("sim-point", seed=0, target_label=3)
+
+
+def test_a_blinded_episode_shows_neither_formula_nor_outcome(recorder):
+    from mt_widgets import SKILLS
+    from mt_widgets.widgets import EpisodeWidget
+
+    skill = SKILLS["sim-point"]
+    episode = EpisodeWidget(skill, seed=1, guidance=False, show_description=False, show_outcome=False, ghost=False)
+    assert skill.description not in episode.header.value
+    for u in skill.target_actions(episode.query_states) + 0.7:
+        episode.demonstrate(u)
+    episode.finish()
+    assert episode.result is not None and episode.result.error > 0
+    shown = episode.player.error_label.value + episode.player.status.value
+    assert "error" not in shown.lower() and "goal" not in shown.lower() and f"{episode.result.error:.3f}" not in shown
+    # Without blinding the same episode states both.
+    open_episode = EpisodeWidget(skill, seed=1, guidance=False)
+    for u in skill.target_actions(open_episode.query_states) + 0.7:
+        open_episode.demonstrate(u)
+    open_episode.finish()
+    assert skill.description in open_episode.header.value
+    assert f"{open_episode.result.error:.3f}" in open_episode.player.error_label.value
