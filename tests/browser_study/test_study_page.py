@@ -15,6 +15,7 @@ import pytest
 from mt_widgets.study import read_events, read_study
 from mt_widgets.widgets import ArmView
 from mt_widgets import SKILLS
+from browser_support import artifact_path
 
 pytestmark = pytest.mark.browser
 
@@ -137,7 +138,7 @@ def demonstrate(page, server, participant, phase, index, offset):
     try:
         wait_for_marker(page, ee)
     except Exception:
-        page.screenshot(path=f"/work/main/test-artifacts/study-page-no-marker-{episode['phase']}-{index}.png")
+        page.screenshot(path=artifact_path("study-page-no-marker", f"{episode['phase']}-{index}"))
         raise
     confirm = button(page, "Confirm")
     for _ in range(3):  # the canvas takes the drag once the state is drawn: retry a missed one

@@ -24,11 +24,11 @@ def bridge(arm):
 # The canvas recorder of the kernel-free widget tests, reused rather than copied.
 from widgets.conftest import recorder  # noqa: E402,F401
 
-# The real-browser fixtures of tests/browser, reused: Chromium (fails when missing), artefacts.
-from browser.conftest import ARTIFACTS, Server, _free_port, _wait_for_port, artifacts, browser  # noqa: E402,F401
-
+# Chromium (``browser``) and ``artifacts`` are the shared fixtures of tests/conftest.py.
 import shutil  # noqa: E402
 from pathlib import Path  # noqa: E402
+
+from browser_support import local_page, voila  # noqa: E402
 
 PAGES = Path(__file__).parent / "pages"
 
@@ -36,14 +36,11 @@ PAGES = Path(__file__).parent / "pages"
 @pytest.fixture(scope="session")
 def uarm_voila(tmp_path_factory):
     """Voila serving this folder's pages (one server, its own JUPYTER_* dirs, ended as a group)."""
-    from browser.conftest import BIN
     root = tmp_path_factory.mktemp("uarm-voila")
     (root / "notebooks").mkdir()
     for page in PAGES.glob("*.ipynb"):
         shutil.copy(page, root / "notebooks" / page.name)
-    port = _free_port()
-    server = Server([str(BIN / "voila"), str(root / "notebooks"), "--no-browser", f"--port={port}",
-                     "--Voila.ip=127.0.0.1"], port, root, "voila", f"http://127.0.0.1:{port}")
+    server = voila(root)
     yield server
     server.stop()
 
@@ -51,9 +48,6 @@ def uarm_voila(tmp_path_factory):
 @pytest.fixture
 def tall_page(browser):
     """A page tall enough for the texts above a 700 px pinned screen canvas; only 127.0.0.1."""
-    context = browser.new_context(viewport={"width": 1280, "height": 1500})
-    page = context.new_page()
-    page.route("**/*", lambda route: route.continue_() if route.request.url.startswith(
-        ("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:")) else route.abort())
+    context, page = local_page(browser, 1280, 1500)
     yield page
     context.close()
