@@ -1,4 +1,4 @@
-"""The science of mt-widgets, with numpy, scipy and numba only (no Jupyter, no widgets, no serial).
+"""The science of mt-widgets, with numpy and numba only (no Jupyter, no widgets, no serial).
 
 Arm dynamics, plants, feature maps, skills, the ridge learner, exact machine teaching,
 query-state selection and rollouts.

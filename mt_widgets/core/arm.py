@@ -85,6 +85,14 @@ class TwoLinkArm:
         self.gravity = gravity
         self.gravity_compensation = bool(gravity_compensation)
         self.parameters = ArmParameters(l1, l2, m1, m2, fractions[0] * l1, fractions[1] * l2, i1, i2, gravity)
+        p = self.parameters
+        # det M(q) = (m1 lc1^2 + I1 + m2 l1^2)(m2 lc2^2 + I2) - (m2 l1 lc2 cos q2)^2; positive for
+        # every q2 exactly when it is positive at q2 = 0. Otherwise some pose cannot be accelerated.
+        worst = (p.m1 * p.lc1**2 + p.i1 + p.m2 * p.l1**2) * (p.m2 * p.lc2**2 + p.i2) - (p.m2 * p.l1 * p.lc2) ** 2
+        if not worst > 1e-12 * (p.m1 + p.m2) ** 2 * (p.l1 + p.l2) ** 4:
+            raise ValueError(f"inertias: expected a mass distribution with a non-singular mass matrix in every pose; "
+                             f"masses={self.masses}, com_fractions={self.com_fractions}, inertias={self.inertias} "
+                             f"give a singular one when the arm is stretched (give the links some inertia)")
 
     def __repr__(self) -> str:
         return (f"TwoLinkArm(link_lengths={self.link_lengths}, masses={self.masses}, "

@@ -9,7 +9,7 @@ from .arm import TwoLinkArm
 from .features import EndEffectorFeatures
 from .plants import ContinuousPlant, _check_rollout
 from .trajectory import TrajectoryBatch
-from .validation import as_count, as_positive
+from .validation import as_count, as_float_array, as_positive
 from .workspace import Box
 
 
@@ -55,8 +55,14 @@ class ArmPlant(ContinuousPlant):
     def state_at(self, position, velocity=(0.0, 0.0), elbow_up: bool = True) -> np.ndarray:
         """The state whose end-effector is at ``position`` (m) moving at ``velocity`` (m/s)."""
         q = self.arm.inverse_kinematics(position, elbow_up=elbow_up)
-        qd = np.linalg.solve(self.arm.jacobian(q), np.asarray(velocity, dtype=float))
-        return np.concatenate([q, qd])
+        velocity = as_float_array("velocity", velocity, ndim=1, shape=(2,))
+        jacobian = self.arm.jacobian(q)
+        if abs(np.linalg.det(jacobian)) < 1e-9:
+            if np.any(velocity):
+                raise ValueError(f"position: {np.asarray(position).tolist()} is where the arm is stretched or folded "
+                                 f"(a singular pose): the tip cannot move at velocity {velocity.tolist()} there")
+            return np.concatenate([q, np.zeros(2)])
+        return np.concatenate([q, np.linalg.solve(jacobian, velocity)])
 
     # -- dynamics for the generic rollout (user feature maps) ----------------------------------
     def hold(self, states, actions):

@@ -22,6 +22,8 @@ def check_demonstrations(Phi, U):
         raise ValueError(f"U: expected one action per row of Phi ({Phi.shape[0]} rows), got {U.shape[0]} rows")
     if Phi.shape[0] == 0:
         raise ValueError("Phi: expected at least one demonstration, got 0 rows")
+    if Phi.shape[1] == 0:
+        raise ValueError("Phi: expected at least one feature per row, got shape (N, 0)")
     return Phi, U
 
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .learner import check_demonstrations
-from .ridge_kernels import optimal_actions_kernel
+from .ridge_kernels import optimal_actions_kernel, svd_with_rank
 from .validation import as_float_array, as_positive
 
 
@@ -65,10 +65,8 @@ def ridge_operator(Phi, lam: float) -> RidgeOperator:
     """Decomposes the learner's map from actions to parameters for features Phi (N, S)."""
     Phi = as_float_array("Phi", Phi, ndim=2)
     lam = as_positive("lam", lam, allow_zero=True)
-    left, singular, right_t = np.linalg.svd(Phi, full_matrices=False)
-    tolerance = (singular[0] if len(singular) else 0.0) * max(Phi.shape) * np.finfo(float).eps
-    rank = int(np.sum(singular > tolerance))
-    return RidgeOperator(left, singular, right_t, lam, rank)
+    left, singular, right_t, rank = svd_with_rank(np.ascontiguousarray(Phi))
+    return RidgeOperator(left, singular, right_t, lam, int(rank))
 
 
 def _check_theta(theta, n_features: int) -> np.ndarray:

@@ -14,7 +14,9 @@ from numba import njit
 
 
 @njit(cache=True)
-def _svd_rank(Phi):
+def svd_with_rank(Phi):
+    """(W, s, V^T, rank) of Phi (N, S): the thin SVD and the number of singular values above
+    the rank tolerance, the one definition of rank for the learner and machine teaching."""
     left, singular, right_t = np.linalg.svd(Phi, full_matrices=False)
     n, s = Phi.shape
     tolerance = singular[0] * max(n, s) * 2.220446049250313e-16 if singular.size > 0 else 0.0
@@ -28,7 +30,7 @@ def _svd_rank(Phi):
 @njit(cache=True)
 def ridge_fit(Phi, U, lam):
     """Theta_hat (R, S) = ((Phi^T Phi + lam I)^-1 Phi^T U)^T, minimum-norm where Phi is deficient."""
-    left, singular, right_t, rank = _svd_rank(Phi)
+    left, singular, right_t, rank = svd_with_rank(Phi)
     projected = np.ascontiguousarray(left[:, :rank].T) @ U    # (rank, R)
     for i in range(rank):
         projected[i, :] *= singular[i] / (singular[i] * singular[i] + lam)
@@ -38,7 +40,7 @@ def ridge_fit(Phi, U, lam):
 @njit(cache=True)
 def optimal_actions_kernel(Phi, theta, lam):
     """(U_bar (N, R), rank): U_bar = pinv(A) theta^T with A the ridge learner's map."""
-    left, singular, right_t, rank = _svd_rank(Phi)
+    left, singular, right_t, rank = svd_with_rank(Phi)
     projected = np.ascontiguousarray(right_t[:rank]) @ np.ascontiguousarray(theta.T)  # (rank, R)
     for i in range(rank):
         projected[i, :] *= (singular[i] * singular[i] + lam) / singular[i]

@@ -13,7 +13,6 @@ import numpy as np
 from .arm_plant import ArmPlant
 from .features import EndEffectorFeatures, FeatureMap, PositionFeatures
 from .query_states import sample_query_states
-from .trajectory import Trajectory, TrajectoryBatch
 from .uarm_plant import UArmPlant
 from .validation import as_count, as_float_array, as_positive
 

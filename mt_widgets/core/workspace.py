@@ -56,7 +56,13 @@ class AnnulusSector:
                 & (np.abs(yaw) <= self.max_yaw_deg + tolerance))
 
     def project(self, points) -> np.ndarray:
-        """The nearest point of the sector for each point (in polar terms: clamp radius and bearing)."""
+        """A point of the sector for each point: its radius and bearing clamped to the sector's.
+
+        Inside the sector a point is its own projection. Outside it, this is the polar clamp, not
+        always the Euclidean nearest point (beyond the yaw limit at a large radius the nearest
+        point lies on the edge ray at a smaller radius); what matters for a kinematic plant is
+        that the result is inside the sector and moves with the input continuously.
+        """
         points = as_float_array("points", points, shape=(2,))
         radius = np.clip(np.hypot(points[..., 0], points[..., 1]), self.r_min, self.r_max)
         yaw = np.clip(np.arctan2(points[..., 1], points[..., 0]), -np.deg2rad(self.max_yaw_deg),

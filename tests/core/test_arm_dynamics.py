@@ -143,3 +143,20 @@ def test_bad_states_are_refused_by_name():
         arm.mass_matrix([0.1, 0.2, 0.3])
     with pytest.raises(ValueError, match="qd: expected finite"):
         arm.coriolis_matrix([0.1, 0.2], [np.nan, 0.0])
+
+
+def test_a_mass_distribution_with_a_singular_mass_matrix_is_refused():
+    with pytest.raises(ValueError, match="inertias: expected a mass distribution"):
+        TwoLinkArm(com_fractions=(0.0, 0.0), inertias=(0.0, 0.0))
+    with pytest.raises(ValueError, match="singular"):
+        TwoLinkArm(com_fractions=(0.0, 1.0), inertias=(0.0, 0.0))  # point mass at the tip, none at the elbow
+    TwoLinkArm(com_fractions=(1.0, 1.0), inertias=(0.0, 0.0))       # point masses at elbow and tip: fine
+
+
+def test_a_state_at_a_singular_pose_is_refused_with_a_velocity_and_allowed_at_rest():
+    from mt_widgets.core import ArmPlant
+
+    plant = ArmPlant()
+    np.testing.assert_allclose(plant.end_effector(plant.state_at([2.0, 0.0]))[0], [2.0, 0.0], atol=1e-9)
+    with pytest.raises(ValueError, match="position"):
+        plant.state_at([2.0, 0.0], velocity=[0.0, 1.0])

@@ -123,3 +123,20 @@ def test_action_difference_speaks_in_angle_and_magnitude():
 def test_bad_input_names_the_argument(call, name):
     with pytest.raises(ValueError, match=name):
         call()
+
+
+def test_features_with_no_columns_are_refused_by_name():
+    with pytest.raises(ValueError, match=r"Phi: expected at least one feature"):
+        RidgeLearner(0.1).fit(np.ones((3, 0)), np.ones((3, 2)))
+
+
+def test_analysis_and_optimal_actions_agree_on_rank():
+    # One rank rule for both paths: the analysis's exact flag and the warning must agree.
+    rng = np.random.default_rng(9)
+    Phi = rng.normal(size=(5, 5))
+    Phi[4] = Phi[3] * (1 + 1e-15)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        optimal_actions(Phi, np.ones((2, 5)), 0.01)
+    warned = any(issubclass(w.category, UnderdeterminedTeachingWarning) for w in caught)
+    assert analyse_demonstrations(Phi, np.ones((5, 2)), np.ones((2, 5)), 0.01).exact == (not warned)
