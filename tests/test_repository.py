@@ -57,3 +57,11 @@ def test_ci_runs_the_readme_test_command():
 @pytest.mark.parametrize("name", ["open-lab.sh", "run-tests.sh", "setup.sh"])
 def test_scripts_are_valid_bash(name):
     subprocess.run(["bash", "-n", str(REPO / "scripts" / name)], check=True)
+
+
+def test_start_here_links_every_tutorial_and_app():
+    start = json.loads((REPO / "tutorials" / "00_start_here.ipynb").read_text())
+    text = "".join("".join(cell["source"]) for cell in start["cells"])
+    for path in sorted((REPO / "tutorials").glob("[0-9][0-9]_*.ipynb")) + sorted((REPO / "notebooks").glob("*.ipynb")):
+        if path.name != "00_start_here.ipynb":
+            assert f"{path.name})" in text, f"tutorials/00_start_here.ipynb does not link {path.name}"
