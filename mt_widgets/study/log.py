@@ -7,7 +7,10 @@ A study folder holds:
   never changed: a folder runs exactly one protocol, so logs of different protocols never mix.
 - ``_enrolment.jsonl``: one line per enrolled participant (ID, enrolment number, group, how the
   group was assigned, time), appended under a lock so two processes never draw the same
-  enrolment number. Participant IDs cannot start with "_", so no log can be named like it.
+  enrolment number. A kill mid-write can leave a torn last record: that participant never
+  started, and the next enrolment first ends the torn line and records the repair
+  (``repaired_torn_line``, bytes), so it is never glued onto it; any other damage is reported,
+  never skipped. Participant IDs cannot start with "_", so no log can be named like it.
 - ``<participant>.jsonl``: the participant's events, one JSON object a line.
 - ``.locks/``: lock files (``fcntl.flock``); a lock dies with its process, so a crash never
   leaves a folder locked.
@@ -440,20 +443,45 @@ class StudyFolder:
         return self.folder / f"{participant_id}.jsonl"
 
     def enrolments(self) -> list[dict]:
-        """Every enrolment record, in enrolment order."""
+        """Every enrolment record, in enrolment order.
+
+        Raises:
+            LogError: a line that does not parse and that no later record's repair covers
+                (only an enrolment killed mid-write leaves one, and the next enrolment ends it
+                and records the repair), naming the file and the line.
+        """
+        return self._read_enrolments()[0]
+
+    def _read_enrolments(self) -> tuple[list[dict], int]:
+        """(records, damaged_bytes): ``damaged_bytes`` > 0 when the file ends in damage (a torn
+        record, or lines a crash left unrepaired) that the next record must say it repairs."""
         path = self.folder / ENROLMENT_FILE
         if not path.exists():
-            return []
-        records = []
-        for number, raw in enumerate(path.read_bytes().split(b"\n"), start=1):
-            if raw.strip():
-                try:
-                    records.append(json.loads(raw))
-                except ValueError:
-                    # Only a torn last line can fail; an enrolment that never reached the disk
-                    # never started a participant.
-                    continue
-        return records
+            return [], 0
+        # The last element is what follows the final newline: empty, or a record killed mid-write.
+        lines = path.read_bytes().split(b"\n")
+        records: list[dict] = []
+        pending: list[tuple[int, int]] = []  # (line number, bytes) of lines that do not parse
+        for number, raw in enumerate(lines, start=1):
+            is_tail = number == len(lines)
+            if is_tail and not raw:
+                break
+            try:
+                record = json.loads(raw)
+                if not isinstance(record, dict) or "participant" not in record:
+                    raise ValueError("not an enrolment record")
+            except ValueError:
+                pending.append((number, len(raw) + (0 if is_tail else 1)))
+                continue
+            if pending and not record.get("repaired_torn_line"):
+                raise LogError(f"{path}, line {pending[0][0]}: not an enrolment record, and the next record does "
+                               f"not record repairing it; the enrolment file is damaged (participants after it "
+                               f"would be lost)")
+            pending = []
+            # A last record missing only its newline is complete: it was enrolled (the next
+            # enrolment ends its line first).
+            records.append(record)
+        return records, sum(size for _, size in pending)
 
     def enrolment(self, participant_id: str) -> dict:
         for record in self.enrolments():
@@ -480,7 +508,7 @@ class StudyFolder:
             raise ValueError(f"group: expected None (randomised) or one of {list(self.protocol.groups)}, "
                              f"got {group!r}")
         with _Lock(self.folder / LOCK_FOLDER / "_study.lock", f"study folder {self.folder}", timeout_s=10.0):
-            records = self.enrolments()
+            records, damaged = self._read_enrolments()
             existing = [r["participant"] for r in records]
             existing += [p.stem for p in self.folder.glob("*.jsonl") if not p.name.startswith("_")]
             validate_participant_id(participant_id, existing)
@@ -496,9 +524,20 @@ class StudyFolder:
             record = {"participant": participant_id, "index": index, "group": group, "method": method,
                       "block_slot": slot if method == "block" else None, "enrolled_at": utc_now(),
                       "protocol_hash": self.protocol.hash}
-            fd = os.open(self.folder / ENROLMENT_FILE, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+            if damaged:
+                # The last enrolment was killed mid-write: its bytes stay (append-only), and this
+                # record says it repairs them, so only such lines are tolerated mid-file.
+                record["repaired_torn_line"] = damaged
+            path = self.folder / ENROLMENT_FILE
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_APPEND, 0o644)
             try:
-                _write_all(fd, (json.dumps(record, separators=(",", ":")) + "\n").encode())
+                line = (json.dumps(record, separators=(",", ":")) + "\n").encode()
+                size = os.fstat(fd).st_size
+                if size and os.pread(fd, 1, size - 1) != b"\n":
+                    # End a torn (or newline-less) last line first, as ParticipantLog.open does, so
+                    # this record never gets glued onto it.
+                    line = b"\n" + line
+                _write_all(fd, line)
                 os.fsync(fd)
             finally:
                 os.close(fd)

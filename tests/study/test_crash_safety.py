@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pytest
 
-from mt_widgets.study import Session, StudyFolder, read_events
+from mt_widgets.study import LogError, Session, StudyFolder, read_events
 from mt_widgets.study import log as log_module
 
 from .scripted import demonstrations, run, short_protocol
@@ -116,3 +116,67 @@ def test_killed_and_resumed_sessions_log_exactly_the_uninterrupted_demonstration
     assert 1 <= len(resumes) <= kills
     assert any(e["repaired_torn_line"] for e in resumes), "no torn line was produced and repaired"
     assert info["repaired_lines"]
+
+
+def _enrol_and_die(folder, participant, mode):
+    """Forks a child that enrols ``participant`` and is SIGKILL-ed inside the enrolment write."""
+    pid = os.fork()
+    if pid == 0:
+        try:
+            real_write = log_module._write_all
+
+            def dying_write(fd, data):
+                if b'"participant"' not in data:  # the folder's write probe, not the record
+                    return real_write(fd, data)
+                if mode == "torn":
+                    real_write(fd, data[: len(data) // 2])
+                elif mode == "unterminated":
+                    real_write(fd, data[:-1])  # every byte but the newline
+                os.kill(os.getpid(), signal.SIGKILL)
+            log_module._write_all = dying_write
+            StudyFolder(folder).enrol(participant)
+        finally:
+            os._exit(1)
+    _, status = os.waitpid(pid, 0)
+    assert os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGKILL
+
+
+def test_a_kill_during_enrolment_loses_neither_that_slot_nor_the_next_participant(tmp_path):
+    study = StudyFolder.create(tmp_path, short_protocol())
+    study.enrol("P01")
+    _enrol_and_die(tmp_path, "P02", "torn")  # half a line, no newline: P02 never started
+    session = Session.start(study, "P03")
+    session.close()
+    _enrol_and_die(tmp_path, "P04", "torn")
+    _enrol_and_die(tmp_path, "P05", "torn")  # two tears in a row, repaired by the next enrolment
+    study.enrol("P06")
+    records = study.enrolments()
+    assert [r["participant"] for r in records] == ["P01", "P03", "P06"]
+    # Enrolment numbers and block slots are handed out once each, in order: randomisation holds.
+    assert [r["index"] for r in records] == [0, 1, 2] and [r["block_slot"] for r in records] == [0, 1, 2]
+    assert study.enrolment("P03") == session.enrolment
+    Session.resume(study, "P03").close()
+    # The torn enrolment's ID was never used: it can still be enrolled.
+    assert study.enrol("P02")["index"] == 3
+
+
+def test_an_enrolment_missing_only_its_newline_is_kept_and_the_next_starts_a_line(tmp_path):
+    study = StudyFolder.create(tmp_path, short_protocol())
+    _enrol_and_die(tmp_path, "P01", "unterminated")
+    assert study.participant_ids() == ["P01"]
+    study.enrol("P02")
+    assert study.participant_ids() == ["P01", "P02"]
+
+
+def test_damage_in_the_middle_of_the_enrolment_file_is_reported_not_skipped(tmp_path):
+    study = StudyFolder.create(tmp_path, short_protocol())
+    for participant in ("P01", "P02", "P03", "P04"):
+        study.enrol(participant)
+    path = tmp_path / "_enrolment.jsonl"
+    p01, p02, p03, p04, _ = path.read_bytes().split(b"\n")
+    # What the old enrol() wrote after a kill: P03 glued onto half of P02, then P04 as usual.
+    path.write_bytes(b"\n".join([p01, p02[:20] + p03, p04, b""]))
+    with pytest.raises(LogError, match=r"_enrolment.jsonl, line 2: not an enrolment record"):
+        study.enrolments()
+    with pytest.raises(LogError, match="line 2"):
+        study.enrol("P05")
