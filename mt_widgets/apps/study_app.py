@@ -12,13 +12,16 @@ never shown (the paper's participants saw the robot's reproduction only).
 
 Every demonstration is handed to ``Session.submit_demonstration`` inside the widget's
 confirmation callback, so it is on disk before the view moves on; a reload (a new kernel)
-resumes at the first missing demonstration with the experimenter's "Resume".
+resumes at the first missing demonstration with the experimenter's "Resume". Any error in a
+participant step (the log cannot be written, the session refuses a call) stops the page with a
+call for the experimenter, and the episode does not count a demonstration the log refused.
 """
 
 from __future__ import annotations
 
 import asyncio
 import html
+import logging
 import math
 import os
 import time
@@ -31,6 +34,8 @@ from mt_widgets.core import SKILLS, running_under_test
 from mt_widgets.study import (BUILTIN_PROTOCOLS, LogError, LogFolderError, ParticipantIdError, ProtocolError,
                               Session, StudyFolder, load_protocol)
 from mt_widgets.widgets import EpisodeWidget
+
+_log = logging.getLogger(__name__)
 
 #: Environment variable naming the default log folder (the notebook and the experimenter's
 #: field start from it).
@@ -114,6 +119,8 @@ class StudyApp(VBox):
     def __init__(self, protocol: str = "paper-sim", log_folder=None, theme=None, practice_seed: int = 12345):
         self.theme = theme
         self.session: Session | None = None
+        #: The error that stopped the participant flow, or None (see ``stop``).
+        self.stopped_by: BaseException | None = None
         self.episode: EpisodeWidget | None = None
         self._episode_key = None
         self._practice_seed = np.random.SeedSequence(practice_seed)
@@ -211,17 +218,55 @@ class StudyApp(VBox):
         button.on_click(clicked)
         return button
 
-    def _safely(self, action) -> None:
+    def _safely(self, action, reraise: bool = False) -> None:
+        """Runs a participant action; any error stops the participant flow (see ``stop``).
+
+        Args:
+            action: what a button or a widget callback does (log, then show).
+            reraise: re-raise the error after stopping, for a widget callback whose widget must
+                not move on (a demonstration that is not on disk is neither counted nor shown
+                guidance).
+        """
+        if self.stopped_by is not None:
+            if reraise:
+                raise RuntimeError("the participant flow is stopped (the experimenter was called); nothing more "
+                                   "is recorded in this page") from self.stopped_by
+            return
         try:
             action()
-        except (LogError, OSError) as error:
-            # The log could not be written: stop here, so nothing is shown that is not on disk.
-            self.heading.value = ""
-            self.body.children = [HTML(f"<div style='color:#b00020;font-size:1.2em;max-width:760px'><b>Please call "
-                                       f"the experimenter.</b><br><small>{html.escape(str(error))}</small></div>")]
+        except Exception as error:  # noqa: BLE001 - any error: what is shown may not be on disk
+            self.stop(error)
+            if reraise:
+                raise
+
+    def stop(self, error: BaseException) -> None:
+        """Stops the participant flow and asks for the experimenter.
+
+        Whatever error a step raised (the log could not be written, or the session refused the
+        call), going on could show the participant something that is not on disk, or leave the
+        view and the session out of step. Everything logged so far stays; the log is closed,
+        and the experimenter continues with a reload and "Resume participant".
+        """
+        _log.error("participant flow stopped", exc_info=(type(error), error, error.__traceback__))
+        self.stopped_by = error
+        self._cancel_timer()
+        participant = self.session.participant if self.session is not None else ""
+        if self.session is not None:
+            try:
+                self.session.close()
+            except OSError:
+                pass
+        self.heading.value = ""
+        self.body.children = [HTML(
+            f"<div style='color:#b00020;font-size:1.2em;max-width:760px'><b>Please call the experimenter.</b>"
+            f"<br><small>For the experimenter: the study stopped here; everything recorded so far is saved. "
+            f"Reload the page and resume participant {html.escape(participant)} to continue."
+            f"<br>{html.escape(type(error).__name__)}: {html.escape(str(error))}</small></div>")]
 
     def show_step(self) -> None:
-        """Shows the session's current step."""
+        """Shows the session's current step (nothing once the flow is stopped)."""
+        if self.stopped_by is not None:
+            return
         step = self.session.current_step()
         protocol = self.session.protocol
         self._cancel_timer()
@@ -350,7 +395,9 @@ class StudyApp(VBox):
                 record.action, {"time_to_first_input_s": record.time_to_first_input_s,
                                 "drawing_duration_s": record.drawing_duration_s, "method": record.method,
                                 "redraws": record.redraws}, index=record.index)
-        self._safely(submit)
+        # Re-raised after stopping the page: the episode then neither counts the demonstration
+        # nor shows guidance for it.
+        self._safely(submit, reraise=True)
 
     def _on_episode_finished(self, result) -> None:
         def finish():

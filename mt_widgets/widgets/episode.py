@@ -21,12 +21,13 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from ipywidgets import HTML, Button, CallbackDispatcher, Layout, VBox
+from ipywidgets import HTML, Button, Layout, VBox
 from traitlets import Float, Int, List, Unicode
 
 from mt_widgets.core import (DEFAULT_LAMBDA, SKILLS, RidgeLearner, UnderdeterminedTeachingWarning,
                              optimal_actions, teaching_risk)
 
+from .callbacks import Callbacks
 from .guidance import GuidancePanel
 from .progress import EffortProgress
 from .reproduction import ReproductionPlayer
@@ -179,8 +180,10 @@ class EpisodeWidget(VBox):
         self.exact = not any(issubclass(w.category, UnderdeterminedTeachingWarning) for w in caught)
         self.result: EpisodeResult | None = None
         self.records: list[DemonstrationRecord] = []
-        self._demonstration_callbacks = CallbackDispatcher()
-        self._finished_callbacks = CallbackDispatcher()
+        # Errors in callbacks propagate (ipywidgets' dispatcher would swallow them): a
+        # demonstration a callback could not record is neither counted nor shown guidance.
+        self._demonstration_callbacks = Callbacks()
+        self._finished_callbacks = Callbacks()
         if on_demonstration is not None:
             self.on_demonstration(on_demonstration)
         if on_finished is not None:
@@ -210,11 +213,21 @@ class EpisodeWidget(VBox):
 
     # -- callbacks --------------------------------------------------------------------------------------
     def on_demonstration(self, callback: Callable[[DemonstrationRecord], None], remove: bool = False) -> None:
-        """Register ``callback(record)``, called after each confirmed demonstration."""
+        """Register ``callback(record)``, called for each confirmed demonstration.
+
+        Callbacks run before the demonstration is counted and before guidance is shown or the
+        next state appears; if one raises, the error reaches the caller of ``confirm`` (or
+        ``demonstrate``), later callbacks are not called, and the arrow stays pending and
+        unconfirmed so that it can be confirmed again.
+        """
         self._demonstration_callbacks.register_callback(callback, remove=remove)
 
     def on_finished(self, callback: Callable[[EpisodeResult], None], remove: bool = False) -> None:
-        """Register ``callback(result)``, called when the episode is learnt and its reproduction sent."""
+        """Register ``callback(result)``, called when the episode is learnt and its reproduction sent.
+
+        An error in a callback reaches the caller of ``finish`` (the reproduction is a function
+        of the demonstrations, already recorded, so nothing is undone).
+        """
         self._finished_callbacks.register_callback(callback, remove=remove)
 
     # -- driving it from code ------------------------------------------------------------------------------
@@ -280,6 +293,11 @@ class EpisodeWidget(VBox):
             self.episode_index, index, confirmed.state, confirmed.action, self.optimal[index].copy(),
             self.guidance, confirmed.method, confirmed.time_to_first_input_s, confirmed.drawing_duration_s,
             confirmed.redraws, confirmed.confirmed_at)
+        # First the callbacks (the study app writes the log there): if one raises, the error
+        # propagates through the canvas's confirm and nothing below happens, so the participant
+        # never sees guidance for, or moves past, a demonstration that is not on disk.
+        self._demonstration_callbacks(record)
+        self.teaching._record(confirmed)
         self.records.append(record)
         self.progress.demonstrations_done = index + 1
         last = index + 1 >= len(self.query_states)
@@ -290,10 +308,7 @@ class EpisodeWidget(VBox):
             self.next_button.description = "Finish and watch" if last else "Next state"
             self.next_button.layout.display = None
             self.phase = "guidance"
-            self._demonstration_callbacks(record)
-            return
-        self._demonstration_callbacks(record)
-        if last:
+        elif last:
             self.finish()
         else:
             self.teaching.advance()

@@ -21,12 +21,12 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-from ipywidgets import (HTML, Button, CallbackDispatcher, FloatText, HBox, Layout,
-                        ToggleButtons, VBox)
+from ipywidgets import HTML, Button, FloatText, HBox, Layout, ToggleButtons, VBox
 from traitlets import Any, Bool, Int, List
 
 from .arm_view import ArmView
 from .arrows import draw_arrow
+from .callbacks import Callbacks
 from .redraw import drawing_batch
 
 #: How often the text readout follows a drag, at most (seconds): the canvas follows every
@@ -109,7 +109,7 @@ class TeachingCanvas(VBox):
         self.view = ArmView(skill, width=width, height=height, theme=theme, action_length=action_length,
                             css_width=css_width, target_label=target_label)
         self.theme = self.view.theme
-        self._confirm_callbacks = CallbackDispatcher()
+        self._confirm_callbacks = Callbacks()
         self._dragging = False
         self._last_readout = 0.0
         self._guidance = None
@@ -168,7 +168,12 @@ class TeachingCanvas(VBox):
         return self.query_states[self.state_index] if self.state_index < self.n_states else None
 
     def on_confirm(self, callback: Callable[[ConfirmedAction], None], remove: bool = False) -> None:
-        """Register ``callback(confirmed: ConfirmedAction)``, called when an arrow is confirmed."""
+        """Register ``callback(confirmed: ConfirmedAction)``, called when an arrow is confirmed.
+
+        Callbacks run before the arrow is recorded in ``demonstrations``, and an exception in
+        one reaches the caller of ``confirm``: the arrow is then not recorded and stays pending,
+        to be confirmed again (a demonstration the study log could not write is not counted).
+        """
         self._confirm_callbacks.register_callback(callback, remove=remove)
 
     def set_action(self, action, method: str = "code") -> None:
@@ -204,11 +209,17 @@ class TeachingCanvas(VBox):
             time_to_first_input_s=None if timing.first_input_at is None else timing.first_input_at - timing.shown_at,
             drawing_duration_s=None if timing.first_input_at is None else now - timing.first_input_at,
             redraws=timing.redraws)
-        self.demonstrations = self.demonstrations + [list(self.pending_action)]
-        self._confirm_callbacks(confirmed)
+        self._confirm_callbacks(confirmed)  # an error propagates: nothing is recorded
+        self._record(confirmed)
         if self.auto_advance and self.state_index == confirmed.index:
             self.advance()
         return confirmed
+
+    def _record(self, confirmed: ConfirmedAction) -> None:
+        # Idempotent: a confirm callback may record the arrow itself, once its own work succeeded
+        # and before it moves the view on (the episode widget does).
+        if len(self.demonstrations) == confirmed.index:
+            self.demonstrations = self.demonstrations + [[float(a) for a in confirmed.action]]
 
     def show_guidance(self, optimal_action) -> None:
         """Draw the optimal arrow (2,) beside the confirmed one at the current state."""

@@ -5,10 +5,11 @@ import re
 
 import numpy as np
 import pytest
+from ipywidgets import Button
 
 from mt_widgets import SKILLS
 from mt_widgets.apps import StudyApp, participant_texts
-from mt_widgets.study import StudyFolder, read_events
+from mt_widgets.study import LogError, SessionStateError, read_events
 
 from .scripted import SHORT_PROTOCOL
 
@@ -125,3 +126,34 @@ def test_a_lesson_in_the_app_writes_no_log(tmp_path, protocol_file):
     while not app.session.finished:
         act(app)
     assert not (tmp_path / "logs").exists()
+
+
+@pytest.mark.parametrize("error", [SessionStateError("submit_demonstration: expected ..."), ValueError("timings"),
+                                   TypeError("unhashable"), LogError("continued by another session")])
+def test_a_demonstration_the_session_refuses_stops_the_page_with_a_call_for_the_experimenter(
+        tmp_path, protocol_file, monkeypatch, error):
+    app = StudyApp(protocol=protocol_file, log_folder=tmp_path / "logs")
+    app.start_participant("P01", group="target")
+    while not ((step := app.session.current_step()).kind == "demonstration" and step.index == 1):
+        act(app)
+    episode = app.episode
+
+    def refuse(*args, **kwargs):
+        raise error
+    monkeypatch.setattr(app.session, "submit_demonstration", refuse)
+    episode.teaching.set_action(SKILLS[step.skill].target_actions(step.state[None])[0])
+    episode.teaching.confirm_button.click()  # as the participant does; ipywidgets prints the error
+    text = " ".join(participant_texts(app))
+    assert "Please call the experimenter" in text and str(error) in text
+    assert episode not in app.body.children and not any(isinstance(w, Button) for w in app.body.children)
+    # The widget did not move on: no guidance, the demonstration not counted.
+    assert episode.phase == "teaching" and episode.state_index == 1 and len(episode.demonstrations) == 1
+    # What was logged stays, and the participant can be resumed at the same demonstration.
+    demos = [e for e in read_events(tmp_path / "logs" / "P01.jsonl")[0] if e["type"] == "demonstration"]
+    assert len(demos) == 1
+    monkeypatch.undo()
+    app.session.close()
+    resumed = StudyApp(protocol=protocol_file, log_folder=tmp_path / "logs")
+    resumed.resume_participant("P01")
+    step = resumed.session.current_step()
+    assert (step.kind, step.index) == ("demonstration", 1) and resumed.episode.state_index == 1

@@ -112,3 +112,57 @@ def test_fewer_states_than_features_says_exact_teaching_is_impossible():
     assert not episode.exact
     episode.demonstrate([0.1, 0.1])
     assert "least-error" in episode.guidance_panel.value
+
+
+class LogRefused(RuntimeError):
+    pass
+
+
+@pytest.mark.parametrize("guidance", [True, False])
+@pytest.mark.parametrize("last", [False, True])
+def test_a_demonstration_a_callback_refuses_is_neither_shown_guidance_nor_counted(recorder, guidance, last):
+    skill = SKILLS["sim-point"]
+    refuse = [False]
+    logged, finished = [], []
+
+    def log(record):  # e.g. the study log could not be written
+        if refuse[0]:
+            raise LogRefused("the log could not be written")
+        logged.append(record)
+
+    episode = EpisodeWidget(skill, seed=1, guidance=guidance, on_demonstration=log, on_finished=finished.append)
+    n = len(episode.query_states)
+    for action in episode.optimal[: n - 1 if last else 1]:
+        episode.demonstrate(action)
+        if guidance:
+            episode.next()
+    index = episode.state_index
+    arrows = episode.teaching.view.layer("arrows")
+    refuse[0] = True
+    recorder.clear()
+    episode.teaching.set_action([0.4, 0.1])
+    drawn = len(recorder.on(arrows))
+    with pytest.raises(LogRefused):
+        episode.teaching.confirm()
+    # The error reached the caller: nothing moved on, no optimal arrow, no explanation.
+    assert len(recorder.on(arrows)) == drawn, "an arrow was drawn for an unlogged demonstration"
+    assert episode.phase == "teaching" and episode.guidance_panel.value == ""
+    assert episode.next_button.layout.display == "none" and not finished
+    assert episode.state_index == episode.teaching.state_index == index
+    assert len(episode.demonstrations) == len(episode.records) == len(logged) == index
+    assert episode.progress.demonstrations_done == index
+    # The arrow stays pending and unlocked: once the log works again, confirming it records it.
+    assert episode.teaching.pending_action == [0.4, 0.1] and not episode.teaching.locked
+    refuse[0] = False
+    episode.teaching.confirm_button.click()
+    assert [r.index for r in logged] == list(range(index + 1))
+    assert episode.phase == ("guidance" if guidance else "finished" if last else "teaching")
+
+
+def test_a_confirm_button_click_whose_callback_fails_does_not_record_the_arrow():
+    skill = SKILLS["uarm-point"]
+    episode = EpisodeWidget(skill, seed=1, guidance=True,
+                            on_demonstration=lambda record: 1 / 0)
+    episode.teaching.set_action([1.0, 0.0])
+    episode.teaching.confirm_button.click()  # ipywidgets' dispatcher reports the error
+    assert episode.phase == "teaching" and episode.demonstrations == [] and episode.records == []
