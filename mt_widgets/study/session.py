@@ -75,7 +75,7 @@ import numpy as np
 import mt_widgets
 from mt_widgets.core import SKILLS, SeedSchedule, analyse_demonstrations
 
-from .log import LogError, MemoryLog, ParticipantLog, StudyFolder
+from .log import LogError, MemoryLog, ParticipantLog, StudyFolder, to_jsonable
 from .protocol import Phase, Protocol
 
 TEXT_STEPS = ("welcome", "consent", "instructions", "phase_intro", "reproduction", "thank_you")
@@ -505,10 +505,19 @@ class Session:
             raise ValueError(f"action: expected {skill.plant.action_dim} numbers, got {action!r}") from None
         if action.shape != (skill.plant.action_dim,) or not np.all(np.isfinite(action)):
             raise ValueError(f"action: expected {skill.plant.action_dim} finite numbers, got {action.tolist()}")
-        timings = dict(timings or {})
-        if not isinstance(timings, dict):
-            raise ValueError(f"timings: expected a mapping, got {type(timings).__name__}")
+        if timings is None:
+            timings = {}
+        if not isinstance(timings, Mapping):
+            raise ValueError(f"timings: expected a mapping (e.g. {{'time_to_first_input_s': 1.2, "
+                             f"'drawing_duration_s': 0.8}}) or None, got {type(timings).__name__} {timings!r}")
+        timings = dict(timings)
         measured = {key_: _check_seconds(key_, timings.pop(key_, None)) for key_ in TIMING_KEYS}
+        for name, value in timings.items():  # refused here, by name, rather than inside the log write
+            try:
+                to_jsonable(value)
+            except TypeError:
+                raise ValueError(f"timings[{name!r}]: expected JSON-like data (numbers, text, lists, dicts), "
+                                 f"got {type(value).__name__}") from None
         optimal = np.asarray(started["optimal"])[slot.index]
         self.log.append("demonstration", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
                         index=slot.index, state=np.asarray(started["query_states"])[slot.index], action=action,

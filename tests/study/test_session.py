@@ -94,6 +94,21 @@ def test_calls_out_of_turn_are_refused(study):
     session.close()
 
 
+@pytest.mark.parametrize("timings", [[("method", "pointer")], "fast", 1.5, ["time_to_first_input_s"]])
+def test_timings_that_are_not_a_mapping_are_refused_by_name_and_nothing_is_logged(study, timings):
+    session = Session.start(study, "P01")
+    while session.current_step().kind != "demonstration":
+        run(session, stop_after=1)
+    n_events = len(session.events)
+    with pytest.raises(ValueError, match=rf"timings: expected a mapping .*, got {type(timings).__name__}"):
+        session.submit_demonstration([1.0, 0.0], timings)
+    with pytest.raises(ValueError, match=r"timings\['method'\]: expected JSON-like data .*, got object"):
+        session.submit_demonstration([1.0, 0.0], {"method": object()})
+    assert len(session.events) == n_events and session.current_step().index == 0
+    session.submit_demonstration([1.0, 0.0], None)  # None: no timings known
+    session.close()
+
+
 def test_resume_continues_at_the_first_missing_demonstration_with_the_same_states(study):
     session = Session.start(study, "P01")
     while not (session.current_step().kind == "demonstration" and session.current_step().phase == "B"
