@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import time
 import warnings
+import weakref
 from dataclasses import dataclass
 from typing import Callable
 
@@ -107,15 +108,22 @@ def _resolve_skill(skill):
     return skill
 
 
-_GHOSTS: dict[tuple[int, float], object] = {}
+#: skill -> {duration: the target skill's own rollout}. Keyed by the skill object itself (a Skill
+#: hashes by identity), weakly: an entry goes with its skill, and a new skill that happens to
+#: get a freed skill's id never gets that skill's ghost.
+_GHOSTS: "weakref.WeakKeyDictionary[object, dict[float, object]]" = weakref.WeakKeyDictionary()
 
 
 def _target_rollout(skill, duration: float):
     # The target skill's own motion depends only on the skill and duration: computed once.
-    key = (id(skill), float(duration))
-    if key not in _GHOSTS:
-        _GHOSTS[key] = skill.reproduce(skill.theta, duration=duration)
-    return _GHOSTS[key]
+    duration = float(duration)
+    try:
+        ghosts = _GHOSTS.setdefault(skill, {})
+    except TypeError:  # a skill-like object that cannot be weakly referenced: not cached
+        return skill.reproduce(skill.theta, duration=duration)
+    if duration not in ghosts:
+        ghosts[duration] = skill.reproduce(skill.theta, duration=duration)
+    return ghosts[duration]
 
 
 class EpisodeWidget(VBox):
