@@ -27,6 +27,7 @@ from traitlets import Float, Int, List, Unicode
 
 from mt_widgets.core import (DEFAULT_LAMBDA, SKILLS, RidgeLearner, UnderdeterminedTeachingWarning,
                              optimal_actions, teaching_risk)
+from mt_widgets.core.validation import as_float_array
 
 from .callbacks import Callbacks
 from .guidance import GuidancePanel
@@ -262,8 +263,22 @@ class EpisodeWidget(VBox):
             self.teaching.advance()
 
     def restore(self, demonstrations) -> None:
-        """Take already-given demonstrations (k, R) when resuming; finishes if all are there."""
-        actions = np.asarray(demonstrations, dtype=float).reshape(-1, 2)
+        """Take already-given demonstrations (k, R) when resuming; finishes if all are there.
+
+        Args:
+            demonstrations: (k, R) actions, k <= N, R = ``skill.plant.action_dim``.
+        """
+        action_dim = self.skill.plant.action_dim
+        if len(demonstrations) == 0:
+            actions = np.zeros((0, action_dim))
+        else:
+            actions = as_float_array("demonstrations", demonstrations)
+            if actions.ndim != 2 or actions.shape[1] != action_dim:
+                raise ValueError(f"demonstrations: expected shape (k, {action_dim}), one action of the skill per "
+                                 f"row, got {actions.shape}")
+        if len(actions) > len(self.query_states):
+            raise ValueError(f"demonstrations: expected at most {len(self.query_states)} (one per query state), "
+                             f"got {len(actions)}")
         self.teaching.restore(actions)
         self.progress.demonstrations_done = len(actions)
         if len(actions) == len(self.query_states):

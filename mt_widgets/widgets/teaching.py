@@ -24,6 +24,8 @@ import numpy as np
 from ipywidgets import HTML, Button, FloatText, HBox, Layout, ToggleButtons, VBox
 from traitlets import Any, Bool, Int, List
 
+from mt_widgets.core.validation import as_float_array
+
 from .arm_view import ArmView
 from .arrows import draw_arrow
 from .callbacks import Callbacks
@@ -52,7 +54,7 @@ class ConfirmedAction:
     Attributes:
         index: Query-state index (0-based).
         state: (state_dim,) the query state.
-        action: (2,) the confirmed action in ``action_units``.
+        action: (R,) the confirmed action in ``action_units``.
         method: "pointer", "keyboard", "numeric" or "code" (how the last change was made).
         time_to_first_input_s: From the state appearing to the first input on it (None if
             set by code without any input).
@@ -103,6 +105,8 @@ class TeachingCanvas(VBox):
         if states.ndim != 2 or states.shape[1] != skill.state_dim or len(states) == 0:
             raise ValueError(f"query_states: expected shape (N, {skill.state_dim}) with N >= 1, got {states.shape}")
         self.skill = skill
+        #: R, the number of action components.
+        self.action_dim = int(skill.plant.action_dim)
         self.query_states = states
         self.grab_radius = float(grab_radius)
         self.auto_advance = bool(auto_advance)
@@ -177,14 +181,18 @@ class TeachingCanvas(VBox):
         self._confirm_callbacks.register_callback(callback, remove=remove)
 
     def set_action(self, action, method: str = "code") -> None:
-        """Draw ``action`` (2,) in ``action_units`` as the pending arrow at the current state."""
-        u = np.array(action, dtype=float).reshape(-1)
-        if u.shape != (2,) or not np.all(np.isfinite(u)):
-            raise ValueError(f"action: expected 2 finite numbers in {self.skill.action_units}, got {action!r}")
+        """Draw ``action`` (R,) in ``action_units`` as the pending arrow at the current state."""
+        try:
+            u = np.array(action, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            u = None
+        if u is None or u.shape != (self.action_dim,) or not np.all(np.isfinite(u)):
+            raise ValueError(f"action: expected {self.action_dim} finite numbers in {self.skill.action_units}, "
+                             f"got {action!r}")
         if self.current_state is None:
             raise RuntimeError("set_action: every query state already has a demonstration")
         self._note_input(method)
-        self.pending_action = [float(u[0]), float(u[1])]
+        self.pending_action = [float(c) for c in u]
         self._draw_arrows()
         self._update_readout()
         self._sync_entries()
@@ -222,7 +230,7 @@ class TeachingCanvas(VBox):
             self.demonstrations = self.demonstrations + [[float(a) for a in confirmed.action]]
 
     def show_guidance(self, optimal_action) -> None:
-        """Draw the optimal arrow (2,) beside the confirmed one at the current state."""
+        """Draw the optimal arrow (R,) beside the confirmed one at the current state."""
         self._guidance = np.array(optimal_action, dtype=float)
         self._draw_arrows()
 
@@ -236,8 +244,14 @@ class TeachingCanvas(VBox):
         self._show_current_state()
 
     def restore(self, actions) -> None:
-        """Take already-given demonstrations (k, 2) as confirmed, without callbacks (resuming)."""
-        actions = np.array(actions, dtype=float).reshape(-1, 2) if len(actions) else np.zeros((0, 2))
+        """Take already-given demonstrations (k, R) as confirmed, without callbacks (resuming)."""
+        if len(actions) == 0:
+            actions = np.zeros((0, self.action_dim))
+        else:
+            actions = as_float_array("actions", actions)
+            if actions.ndim != 2 or actions.shape[1] != self.action_dim:
+                raise ValueError(f"actions: expected shape (k, {self.action_dim}), one action per row, "
+                                 f"got {actions.shape}")
         if len(actions) > self.n_states:
             raise ValueError(f"actions: expected at most {self.n_states} demonstrations, got {len(actions)}")
         self.demonstrations = [list(map(float, a)) for a in actions]

@@ -184,3 +184,21 @@ def test_the_ghost_is_the_skills_own_motion_even_when_an_id_is_reused_and_dies_w
     del slow, fast, skill
     gc.collect()
     assert len(episode_module._GHOSTS) == before - 2, "the cache keeps ghosts of skills that are gone"
+
+
+def test_restored_demonstrations_of_the_wrong_shape_are_refused_by_name_not_reshaped():
+    skill = SKILLS["uarm-point"]
+    episode = EpisodeWidget(skill, seed=3, guidance=False)
+    # Two 3-component actions used to be reshaped silently into three 2-component ones.
+    with pytest.raises(ValueError, match=r"demonstrations: expected shape \(k, 2\)"):
+        episode.restore([[1.0, 0.5, 0.0], [-0.5, 0.2, 0.0]])
+    with pytest.raises(ValueError, match=r"demonstrations: expected shape \(k, 2\)"):
+        EpisodeWidget(skill, seed=3, demonstrations=[1.0, 0.5, -0.5, 0.2])
+    with pytest.raises(ValueError, match=r"actions: expected shape \(k, 2\)"):
+        episode.teaching.restore([[1.0, 0.5, 0.0]])
+    with pytest.raises(ValueError, match="action: expected 2 finite numbers"):
+        episode.teaching.set_action([1.0, 0.5, 0.0])
+    assert episode.state_index == 0 and episode.demonstrations == []
+    episode.restore([])
+    episode.restore(np.zeros((0, 2)))
+    assert episode.state_index == 0
