@@ -27,7 +27,7 @@ from traitlets import Float, Int, List, Unicode
 
 from mt_widgets.core import (DEFAULT_LAMBDA, SKILLS, RidgeLearner, UnderdeterminedTeachingWarning,
                              optimal_actions, teaching_risk)
-from mt_widgets.core.validation import as_float_array
+from mt_widgets.core.validation import as_float_array, as_positive
 
 from .callbacks import Callbacks
 from .guidance import GuidancePanel
@@ -169,9 +169,7 @@ class EpisodeWidget(VBox):
                  action_length=None, target_label: str | None = "goal", show_description: bool = True,
                  show_outcome: bool = True):
         self.skill = _resolve_skill(skill)
-        if not (np.isfinite(lam) and lam >= 0):
-            raise ValueError(f"lam: expected a finite number >= 0, got {lam!r}")
-        self.lam = float(lam)
+        self.lam = as_positive("lam", lam, allow_zero=True)
         self.guidance = bool(guidance)
         self.duration = float(self.skill.default_duration if duration is None else duration)
         if not self.duration > 0:

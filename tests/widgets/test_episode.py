@@ -102,6 +102,9 @@ def test_bad_arguments_name_themselves():
         EpisodeWidget("sim-circle")
     with pytest.raises(ValueError, match="lam"):
         EpisodeWidget("sim-point", lam=-1)
+    for bad in ("0.1", None, [0.1], True):
+        with pytest.raises(ValueError, match="lam: expected a real number"):
+            EpisodeWidget("sim-point", lam=bad)
     with pytest.raises(ValueError, match="query_states"):
         EpisodeWidget("sim-point", query_states=np.zeros((5, 2)))
 
