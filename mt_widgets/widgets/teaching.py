@@ -199,6 +199,7 @@ class TeachingCanvas(VBox):
 
     def clear_action(self) -> None:
         """Remove the pending (unconfirmed) arrow."""
+        self._dragging = False  # Escape mid-drag: the pointer still moving must not redraw it
         self.pending_action = None
         self._draw_arrows()
         self._update_readout()
@@ -209,6 +210,9 @@ class TeachingCanvas(VBox):
             raise RuntimeError("confirm: input is locked (guidance is shown or the episode is over)")
         if self.pending_action is None or self.current_state is None:
             raise RuntimeError("confirm: draw an arrow first (pending_action is None)")
+        # Enter mid-drag: the drag ends with the confirmation, so later moves of the still
+        # pressed pointer cannot change the confirmed arrow or draw one at the next state.
+        self._dragging = False
         now = time.monotonic()
         timing = self._timing
         confirmed = ConfirmedAction(
@@ -238,6 +242,7 @@ class TeachingCanvas(VBox):
         """Move on to the next query state (after a confirmation)."""
         if len(self.demonstrations) <= self.state_index:
             raise RuntimeError("advance: confirm the current arrow first")
+        self._dragging = False
         self.state_index += 1
         self.pending_action = None
         self._guidance = None
@@ -254,6 +259,7 @@ class TeachingCanvas(VBox):
                                  f"got {actions.shape}")
         if len(actions) > self.n_states:
             raise ValueError(f"actions: expected at most {self.n_states} demonstrations, got {len(actions)}")
+        self._dragging = False
         self.demonstrations = [list(map(float, a)) for a in actions]
         self.state_index = len(actions)
         self.pending_action = None
@@ -355,13 +361,17 @@ class TeachingCanvas(VBox):
         # Called for every pointer move over the canvas: return at once unless dragging.
         if not self._dragging:
             return
+        if not self._accepting():  # locked or done since the press: the drag is over
+            self._dragging = False
+            return
         self._drag_to((x, y))
 
     def _on_mouse_up(self, x, y) -> None:
         if not self._dragging:
             return
         self._dragging = False
-        self._drag_to((x, y), final=True)
+        if self._accepting():
+            self._drag_to((x, y), final=True)
 
     def _drag_to(self, pointer, final: bool = False) -> None:
         origin, _ = self.view.painter.end_effector(self.current_state)
@@ -412,6 +422,8 @@ class TeachingCanvas(VBox):
         self.set_action(action, method="numeric")
 
     def _set_locked(self, locked: bool) -> None:
+        if locked:
+            self._dragging = False
         self.locked = locked
         for widget in (self.set_button, self.first_entry, self.second_entry, self.entry_mode):
             widget.disabled = locked

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from mt_widgets import SKILLS
-from mt_widgets.widgets import ArmView, ReproductionPlayer, TeachingCanvas
+from mt_widgets.widgets import ArmView, EpisodeWidget, ReproductionPlayer, TeachingCanvas
 
 from .conftest import client_ready, key, near, path_points, pointer
 
@@ -247,3 +247,36 @@ def test_a_blinded_episode_shows_neither_formula_nor_outcome(recorder):
     open_episode.finish()
     assert skill.description in open_episode.header.value
     assert f"{open_episode.result.error:.3f}" in open_episode.player.error_label.value
+
+
+def test_enter_mid_drag_ends_the_drag_so_later_moves_draw_nothing_at_the_next_state(recorder, caplog):
+    skill = SKILLS["uarm-point"]
+    teach = TeachingCanvas(skill, skill.query_states(seed=1)[:2])
+    canvas = teach.view.canvas
+    for index in range(2):
+        ee = teach.view.end_effector_pixel(teach.current_state)
+        pointer(canvas, "mouse_down", *ee)
+        pointer(canvas, "mouse_move", *(ee + [25, 10]))
+        key(canvas, "Enter")  # confirmed mid-drag, the button still pressed
+        assert teach.state_index == index + 1 and len(teach.demonstrations) == index + 1
+        recorder.clear()
+        pointer(canvas, "mouse_move", *(ee + [40, -30]))
+        pointer(canvas, "mouse_up", *(ee + [40, -30]))
+        # The next state shows no arrow from the old drag; after the last, nothing fails.
+        assert teach.pending_action is None and recorder.messages == []
+    assert not [r for r in caplog.records if "Exception in callback" in r.getMessage()]
+
+
+def test_a_move_after_confirming_mid_drag_leaves_the_confirmed_arrow_under_guidance(recorder):
+    skill = SKILLS["sim-point"]
+    episode = EpisodeWidget(skill, seed=2, guidance=True)
+    teach = episode.teaching
+    ee = teach.view.end_effector_pixel(teach.current_state)
+    pointer(teach.view.canvas, "mouse_down", *ee)
+    pointer(teach.view.canvas, "mouse_move", *(ee + [25, 10]))
+    key(teach.view.canvas, "Enter")
+    assert episode.phase == "guidance"
+    confirmed = list(teach.pending_action)
+    pointer(teach.view.canvas, "mouse_move", *(ee + [-40, 30]))
+    pointer(teach.view.canvas, "mouse_up", *(ee + [-40, 30]))
+    assert teach.pending_action == confirmed == episode.demonstrations[0]
