@@ -36,7 +36,7 @@ def best_of(function, repeats: int) -> tuple[float, float, object]:
 
 
 def main() -> None:
-    from mt_widgets.study.in_silico import compare_with_paper, run_in_silico
+    from mt_widgets.study.in_silico import run_in_silico
     from mt_widgets.study.power import simulated_power
 
     print(f"cores available: {os.cpu_count()}; load average {os.getloadavg()[0]:.1f}")

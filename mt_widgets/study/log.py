@@ -46,7 +46,7 @@ import numpy as np
 
 import mt_widgets
 
-from .participants import ParticipantIdError, block_assignment, validate_participant_id
+from .participants import block_assignment, validate_participant_id
 from .protocol import Protocol, protocol_from_data
 
 STUDY_FILE = "study.json"

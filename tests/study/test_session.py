@@ -10,7 +10,7 @@ from mt_widgets import SKILLS, analyse_demonstrations
 from mt_widgets.study import (DEMONSTRATION_COLUMNS, EPISODE_COLUMNS, Session, SessionStateError, StudyFolder,
                               export_study, read_study)
 
-from .scripted import demonstrations, run, scripted_action, short_protocol
+from .scripted import run, scripted_action, short_protocol
 
 
 @pytest.fixture
