@@ -14,13 +14,26 @@ official firmware and SDK sources; cited below as "the doc"). Design in short:
   :class:`SwiftProDisconnected`;
 * a move is checked against the :class:`SafetyEnvelope` (target, step, path, speed), then
   the arm is asked (M2222) whether it can reach the target, and only then sent. There is
-  no public method that sends raw G-code.
+  no public method that sends raw G-code;
+* an arm outside the envelope (as after power-up) is never moved by :meth:`SwiftPro.move_to`,
+  which refuses: an experimenter brings it in with :meth:`SwiftPro.home`, which lifts it into
+  the height band, moves it out of the hole round the base along its own yaw, then follows a
+  polar path, at ``entry_speed_mm_s``, every leg checked (never further out than it was, at
+  most ``max_step_mm``, reachable by M2222). Participant-facing code only calls ``home`` once
+  at connection, from the experimenter's app;
+* :meth:`SwiftPro.stop` always wins: it bypasses the 2-request in-flight limit, makes every
+  move that began before it refuse to be sent (the stop generation, see
+  :attr:`SwiftPro.stop_generation` and ``move_to(..., unless_stopped_since=...)``), and cuts
+  the current one. On firmware 4.0-4.4, which has no planner clear, it pauses the arm
+  (``S1000 V0``) and :meth:`SwiftPro.resume` must be called before anything moves again; see
+  there for what happens to the move the pause cut short.
 """
 
 from __future__ import annotations
 
 import logging
 import math
+import numbers
 import random
 import threading
 import time
@@ -32,7 +45,7 @@ import serial
 from serial.serialutil import SerialException, SerialTimeoutException
 
 from . import protocol
-from .envelope import TEACHING_HEIGHT_MM, SafetyEnvelope
+from .envelope import TEACHING_HEIGHT_MM, SafetyEnvelope, is_real
 from .errors import (
     SwiftProCommandError,
     SwiftProDisconnected,
@@ -64,6 +77,8 @@ class _Pending:
     reply: Reply | None = None
     error: BaseException | None = None
     released: bool = False
+    #: False for stop commands, which bypass the in-flight limit (Stop must never wait for a slot).
+    holds_slot: bool = True
 
 
 def _port_error(port: str, exc: BaseException, doing: str) -> SwiftProDisconnected:
@@ -105,10 +120,14 @@ class SwiftPro:
         if port is not None and not isinstance(port, str):
             raise ValueError(f"port must be a device path, a pyserial URL, 'auto' or None, got {port!r}")
         for name, value in (("timeout", timeout), ("ready_timeout", ready_timeout)):
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive number of seconds, got {value!r}")
-        if not (isinstance(max_in_flight, int) and 1 <= max_in_flight <= 32):
-            raise ValueError(f"max_in_flight must be an int in 1..32, got {max_in_flight!r}")
+            if not (is_real(value) and math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a positive, finite number of seconds, got {value!r}")
+        if not (isinstance(max_in_flight, numbers.Integral) and not isinstance(max_in_flight, bool)
+                and 1 <= max_in_flight <= 32):
+            raise ValueError(f"max_in_flight must be an integer in 1..32, got {max_in_flight!r}")
+        if not is_real(teaching_height_mm):
+            raise ValueError(f"teaching_height_mm must be a real number of mm in the envelope's height band, "
+                             f"got {teaching_height_mm!r}")
         self.port = port
         self.envelope = envelope if envelope is not None else SafetyEnvelope()
         if not isinstance(self.envelope, SafetyEnvelope):
@@ -118,7 +137,7 @@ class SwiftPro:
         self.default_speed_mm_s = self.envelope.check_speed(default_speed_mm_s)
         self.timeout = float(timeout)
         self.ready_timeout = float(ready_timeout)
-        self.max_in_flight = max_in_flight
+        self.max_in_flight = int(max_in_flight)
         self.simulate_if_absent = simulate_if_absent
 
         self.firmware_version: tuple[int, int, int] | None = None
@@ -147,7 +166,12 @@ class SwiftPro:
         self._callbacks: list[Callable[[Event], None]] = []
         self._last_target: tuple[float, float, float] | None = None
         self._current_move: _Pending | None = None
+        self._current_target: tuple[float, float, float, float] | None = None  # x, y, z mm and speed mm/s
         self._stopped = False
+        # Firmware 4.0-4.4: stop() paused the arm (S1000 V0); nothing may be queued until
+        # resume(), and the target of the move the pause cut short (x, y, z, speed) or None.
+        self._paused = False
+        self._paused_target: tuple[float, float, float, float] | None = None
 
     # ================================================================== life cycle
     def __enter__(self) -> SwiftPro:
@@ -161,6 +185,18 @@ class SwiftPro:
     def connected(self) -> bool:
         """True between a successful :meth:`connect` and :meth:`close` or a link failure."""
         return self._ser is not None and self._dead is None
+
+    @property
+    def stop_generation(self) -> int:
+        """How many times :meth:`stop` was called. Read it when a job starts and pass it to
+        every ``move_to(..., unless_stopped_since=generation)`` of the job: a stop at any
+        time since then makes those moves refuse to be sent."""
+        return self._stop_generation
+
+    @property
+    def paused(self) -> bool:
+        """True after :meth:`stop` on firmware 4.0-4.4 until :meth:`resume`: nothing moves."""
+        return self._paused
 
     @property
     def firmware_major(self) -> int | None:
@@ -205,6 +241,10 @@ class SwiftPro:
         self._connect_to(self.port)
 
     def _connect_to(self, port: str) -> None:
+        if self._ser is not None:
+            # After a link failure the old port is still open and its reader may still run:
+            # close both, or the file descriptor leaks and an exclusive reopen finds the port busy.
+            self.close()
         self._reset_state()
         try:
             ser = serial.serial_for_url(port, baudrate=115200, timeout=0.05, write_timeout=self.timeout,
@@ -257,6 +297,10 @@ class SwiftPro:
         self._next_number = random.randint(1, protocol.MAX_REQUEST_NUMBER)
         self._last_target = None
         self.firmware_version = None
+        self._current_move = None
+        # Opening the port resets the board (the doc: probably, through DTR), which ends a pause.
+        self._paused = False
+        self._paused_target = None
 
     def _wait_ready(self) -> None:
         """4.x says ``@1`` when booted; 3.x does not (the doc, "Link"), so also poll P2234."""
@@ -360,7 +404,8 @@ class SwiftPro:
             if pending.released:
                 return
             pending.released = True
-        self._slots.release()
+        if pending.holds_slot:
+            self._slots.release()
 
     def _fail_all(self, error: SwiftProDisconnected, keep_dead: bool = True) -> None:
         with self._lock:
@@ -377,15 +422,21 @@ class SwiftPro:
             self._events_cond.notify_all()
 
     # ================================================================== requests
-    def _submit(self, command: str, *params: tuple[str, float], move_generation: int | None = None) -> _Pending:
+    def _submit(self, command: str, *params: tuple[str, float], move_generation: int | None = None,
+                is_stop: bool = False, while_paused: bool = False) -> _Pending:
         """Send a numbered request; returns its pending record. Private: no raw G-code
         reaches a participant-facing UI.
 
         With ``move_generation`` the request is a move: it is sent only if no :meth:`stop`
         came since that generation, and it becomes the current move that a stop cuts.
+        ``is_stop`` requests bypass the in-flight limit. While the arm is paused (4.0-4.4)
+        G and M commands would queue behind the cut move and never be answered: they are
+        refused unless ``while_paused`` (resume's own barrier).
         """
         self._check_alive()
-        if not self._slots.acquire(timeout=self.timeout):
+        if self._paused and not while_paused and command[:1] in ("G", "M"):
+            raise SwiftProStopped(f"{command!r} was not sent: the arm is paused by stop(); call resume() first")
+        if not is_stop and not self._slots.acquire(timeout=self.timeout):
             raise SwiftProTimeout(
                 f"{self.max_in_flight} requests still unanswered after {self.timeout} s; {command!r} not sent")
         pending = None
@@ -396,7 +447,7 @@ class SwiftPro:
                     raise SwiftProStopped(f"{command!r} was not sent: stop() came before it")
                 with self._lock:
                     number = self._allocate_number()
-                    pending = _Pending(number, command, threading.Event())
+                    pending = _Pending(number, command, threading.Event(), holds_slot=not is_stop)
                     self._pending[number] = pending
                     self._order.append(number)
                 if move_generation is not None:
@@ -404,7 +455,8 @@ class SwiftPro:
                 self._send(protocol.build_request(number, command, *params))
         except BaseException:
             if pending is None:
-                self._slots.release()
+                if not is_stop:
+                    self._slots.release()
             else:
                 with self._lock:
                     if self._pending.pop(pending.number, None) is not None:
@@ -477,8 +529,9 @@ class SwiftPro:
                     return event.line
         return None
 
-    def _request(self, command: str, *params: tuple[str, float], timeout: float | None = None) -> Reply:
-        return self._wait(self._submit(command, *params), self.timeout if timeout is None else timeout)
+    def _request(self, command: str, *params: tuple[str, float], timeout: float | None = None,
+                 is_stop: bool = False) -> Reply:
+        return self._wait(self._submit(command, *params, is_stop=is_stop), self.timeout if timeout is None else timeout)
 
     # ================================================================== events
     def on_event(self, callback: Callable[[Event], None]) -> None:
@@ -535,40 +588,115 @@ class SwiftPro:
             raise SwiftProError(f"M2222 must answer V0 or V1, got {reply.line!r}")
         return values["V"] == 1
 
-    def move_to(self, x: float, y: float, z: float | None = None, speed: float | None = None) -> None:
+    def move_to(self, x: float, y: float, z: float | None = None, speed: float | None = None, *,
+                unless_stopped_since: int | None = None) -> None:
         """Move the tool in a straight line to (x, y, z) mm and wait until it is there.
 
         Checks, in order, before anything is sent: the target is inside the envelope; the
-        speed is allowed; the straight path from the last known position stays inside and
-        is at most ``max_step_mm`` long; the arm itself says the target is reachable
-        (M2222). If the arm starts outside the envelope (after power-up, say), only the
-        target is checked and the speed is capped at ``entry_speed_mm_s``.
+        arm is inside it too (an arm outside, as after power-up, is refused: an experimenter
+        brings it in with :meth:`home`); the speed is allowed; the straight path from the
+        last known position stays inside and is at most ``max_step_mm`` long; the arm itself
+        says the target is reachable (M2222).
 
         Args:
             x: forward, mm.
             y: left, mm.
             z: up, mm; the teaching height if None.
             speed: mm/s; ``default_speed_mm_s`` if None.
+            unless_stopped_since: a :attr:`stop_generation` read earlier (when a job began);
+                if :meth:`stop` was called since, the move is refused. None: since this call.
 
         Raises:
             UnsafeMoveError: a check failed; nothing was sent.
             SwiftProUnreachable, SwiftProMotorsDetached, ...: the arm refused the move.
-            SwiftProStopped: :meth:`stop` cut the move short.
+            SwiftProStopped: :meth:`stop` cut the move short, came since
+                ``unless_stopped_since``, or paused the arm (4.0-4.4) and :meth:`resume` was
+                not called since.
             SwiftProTimeout, SwiftProDisconnected: the link failed.
         """
+        generation = self._generation_since(unless_stopped_since)
         z = self.teaching_height_mm if z is None else z
         speed = self.default_speed_mm_s if speed is None else speed
         # Round to the 4 decimals that go on the wire before checking, so that what is
         # checked is exactly what is sent.
         target = self.envelope.check_point(*(round(v, 4) for v in self.envelope.check_point(x, y, z)))
-        generation = self._stop_generation
+        self._move(target, speed, generation, homing=False)
+
+    def home(self, x: float = 200.0, y: float = 0.0, z: float | None = None, *, speed: float | None = None,
+             max_segment_mm: float = 40.0, unless_stopped_since: int | None = None
+             ) -> list[tuple[float, float, float]]:
+        """Experimenter-level: bring the arm into the envelope (after power-up, or after it was
+        moved by hand) and to (x, y, z) mm, the only way into the envelope.
+
+        The path is :meth:`SafetyEnvelope.entry_path`: straight up into the height band if
+        below it, out of (or into) the radius band along the arm's own yaw, down into the
+        band if above it, then a polar path to the target; legs at most ``max_segment_mm``,
+        all at ``speed`` (at most ``entry_speed_mm_s``). Each leg is checked before it is
+        sent: while the arm is outside, it may not take it further out in any respect
+        (:meth:`SafetyEnvelope.check_entering_segment`); once inside, the usual checks of
+        :meth:`move_to`; and the arm is asked (M2222). From inside, ``home`` is a slow
+        :meth:`move_to` along a polar path.
+
+        Args:
+            x, y: the target, mm, inside the envelope (default: 200 mm straight ahead).
+            z: its height, mm; the teaching height if None.
+            speed: mm/s; ``entry_speed_mm_s`` if None.
+            max_segment_mm: longest leg, mm.
+            unless_stopped_since: as for :meth:`move_to`.
+
+        Returns:
+            The points the arm was sent to, in order, mm.
+
+        Raises:
+            As :meth:`move_to`; a failed leg leaves the arm where that leg began (or cut short).
+        """
+        generation = self._generation_since(unless_stopped_since)
+        z = self.teaching_height_mm if z is None else z
+        target = self.envelope.check_point(*(round(v, 4) for v in self.envelope.check_point(x, y, z)))
+        speed = self.envelope.check_speed(self.envelope.entry_speed_mm_s if speed is None else speed, entering=True)
         self._check_alive()
         with self._move_lock:
+            self._last_target = None  # read where the arm really is, not where it was sent
+            start = self.position()
+            legs = [tuple(round(v, 4) for v in leg) for leg in self.envelope.entry_path(start, target, max_segment_mm)]
+        for leg in legs:
+            self._move(leg, speed, generation, homing=True)
+        return legs
+
+    def _generation_since(self, unless_stopped_since: int | None) -> int:
+        if unless_stopped_since is None:
+            return self._stop_generation
+        if not (isinstance(unless_stopped_since, numbers.Integral) and not isinstance(unless_stopped_since, bool)
+                and 0 <= unless_stopped_since <= self._stop_generation):
+            raise ValueError(f"unless_stopped_since must be a stop_generation read earlier, an integer in "
+                             f"0..{self._stop_generation}, got {unless_stopped_since!r}")
+        if unless_stopped_since != self._stop_generation:
+            raise SwiftProStopped(f"not moving: stop() was called since generation {unless_stopped_since}")
+        return int(unless_stopped_since)
+
+    def _move(self, target: tuple[float, float, float], speed: float, generation: int, *, homing: bool) -> None:
+        """Check the move from where the arm is to ``target`` and send it (``home`` legs may
+        start and end outside the envelope; see :meth:`home`)."""
+        self._check_alive()
+        with self._move_lock:
+            if self._paused:
+                raise SwiftProStopped("the arm is paused by stop(); call resume() first")
             start = self._last_target if self._last_target is not None else self.position()
-            entering = not self.envelope.contains(*start)
-            speed = self.envelope.check_speed(speed, entering=entering)
-            if not entering:
+            try:
+                self.envelope.check_point(*start)
+                inside = True
+            except UnsafeMoveError as outside:
+                if not homing:
+                    raise UnsafeMoveError(
+                        f"the arm is at {tuple(round(v, 3) for v in start)} mm, outside the safety envelope "
+                        f"({outside}); nothing was sent: an experimenter must bring it in with home() first",
+                        coordinate=outside.coordinate, value=outside.value, limit=outside.limit) from outside
+                inside = False
+            speed = self.envelope.check_speed(speed, entering=homing)
+            if inside:
                 self.envelope.check_segment(start, target)
+            else:
+                self.envelope.check_entering_segment(start, target)
             if not self.is_reachable(*target):
                 raise UnsafeMoveError(
                     f"the arm says (x, y, z) = {target} mm is unreachable (M2222 answered V0)",
@@ -583,6 +711,7 @@ class SwiftPro:
             duration = math.dist(start, target) / speed
             self._stopped = False
             self._last_target = None  # unknown until the move is confirmed
+            self._current_target = (*target, speed)
             pending = self._submit(word, ("X", target[0]), ("Y", target[1]), ("Z", target[2]), ("F", feed),
                                    move_generation=generation)
             try:
@@ -606,36 +735,83 @@ class SwiftPro:
             time.sleep(0.01)
 
     def stop(self) -> None:
-        """Stop moving now; a move waiting in :meth:`move_to` raises :class:`SwiftProStopped`.
+        """Stop moving now; a move waiting in :meth:`move_to` raises :class:`SwiftProStopped`,
+        and every move begun before this call (``unless_stopped_since``) refuses to be sent.
 
-        4.5+ sends ``S1100`` (clears the planner); older 4.x ``S1000 V0`` (pause; call
-        :meth:`resume` to go on); 3.x ``G2203``. UNCERTAIN (the doc): whether the firmware
-        ever answers the cut move, so its number is retired here.
+        The stop command never waits for a request slot. 4.5+ sends ``S1100`` (clears the
+        planner); 4.0-4.4 ``S1000 V0`` (pause: nothing more moves until :meth:`resume`);
+        3.x ``G2203``. UNCERTAIN (the doc): whether the firmware ever answers the cut move,
+        so its number is retired here.
         """
         with self._stop_lock:
             self._stop_generation += 1
             self._stopped = True
             move = self._current_move
+            target = self._current_target if move is not None else None
         version = self.firmware_version or (4, 0, 0)
         if version[0] == 3:
-            self._request("G2203")
+            command = ("G2203",)
         elif version >= (4, 5, 0):
-            self._request("S1100")
+            command = ("S1100",)
         else:
-            self._request("S1000", ("V", 0))
-        if move is not None:
-            with self._lock:
-                if self._pending.pop(move.number, None) is not None:
-                    self._order.remove(move.number)
-                    self._retired[move.number] = time.monotonic()
-                    move.error = SwiftProStopped(f"{move.command!r} was stopped")
-            self._release(move)
-            move.done.set()
-        self._last_target = None
+            command = ("S1000", ("V", 0))
+            # Paused from now on, even if the reply is lost: refusing moves is the safe side.
+            if target is not None:
+                self._paused_target = target
+            self._paused = True
+        try:
+            self._request(*command, is_stop=True)
+        finally:
+            if move is not None:
+                with self._lock:
+                    if self._pending.pop(move.number, None) is not None:
+                        self._order.remove(move.number)
+                        self._retired[move.number] = time.monotonic()
+                        move.error = SwiftProStopped(f"{move.command!r} was stopped")
+                self._release(move)
+                move.done.set()
+            self._last_target = None
 
     def resume(self) -> None:
-        """Resume after a pause (4.x ``S1000 V1``; only meaningful on firmware before 4.5)."""
-        self._request("S1000", ("V", 1))
+        """Let the arm move again after :meth:`stop` paused it (firmware 4.0-4.4); nothing to do
+        on other firmware (their stop clears the planner) or when not paused.
+
+        4.0-4.4 has no planner clear (``S1100`` is 4.5+), so the move the pause cut short is
+        still at the head of the firmware's queue and goes on with ``S1000 V1``. Rather than
+        let it run after (or between) new moves, resume sends ``S1000 V1``, then waits for
+        that old move to end: a harmless M2222 question queued behind it is answered only
+        when the queue is empty (4.x answers G/M commands when idle). Then it re-reads the
+        position, from which the next move is checked. The old move was checked against
+        the envelope when it was sent, so finishing it stays inside. A :meth:`stop` while
+        waiting pauses the arm again and makes resume raise :class:`SwiftProStopped`.
+
+        Raises:
+            SwiftProStopped: a stop came while resuming (the arm is paused again).
+            SwiftProTimeout, SwiftProDisconnected: the link failed (the arm stays marked paused).
+        """
+        self._check_alive()
+        with self._move_lock:
+            if not self._paused:
+                return
+            generation = self._stop_generation
+            target = self._paused_target
+            self._request("S1000", ("V", 1))
+            here = self.position()
+            wait_s = self.timeout
+            if target is not None:
+                wait_s += 1.5 * math.dist(here, target[:3]) / target[3]
+            barrier = here if target is None else target[:3]
+            pending = self._submit("M2222", ("X", barrier[0]), ("Y", barrier[1]), ("Z", barrier[2]), ("P", 0),
+                                   move_generation=generation, while_paused=True)
+            try:
+                self._wait(pending, wait_s)
+            finally:
+                self._current_move = None
+            if self._stop_generation != generation:
+                raise SwiftProStopped("resume was cut short by stop(): the arm is paused again")
+            self._paused = False
+            self._paused_target = None
+            self._last_target = self.position()
 
     def beep(self, frequency_hz: float = 1000.0, duration_ms: float = 200.0) -> None:
         """Sound the buzzer (M2210 F T; both fields on 4.x).
@@ -644,9 +820,9 @@ class SwiftPro:
             frequency_hz: pitch, 50..10000 Hz.
             duration_ms: length, 1..5000 ms.
         """
-        if not (isinstance(frequency_hz, (int, float)) and 50 <= frequency_hz <= 10000):
+        if not (is_real(frequency_hz) and 50 <= frequency_hz <= 10000):
             raise ValueError(f"frequency_hz must be in 50..10000 Hz, got {frequency_hz!r}")
-        if not (isinstance(duration_ms, (int, float)) and 1 <= duration_ms <= 5000):
+        if not (is_real(duration_ms) and 1 <= duration_ms <= 5000):
             raise ValueError(f"duration_ms must be in 1..5000 ms, got {duration_ms!r}")
         self._request("M2210", ("F", frequency_hz), ("T", duration_ms), timeout=self.timeout + duration_ms / 1000)
 
@@ -662,9 +838,9 @@ class SwiftPro:
 
     def set_position_reports(self, interval_s: float | None) -> None:
         """Ask for ``@3`` position events every ``interval_s`` seconds (M2120); None or 0 stops them."""
-        if interval_s is None or interval_s == 0:
+        if interval_s is None or (is_real(interval_s) and interval_s == 0):
             self._request("M2120", ("V", 0))
             return
-        if not (isinstance(interval_s, (int, float)) and 0.01 <= interval_s <= 60):
+        if not (is_real(interval_s) and 0.01 <= interval_s <= 60):
             raise ValueError(f"interval_s must be None, 0 or in 0.01..60 s, got {interval_s!r}")
         self._request("M2120", ("V", interval_s))

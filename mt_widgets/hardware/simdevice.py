@@ -17,6 +17,7 @@ every mode and in both profiles (see :func:`is_reachable`).
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import math
 import random
@@ -148,6 +149,11 @@ class SimulatedSwiftPro:
 
     Args:
         firmware: 4 (grbl-based, default) or 3 (Marlin-based).
+        version: the firmware version P2203 reports, ``"4.2"`` or ``"4.2.0"`` (default 4.10.0
+            on 4.x, 3.2.0 on 3.x); its major number must be ``firmware``. Before 4.5 there is
+            no ``S1100`` (E20): ``S1000 V0`` pauses, the cut move stays at the head of the
+            queue, every G/M command queues behind it unanswered, and ``S1000 V1`` carries
+            the cut move on to its target before anything queued after it.
         boot_delay: seconds from power-on to the banner; input before it is dropped.
         latency: seconds added to every line the arm sends.
         motion_scale: factor on move durations (1 = distance / speed; tests use 0.01).
@@ -159,6 +165,7 @@ class SimulatedSwiftPro:
     """
 
     firmware: int = 4
+    version: str | None = None
     boot_delay: float = 0.3
     latency: float = 0.0
     motion_scale: float = 1.0
@@ -184,6 +191,14 @@ class SimulatedSwiftPro:
             raise ValueError(f"chatter must be None or > 0 seconds, got {self.chatter!r}")
         self.lock = threading.RLock()
         self._profile = _PROFILES[self.firmware]
+        if self.version is not None:
+            parts = str(self.version).lstrip("vV").split(".")
+            if not (1 <= len(parts) <= 3 and all(p.isdigit() for p in parts) and int(parts[0]) == self.firmware):
+                raise ValueError(f"version must look like {self.firmware}.2 or {self.firmware}.2.0 (major = firmware "
+                                 f"= {self.firmware}), got {self.version!r}")
+            numbers = tuple(int(p) for p in parts) + (0,) * (3 - len(parts))
+            self._profile = dataclasses.replace(self._profile, firmware="V" + ".".join(map(str, numbers)))
+        self.version_tuple = tuple(int(p) for p in self._profile.firmware[1:].split("."))
         self._rng = random.Random(self.seed)
         self._drop_replies = 0
         self._drop_line: int | None = None
@@ -284,6 +299,12 @@ class SimulatedSwiftPro:
         """Send an arbitrary line at ``now`` (an unsolicited event, say)."""
         with self.lock:
             self._emit(line, now)
+
+    def moving_at(self, t: float) -> bool:
+        """Whether the tool is moving at ``t`` (for tests that wait for a move to be under way)."""
+        with self.lock:
+            self._advance(t)
+            return self._motion is not None and self._motion.t0 <= t < self._motion.t1
 
     def position_at(self, t: float) -> tuple[float, float, float]:
         """Where the tool is at ``t`` (encoder truth, whatever the profile reports)."""
@@ -407,7 +428,8 @@ class SimulatedSwiftPro:
         elif self._drop_replies > 0:
             self._drop_replies -= 1
             cmd.lose_reply = True
-        known = (word in _ALLOWED and not (self.firmware == 3 and word in _ONLY_4X)) or (
+        known = (word in _ALLOWED and not (self.firmware == 3 and word in _ONLY_4X)
+                 and not (word == "S1100" and self.version_tuple < (4, 5, 0))) or (
             self.firmware == 3 and word in _ONLY_3X)
         if not m or not known:
             if self.firmware == 4:

@@ -8,7 +8,7 @@ import threading
 import time
 import tty
 
-import mt_widgets.hardware  # noqa: F401  (registers uarm-sim://)
+# Importing the package (for SwiftPro) also registers the uarm-sim:// URL handler.
 from mt_widgets.hardware import SwiftPro
 from mt_widgets.hardware.simdevice import SimulatedSwiftPro
 
@@ -29,6 +29,20 @@ def device_of(arm: SwiftPro) -> SimulatedSwiftPro:
 
 def sent_lines(arm: SwiftPro) -> list[str]:
     return list(device_of(arm).received_lines)
+
+
+def wait_until(condition, timeout: float = 10.0, what: str = "the condition") -> None:
+    """Poll ``condition()`` until true; fail after ``timeout`` s (a guard against hangs only)."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"{what} did not happen within {timeout} s")
+        time.sleep(0.002)
+
+
+def arm_is_moving(arm: SwiftPro) -> bool:
+    """Whether the simulated arm behind ``arm`` has a move under way now."""
+    return device_of(arm).moving_at(time.monotonic())
 
 
 class PtyArm:

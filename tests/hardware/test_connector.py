@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 
+import numpy as np
 import pytest
 import serial
 
@@ -26,7 +28,7 @@ from mt_widgets.hardware import (
     UnsafeMoveError,
 )
 
-from .helpers import device_of, sent_lines, sim_url
+from .helpers import arm_is_moving, device_of, sent_lines, sim_url, wait_until
 
 
 def moves_sent(arm):
@@ -114,7 +116,7 @@ def test_unknown_command_on_3x_times_out_then_the_link_recovers():
         start = time.monotonic()
         with pytest.raises(SwiftProTimeout, match="Unknown command"):
             arm._request("G28")
-        assert time.monotonic() - start < 0.5
+        assert time.monotonic() - start < 3.0  # the 0.2 s timeout, not a hang
         assert arm.position() == (200.0, 0.0, 100.0)
 
 
@@ -152,7 +154,7 @@ def test_port_closed_mid_command_raises_disconnected_without_hanging(arm4):
     start = time.monotonic()
     with pytest.raises(SwiftProDisconnected):
         arm4.position()
-    assert time.monotonic() - start < 0.5
+    assert time.monotonic() - start < 3.0  # woken by the failure, not by the 1 s timeout or a hang
     with pytest.raises(SwiftProDisconnected):
         arm4.move_to(210.0, 0.0)
     arm4.close()
@@ -187,8 +189,8 @@ def test_a_port_held_by_another_program_raises_port_busy():
             SwiftPro(sim_url(name="held")).connect()
     start = time.monotonic()
     with pytest.raises(SwiftProPortBusy, match="SDK issue #11"):
-        SwiftPro(sim_url(busy=1), ready_timeout=1.0).connect()
-    assert time.monotonic() - start < 0.5
+        SwiftPro(sim_url(busy=1), ready_timeout=10.0).connect()
+    assert time.monotonic() - start < 5.0  # told at once, not after the 10 s ready_timeout
 
 
 def test_an_arm_that_never_boots_times_out():
@@ -208,12 +210,14 @@ def test_stop_cuts_a_move_short():
 
         worker = threading.Thread(target=move)
         worker.start()
-        time.sleep(0.3)
+        wait_until(lambda: arm_is_moving(arm), what="the move to start")
         arm.stop()
-        worker.join(timeout=1.0)
+        worker.join(timeout=5.0)
         assert not worker.is_alive() and isinstance(errors[0], SwiftProStopped)
         x = arm.position()[0]
-        assert 205.0 < x < 250.0
+        assert 200.0 < x < 299.0  # under way, then cut short
+        time.sleep(0.1)
+        assert arm.position()[0] == pytest.approx(x)  # and it stays
         arm.move_to(220.0, 0.0, 100.0, speed=100.0)
         assert arm.position()[0] == pytest.approx(220.0)
 
@@ -283,12 +287,70 @@ def test_the_arms_own_reachability_answer_is_asked_before_moving():
         assert moves_sent(arm) == []
 
 
-def test_an_arm_outside_the_envelope_is_brought_in_slowly():
+def _closest_to_axis(p, q):
+    """Nearest horizontal distance to the base axis along the straight path p -> q (mm)."""
+    d = np.subtract(q[:2], p[:2])
+    t = 0.0 if not d.any() else float(np.clip(-np.dot(p[:2], d) / np.dot(d, d), 0.0, 1.0))
+    return float(np.hypot(*(np.asarray(p[:2]) + t * d)))
+
+
+def _sent_moves(lines):
+    """(x, y, z, F) of every G0/G1 line, in order."""
+    out = []
+    for line in lines:
+        words = line.split()
+        if len(words) > 1 and words[1] in ("G0", "G1"):
+            fields = {w[0]: float(w[1:]) for w in words[2:]}
+            out.append((fields["X"], fields["Y"], fields["Z"], fields["F"]))
+    return out
+
+
+def test_an_arm_outside_the_envelope_is_never_moved_by_move_to_only_brought_in_by_home():
     with SwiftPro(sim_url(start="120,0,150")) as arm:
-        with pytest.raises(UnsafeMoveError, match="entry_speed_mm_s"):
-            arm.move_to(200.0, 0.0)
-        arm.move_to(200.0, 0.0, speed=20.0)
-        assert arm.position() == pytest.approx((200.0, 0.0, 80.0))
+        for speed in (20.0, 50.0):
+            with pytest.raises(UnsafeMoveError, match=r"outside the safety envelope.*home\(\)"):
+                arm.move_to(200.0, 0.0, speed=speed)
+        assert moves_sent(arm) == []
+        legs = arm.home()
+        assert arm.position() == pytest.approx((200.0, 0.0, arm.teaching_height_mm))
+        sent = _sent_moves(sent_lines(arm))
+        np.testing.assert_allclose([m[:3] for m in sent], legs, atol=1e-4)
+        previous = (120.0, 0.0, 150.0)
+        for x, y, z, feed in sent:
+            assert feed <= arm.envelope.entry_speed_mm_s
+            assert math.dist(previous, (x, y, z)) <= 40.0 + 1e-6
+            # never further out than it started: not nearer the base (anywhere along the
+            # chord), not higher than 150 mm
+            assert _closest_to_axis(previous, (x, y, z)) >= 120.0 - 1e-3 and z <= 150.0
+            previous = (x, y, z)
+        arm.move_to(250.0, 30.0)  # inside now: ordinary moves go
+        assert arm.position()[:2] == pytest.approx((250.0, 30.0))
+
+
+def test_an_entering_move_is_never_sent_straight_through_the_hole_round_the_base():
+    # Power-up below the height band at yaw -40 degrees; the target at +40 degrees: the
+    # straight chord passes 115 mm from the base axis, inside min_radius_mm = 135.
+    a = math.radians(40.0)
+    start, target = (150 * math.cos(a), -150 * math.sin(a), 20.0), (150 * math.cos(a), 150 * math.sin(a), 80.0)
+    with SwiftPro(sim_url(start=",".join(f"{v:.4f}" for v in start))) as arm:
+        with pytest.raises(UnsafeMoveError, match="home"):
+            arm.move_to(*target, speed=20.0)
+        assert moves_sent(arm) == []
+        arm.home(*target)
+        assert arm.position() == pytest.approx(target, abs=1e-3)
+        sent = _sent_moves(sent_lines(arm))
+        assert sent[0][:2] == pytest.approx(start[:2], abs=1e-3) and sent[0][2] > 40.0  # lifted first
+        path = [start] + [m[:3] for m in sent]
+        assert min(_closest_to_axis(p, q) for p, q in zip(path, path[1:])) >= 135.0 - 1e-3
+
+
+def test_home_is_cut_by_stop_like_any_move():
+    with SwiftPro(sim_url(start="120,0,150"), timeout=1.0) as arm:
+        generation = arm.stop_generation
+        arm.stop()
+        with pytest.raises(SwiftProStopped):
+            arm.home(unless_stopped_since=generation)
+        assert moves_sent(arm) == []
 
 
 def test_numbers_are_sent_in_fixed_decimal_form(arm4):
@@ -317,3 +379,117 @@ def test_a_stop_while_the_arm_checks_reachability_means_the_move_is_never_sent()
         arm.is_reachable = ask_arm
         arm.move_to(250.0, 20.0)  # a new move after the stop goes through
         assert arm.position()[:2] == pytest.approx((250.0, 20.0), abs=0.01)
+
+
+# ----------------------------------------------------------------------------- stop always wins
+def _move_in_thread(arm, *target, speed):
+    errors = []
+
+    def move():
+        try:
+            arm.move_to(*target, speed=speed)
+        except SwiftProError as exc:
+            errors.append(exc)
+
+    worker = threading.Thread(target=move)
+    worker.start()
+    wait_until(lambda: arm_is_moving(arm), what="the move to start")
+    return worker, errors
+
+
+def test_stop_does_not_wait_for_a_request_slot():
+    # Both in-flight slots taken: the move, and a position poll whose reply is lost.
+    with SwiftPro(sim_url(motion_scale=1), timeout=1.0) as arm:
+        worker, errors = _move_in_thread(arm, 300.0, 0.0, 100.0, speed=50.0)  # 2 s
+        device_of(arm).drop_next_reply()
+        arm._submit("P2220")
+        arm.stop()  # must neither wait for a slot nor raise
+        worker.join(timeout=5.0)
+        assert not worker.is_alive() and isinstance(errors[0], SwiftProStopped)
+        assert not arm_is_moving(arm)
+
+
+def test_a_move_begun_before_a_stop_is_refused_even_if_its_checks_start_after_it():
+    with SwiftPro(sim_url(), timeout=1.0) as arm:
+        generation = arm.stop_generation  # a job starts
+        arm.stop()
+        assert arm.stop_generation == generation + 1
+        before = len(sent_lines(arm))
+        with pytest.raises(SwiftProStopped, match="stop"):
+            arm.move_to(250.0, 0.0, unless_stopped_since=generation)
+        assert sent_lines(arm)[before:] == []  # not even the M2222 question
+        arm.move_to(250.0, 0.0, unless_stopped_since=arm.stop_generation)
+        assert arm.position()[:2] == pytest.approx((250.0, 0.0))
+        with pytest.raises(ValueError, match="unless_stopped_since"):
+            arm.move_to(250.0, 0.0, unless_stopped_since=arm.stop_generation + 1)
+        with pytest.raises(AttributeError):
+            arm.stop_generation = 0
+
+
+def test_on_firmware_4_2_stop_pauses_and_resume_ends_the_cut_move_before_any_new_one():
+    # 4.0-4.4 has no S1100: stop is S1000 V0, a pause; the cut move waits at the head of the
+    # firmware's queue and every G/M command queues behind it (UARM_PROTOCOL.md, "Commands").
+    with SwiftPro(sim_url(version="4.2", motion_scale=1), timeout=1.0) as arm:
+        assert arm.firmware_version == (4, 2, 0)
+        worker, errors = _move_in_thread(arm, 300.0, 0.0, 100.0, speed=50.0)  # 2 s
+        arm.stop()
+        worker.join(timeout=5.0)
+        assert isinstance(errors[0], SwiftProStopped) and arm.paused
+        assert any(line.endswith("S1000 V0") for line in sent_lines(arm))
+        held = arm.position()
+        assert held[0] < 299.0
+        with pytest.raises(SwiftProStopped, match="resume"):
+            arm.move_to(250.0, 0.0, 100.0)  # would hang behind the paused move: refused at once
+        arm.resume()
+        assert not arm.paused and any(line.endswith("S1000 V1") for line in sent_lines(arm))
+        # The cut move is over before resume returns: it cannot run after the new moves.
+        assert not arm_is_moving(arm)
+        assert arm.position() == pytest.approx((300.0, 0.0, 100.0))
+        arm.move_to(250.0, 0.0, 100.0, speed=100.0)
+        time.sleep(0.2)
+        assert arm.position() == pytest.approx((250.0, 0.0, 100.0)) and not arm_is_moving(arm)
+
+
+def test_resume_does_nothing_where_stop_is_no_pause(arm3):
+    arm3.stop()
+    arm3.resume()  # 3.x: no S1000 (it would time out as an unknown command)
+    assert not any("S1000" in line for line in sent_lines(arm3))
+    arm3.move_to(210.0, 0.0)
+
+
+# ----------------------------------------------------------------------------- reconnecting
+def test_reconnecting_after_a_link_failure_closes_the_old_port_first():
+    arm = SwiftPro(sim_url(name="reconnect"), timeout=1.0)  # an exclusive port, as a real one
+    arm.connect()
+    try:
+        old_port, old_reader = arm._ser, arm._reader
+        device_of(arm).disconnect_on_command()
+        with pytest.raises(SwiftProDisconnected):
+            arm.position()
+        assert not arm.connected
+        arm.connect()  # the old port, still open, would make this SwiftProPortBusy
+        assert arm.connected and arm.position() == (200.0, 0.0, 100.0)
+        assert not old_port.is_open and not old_reader.is_alive() and arm._ser is not old_port
+    finally:
+        arm.close()
+
+
+# ----------------------------------------------------------------------------- argument checks
+def test_arguments_take_any_real_number_but_not_a_bool():
+    with pytest.raises(ValueError, match=r"timeout must be a positive.*seconds, got True"):
+        SwiftPro(sim_url(), timeout=True)
+    with pytest.raises(ValueError, match=r"max_in_flight must be an integer in 1\.\.32, got True"):
+        SwiftPro(sim_url(), max_in_flight=True)
+    with SwiftPro(sim_url(), timeout=np.float32(1.0), max_in_flight=np.int64(2)) as arm:
+        arm.move_to(np.float32(210.0), np.float64(5.0), np.int32(80), speed=np.float32(50.0))
+        assert arm.position() == pytest.approx((210.0, 5.0, 80.0))
+        arm.beep(np.float32(440.0), np.int64(50))
+        arm.set_position_reports(np.float32(0.5))
+        with pytest.raises(UnsafeMoveError, match=r"x must be a finite real number of mm.*got True \(bool\)"):
+            arm.move_to(True, 0.0)
+        with pytest.raises(UnsafeMoveError, match=r"speed must be .* in \[1\.0, 100\.0\], got False"):
+            arm.move_to(210.0, 0.0, speed=False)
+        with pytest.raises(ValueError, match="frequency_hz"):
+            arm.beep(True, 100)
+        with pytest.raises(ValueError, match="interval_s"):
+            arm.set_position_reports(True)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from mt_widgets.hardware import (
@@ -91,3 +92,58 @@ def test_envelope_parameters_are_validated():
         SafetyEnvelope(min_radius_mm=400)
     with pytest.raises(ValueError, match="max_yaw_deg"):
         SafetyEnvelope(max_yaw_deg=120)
+
+
+def test_envelope_checks_take_numpy_numbers_and_refuse_bools_naming_argument_range_and_value():
+    env = SafetyEnvelope()
+    assert env.check_point(np.float32(200.0), np.int64(0), np.float32(80.0)) == (200.0, 0.0, 80.0)
+    assert env.check_speed(np.float32(50.0)) == 50.0
+    with pytest.raises(UnsafeMoveError, match=r"x must be a finite real number of mm.*got True \(bool\)") as info:
+        env.check_point(True, 0.0, 80.0)
+    assert info.value.coordinate == "x"
+    with pytest.raises(UnsafeMoveError, match=r"z must be .*got '80'"):
+        env.check_point(200.0, 0.0, "80")
+    with pytest.raises(UnsafeMoveError, match=r"speed must be .*\[1\.0, 20\.0\], got True"):
+        env.check_speed(True, entering=True)
+    with pytest.raises(UnsafeMoveError, match=r"z = 20\.000 mm .*z must be in \[40\.0, 120\.0\] mm"):
+        env.check_point(200.0, 0.0, 20.0)
+    with pytest.raises(ValueError, match=r"max_step_mm must be a finite real number .*got True"):
+        SafetyEnvelope(max_step_mm=True)
+    assert SafetyEnvelope(max_step_mm=np.float32(150.0)).max_step_mm == 150.0
+
+
+def test_a_move_into_the_envelope_may_never_take_the_arm_further_out():
+    env = SafetyEnvelope()
+    start = (120.0, 0.0, 150.0)  # in the hole round the base, above the band
+    env.check_entering_segment(start, (145.0, 0.0, 150.0))  # out of the hole along its yaw
+    env.check_entering_segment(start, (120.0, 0.0, 110.0))  # down into the band
+    for end, coordinate in [((110.0, 0.0, 150.0), "radius"), ((145.0, 0.0, 160.0), "z"),
+                            ((120.0, 0.0, 30.0), "z"), ((60.0, 150.0, 150.0), "yaw"),
+                            ((310.0, 0.0, 40.0), "step")]:
+        with pytest.raises(UnsafeMoveError) as info:
+            env.check_entering_segment(start, end)
+        assert info.value.coordinate == coordinate, (end, info.value)
+    # Both ends at 120 mm, yaw -30 and +30 degrees: the chord passes 104 mm from the axis.
+    a = math.radians(30.0)
+    with pytest.raises(UnsafeMoveError, match="base axis"):
+        env.check_entering_segment((120 * math.cos(a), -120 * math.sin(a), 80.0),
+                                   (120 * math.cos(a), 120 * math.sin(a), 80.0))
+
+
+@pytest.mark.parametrize("start", [(120.0, 0.0, 150.0), (60.0, -40.0, 10.0), (340.0, 50.0, 60.0),
+                                   (150.0, 200.0, 30.0), (200.0, 0.0, 100.0)])
+def test_the_entry_path_is_checked_leg_by_leg_and_ends_at_the_target(start):
+    env = SafetyEnvelope()
+    target = (200.0, 30.0, 80.0)
+    legs = env.entry_path(start, target, 40.0)
+    np.testing.assert_allclose(legs[-1], target)
+    here = start
+    for leg in legs:
+        assert math.dist(here, leg) <= 40.0 + 1e-9
+        if env.contains(*here):
+            env.check_segment(here, leg)
+        else:
+            env.check_entering_segment(here, leg)
+        here = leg
+    if start[2] < env.min_z_mm:
+        assert legs[0][:2] == pytest.approx(start[:2])  # lifted before anything else

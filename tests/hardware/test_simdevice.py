@@ -143,3 +143,27 @@ def test_nothing_reachable_from_z190_or_behind_the_base():
     assert not any(is_reachable(s, 0.0, 190.0) for s in range(0, 420))
     assert not is_reachable(-200.0, 0.0, 80.0)
     assert not is_reachable(math.nan, 0.0, 80.0)
+
+
+def test_before_4_5_stop_is_a_pause_and_resume_carries_the_cut_move_on_before_anything_queued():
+    dev, t = booted(version="4.2")
+    dev.write(b"#1 P2203\n#2 S1100\n", t)
+    assert lines(dev, t) == ["$1 ok V4.2.0", "$2 E20"]  # no planner clear before 4.5
+    dev.write(b"#3 G1 X250 Y0 Z100 F50\n", t)  # 1 s
+    dev.write(b"#4 S1000 V0\n", t + 0.5)
+    assert lines(dev, t + 0.5) == ["$4 ok"]
+    dev.write(b"#5 G1 X200 Y50 Z100 F50\n#6 M2222 X200 Y0 Z100 P0\n#7 P2220\n", t + 0.6)
+    assert lines(dev, t + 5.0) == ["$7 ok X225.0000 Y0.0000 Z100.0000"]  # paused: G/M queue unanswered
+    dev.write(b"#8 S1000 V1\n", t + 5.0)
+    assert lines(dev, t + 5.0) == ["$8 ok"]
+    assert dev.position_at(t + 5.25) == pytest.approx((237.5, 0.0, 100.0))  # the cut move goes on
+    assert lines(dev, t + 5.51) == ["$3 ok"]
+    assert dev.position_at(t + 5.51)[0] < 250.0 and dev.moving_at(t + 5.51)  # then the queued one
+    out = lines(dev, t + 7.0)
+    assert out == ["$5 ok", "$6 ok V1"] and dev.position_at(t + 7.0) == pytest.approx((200.0, 50.0, 100.0))
+
+
+def test_firmware_version_option_must_match_the_generation():
+    assert SimulatedSwiftPro(firmware=3, version="3.1").version_tuple == (3, 1, 0)
+    with pytest.raises(ValueError, match="version"):
+        SimulatedSwiftPro(firmware=4, version="3.2")

@@ -11,6 +11,8 @@ hyphen cannot be in a file's module name, so this module is ``protocol_uarmsim``
 
 URL options (all optional):
     firmware: 3 or 4 (default 4).
+    version: the firmware version P2203 reports, e.g. ``4.2`` (default 4.10.0 / 3.2.0); before
+        4.5 stop is a pause (``S1000 V0``) and ``S1100`` does not exist.
     boot: seconds from opening to the banner (default 0.3; tests use 0.01).
     latency: seconds added to each line the arm sends (default 0).
     motion_scale: factor on move durations (default 1).
@@ -58,7 +60,7 @@ def device_from_url(url: str) -> tuple[SimulatedSwiftPro, dict[str, str]]:
     if parts.scheme.lower() not in ("uarm-sim", "uarmsim"):
         raise SerialException(f"expected a URL starting with uarm-sim://, got {url!r}")
     options = {k: v[-1] for k, v in urllib.parse.parse_qs(parts.query, keep_blank_values=True).items()}
-    known = {"firmware", "boot", "latency", "motion_scale", "chatter", "baud", "device", "start", "seed",
+    known = {"firmware", "version", "boot", "latency", "motion_scale", "chatter", "baud", "device", "start", "seed",
              "drop", "close_after", "busy", "name"}
     unknown = sorted(set(options) - known)
     if unknown:
@@ -66,6 +68,7 @@ def device_from_url(url: str) -> tuple[SimulatedSwiftPro, dict[str, str]]:
     try:
         kwargs = {
             "firmware": int(options.get("firmware", 4)),
+            "version": options.get("version") or None,
             "boot_delay": float(options.get("boot", 0.3)),
             "latency": float(options.get("latency", 0.0)),
             "motion_scale": float(options.get("motion_scale", 1.0)),
