@@ -12,7 +12,13 @@ Y left, origin on the base axis. The arm works in millimetres at the fixed teach
   plant step per move, each step within the plant's per-step limit and the envelope's speed
   limit, every move through ``SwiftPro.move_to`` (which checks the safety envelope and asks
   the arm M2222 before sending anything);
-- :meth:`UArmBridge.stop` halts at once: the connector's stop command and no further moves;
+- :meth:`UArmBridge.stop` halts at once: the connector's stop command, and no further moves:
+  each job (showing a state, a reproduction) reads the connector's stop generation when it
+  starts and passes it to every ``move_to``, so a stop at any moment since the job began
+  makes its moves refuse to be sent; :meth:`UArmBridge.resume` lets the arm move again (on
+  firmware 4.0-4.4, whose stop is a pause, through ``SwiftPro.resume``);
+- an arm outside the safety envelope (after power-up) is brought in once, by
+  :meth:`UArmBridge.home_if_outside` (``SwiftPro.home``), which the app calls at connection;
 - a connector error never escapes :meth:`execute`: it comes back as a message in the
   :class:`ExecutionReport` (the study runner has logged the demonstrations already, so
   nothing is lost).
@@ -32,9 +38,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mt_widgets.core import SKILLS, running_under_test
-from mt_widgets.hardware import (SafetyEnvelope, SwiftPro, SwiftProDisconnected, SwiftProError, SwiftProNotFound,
-                                 SwiftProPortBusy, SwiftProStopped, SwiftProTimeout, SwiftProUnreachable,
-                                 UnsafeMoveError)
+from mt_widgets.hardware import (TEACHING_RADIUS_MM, SafetyEnvelope, SwiftPro, SwiftProDisconnected, SwiftProError,
+                                 SwiftProNotFound, SwiftProPortBusy, SwiftProStopped, SwiftProTimeout,
+                                 SwiftProUnreachable, UnsafeMoveError)
+from mt_widgets.hardware.envelope import is_real, polar_waypoints
 
 log = logging.getLogger(__name__)
 
@@ -126,43 +133,6 @@ def describe_error(error: BaseException) -> str:
     return f"{what} {safe} ({type(error).__name__}: {error})"
 
 
-def polar_waypoints(start_mm, end_mm, max_segment_mm: float) -> np.ndarray:
-    """Points (K, 3) in mm from ``start_mm`` (excluded) to ``end_mm`` (included) along a polar path.
-
-    Radius, yaw and height are interpolated linearly, so the path stays in the annulus
-    sector both ends are in (a straight chord between far-apart points may pass through the
-    hole round the base, which the envelope forbids); no segment is longer than
-    ``max_segment_mm``.
-
-    Args:
-        start_mm: (3,) x, y, z in mm.
-        end_mm: (3,) x, y, z in mm.
-        max_segment_mm: longest straight move between consecutive points.
-    """
-    if not (isinstance(max_segment_mm, (int, float)) and math.isfinite(max_segment_mm) and max_segment_mm > 0):
-        raise ValueError(f"max_segment_mm: expected a positive number of mm, got {max_segment_mm!r}")
-    p0, p1 = np.asarray(start_mm, dtype=float), np.asarray(end_mm, dtype=float)
-    for name, p in (("start_mm", p0), ("end_mm", p1)):
-        if p.shape != (3,) or not np.all(np.isfinite(p)):
-            raise ValueError(f"{name}: expected finite (x, y, z) in mm, got {p!r}")
-    r0, r1 = math.hypot(p0[0], p0[1]), math.hypot(p1[0], p1[1])
-    a0, a1 = math.atan2(p0[1], p0[0]), math.atan2(p1[1], p1[0])
-
-    def at(s):
-        s = np.asarray(s, dtype=float)[:, None]
-        r, a, z = r0 + s * (r1 - r0), a0 + s * (a1 - a0), p0[2] + s * (p1[2] - p0[2])
-        return np.hstack([r * np.cos(a), r * np.sin(a), z])
-
-    fine = at(np.linspace(0.0, 1.0, 65))
-    length = float(np.sum(np.linalg.norm(np.diff(fine, axis=0), axis=1)))
-    # Chords are shorter than arcs, so equal parameter steps of at most max_segment_mm of arc
-    # (plus 5 % for the uneven speed of the polar parameter along the path) suffice.
-    count = max(1, math.ceil(1.05 * length / max_segment_mm))
-    points = at(np.arange(1, count + 1) / count)
-    points[-1] = p1
-    return points
-
-
 @dataclass
 class ExecutionReport:
     """What happened when a reproduction was played on the arm.
@@ -222,13 +192,15 @@ class UArmBridge:
         if self.waypoint_mm > self.envelope.max_step_mm:
             raise ValueError(f"waypoint_mm: expected at most the envelope's max_step_mm = {self.envelope.max_step_mm}, "
                              f"got {waypoint_mm}")
-        self.min_move_mm = float(min_move_mm)
-        if not (math.isfinite(self.min_move_mm) and self.min_move_mm >= 0):
+        if not (is_real(min_move_mm) and math.isfinite(min_move_mm) and min_move_mm >= 0):
             raise ValueError(f"min_move_mm: expected a number of mm >= 0, got {min_move_mm!r}")
+        self.min_move_mm = float(min_move_mm)
         self.z_mm = float(arm.teaching_height_mm if z_mm is None else z_mm)
         self.envelope.check_point(self.envelope.min_radius_mm + 1.0, 0.0, self.z_mm)
         self._stop_requested = threading.Event()
-        self._in_move = threading.Event()
+        # Counts stop() calls, so that resume() never clears a stop that came while it ran.
+        self._flag_lock = threading.Lock()
+        self._stops = 0
         self._busy = threading.Lock()
         self.moves_sent = 0
 
@@ -254,34 +226,48 @@ class UArmBridge:
     def stop_requested(self) -> bool:
         return self._stop_requested.is_set()
 
-    def _move(self, x: float, y: float, speed: float) -> None:
-        # The flag is read right before each move: after stop() no new move starts.
+    def _job_generation(self) -> int:
+        """Start a job: read the connector's stop generation first, then the stop flag. A stop
+        before this call is seen in the flag; one after it changes the generation, and every
+        ``move_to(..., unless_stopped_since=generation)`` of the job then refuses to be sent."""
+        generation = self.arm.stop_generation
         if self._stop_requested.is_set():
-            raise SwiftProStopped("stop was requested; no further moves")
-        self._in_move.set()
-        try:
-            self.moves_sent += 1
-            self.arm.move_to(x, y, self.z_mm, speed=speed)
-        finally:
-            self._in_move.clear()
+            raise SwiftProStopped("stop was requested; no further moves until resume")
+        return generation
 
-    def _travel_to(self, target, on_point: Callable | None = None) -> None:
-        """Go to ``target`` (x, y, z) mm along a polar path at the approach speed."""
+    def _move(self, x: float, y: float, speed: float, generation: int) -> None:
+        self.moves_sent += 1
+        self.arm.move_to(x, y, self.z_mm, speed=speed, unless_stopped_since=generation)
+
+    def _travel_to(self, target, generation: int, on_point: Callable | None = None) -> None:
+        """Go to ``target`` (x, y, z) mm along a polar path at the approach speed.
+
+        An arm outside the envelope is refused by the connector (``UnsafeMoveError``):
+        :meth:`home_if_outside` brings it in first.
+        """
         start = self.arm.position()
-        speed = self.approach_speed_mm_s
-        if not self.envelope.contains(*start):
-            # After power-up the arm may sit outside the envelope: the connector only lets it
-            # in slowly, straight to a target inside; go straight to the target then.
-            self._move(target[0], target[1], min(speed, self.envelope.entry_speed_mm_s))
-            if on_point is not None:
-                on_point(target)
-            return
         if math.dist(start, target) < self.min_move_mm:
             return  # already there: a zero-length move would only cost a round trip
         for point in polar_waypoints(start, target, self.waypoint_mm):
-            self._move(float(point[0]), float(point[1]), speed)
+            self._move(float(point[0]), float(point[1]), self.approach_speed_mm_s, generation)
             if on_point is not None:
                 on_point(point)
+
+    def home_if_outside(self) -> bool:
+        """Bring an arm that is outside the safety envelope (as after power-up) to the middle
+        of the teaching workspace with ``SwiftPro.home`` (slowly, every leg checked). Called
+        once at connection by the experimenter's app; :meth:`stop` cuts it like any move.
+
+        Returns:
+            True if the arm was outside and has been brought in, False if it was inside.
+        """
+        with self._busy:
+            generation = self._job_generation()
+            if self.envelope.contains(*self.arm.position()):
+                return False
+            r_mid = 0.5 * sum(TEACHING_RADIUS_MM)
+            self.arm.home(r_mid, 0.0, self.z_mm, max_segment_mm=self.waypoint_mm, unless_stopped_since=generation)
+            return True
 
     def show_state(self, state_cm) -> None:
         """Move the arm to a query state (r1, r2) cm, so the real arm shows what the screen shows.
@@ -293,7 +279,7 @@ class UArmBridge:
         """
         target = self.state_to_arm_mm(state_cm)
         with self._busy:
-            self._travel_to(target)
+            self._travel_to(target, self._job_generation())
 
     def execute(self, trajectory, on_step: Callable[[int, tuple[float, float]], None] | None = None
                 ) -> ExecutionReport:
@@ -322,8 +308,9 @@ class UArmBridge:
         started = time.monotonic()
         with self._busy:
             try:
+                generation = self._job_generation()
                 start = self.state_to_arm_mm(positions[0])
-                self._travel_to(start)
+                self._travel_to(start, generation)
                 report.positions_mm.append(start[:2])
                 if on_step is not None:
                     on_step(0, start[:2])
@@ -337,7 +324,7 @@ class UArmBridge:
                             coordinate="step", value=step, limit=self.max_step_mm)
                     if step >= self.min_move_mm:
                         speed = min(max(step / self.step_period_s, 1.0), self.envelope.max_speed_mm_s)
-                        self._move(float(target[0]), float(target[1]), speed)
+                        self._move(float(target[0]), float(target[1]), speed, generation)
                         here = target
                     report.steps_done = k
                     report.positions_mm.append((float(here[0]), float(here[1])))
@@ -355,36 +342,44 @@ class UArmBridge:
         report.duration_s = time.monotonic() - started
         return report
 
-    def stop(self, grace_s: float = 0.05, attempts: int = 20) -> str | None:
-        """Halt now: no further moves start until :meth:`resume`, and the arm's stop command
-        cuts the current one.
-
-        A move whose pre-checks (the M2222 question) were under way when the stop command went
-        out is sent after it; so while a move is still in progress after ``grace_s`` the stop
-        command is repeated (at most ``attempts`` times).
+    def stop(self) -> str | None:
+        """Halt now: the arm's stop command cuts the current move, and no further move starts
+        until :meth:`resume`. A move of a job that began before this call refuses to be sent
+        even if its checks were under way (the connector's stop generation), so one stop
+        command is enough.
 
         Returns:
             None, or a sentence for the screen if the stop command could not be sent (the
             link is down: the arm is not being driven by us anyway).
         """
-        self._stop_requested.set()
-        message = None
-        for _ in range(max(1, attempts)):
-            try:
-                self.arm.stop()
-            except (SwiftProError, OSError) as exc:
-                message = describe_error(exc)
-                break
-            deadline = time.monotonic() + grace_s
-            while self._in_move.is_set() and time.monotonic() < deadline:
-                time.sleep(0.005)
-            if not self._in_move.is_set():
-                break
-        return message
+        with self._flag_lock:
+            self._stops += 1
+            self._stop_requested.set()
+        try:
+            self.arm.stop()
+        except (SwiftProError, OSError) as exc:
+            return describe_error(exc)
+        return None
 
     def resume(self) -> None:
-        """Allow moves again after :meth:`stop` (a person decided it is safe)."""
-        self._stop_requested.clear()
+        """Allow moves again after :meth:`stop` (a person decided it is safe).
+
+        On firmware 4.0-4.4 the arm was paused: ``SwiftPro.resume`` un-pauses it and waits
+        until the move the stop cut short has ended, so it can never run after new moves;
+        this may take as long as that move's remainder. A stop meanwhile wins: the arm is
+        paused again, the stop stays in force, and this raises ``SwiftProStopped``.
+
+        Raises:
+            SwiftProStopped: a stop came while resuming.
+            SwiftProError: the link failed (the stop stays in force).
+        """
+        with self._flag_lock:
+            seen = self._stops
+        self.arm.resume()
+        with self._flag_lock:
+            if self._stops != seen:
+                raise SwiftProStopped("stop was pressed while resuming; the arm stays stopped")
+            self._stop_requested.clear()
 
     def beep(self, frequency_hz: float, duration_ms: float) -> str | None:
         """Sound the arm's buzzer (M2210); returns a message instead of raising if the link fails."""
@@ -396,7 +391,7 @@ class UArmBridge:
 
 
 def _positive(name: str, value) -> float:
-    if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+    if not (is_real(value) and math.isfinite(value) and value > 0):
         raise ValueError(f"{name}: expected a positive number, got {value!r}")
     return float(value)
 

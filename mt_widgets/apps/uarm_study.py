@@ -9,7 +9,9 @@
 - the learnt skill's reproduction is executed on the arm step by step;
 - the **Stop** button halts the arm at once (stop command, no further moves) until
   **Resume arm**; a connector error shows a message, never a traceback: the demonstrations
-  are logged by the study runner before the arm is asked to do anything.
+  are logged by the study runner before the arm is asked to do anything;
+- an arm outside the safety envelope (after power-up) is brought in once, slowly, as the
+  first job (``UArmBridge.home_if_outside``); Stop cuts it like any move.
 
 Arm work runs on one worker thread, in order, so the kernel stays free for the Stop button.
 
@@ -99,6 +101,14 @@ class UArmTeaching:
         self.last_report = None
         self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="uarm")
         self._update_position()
+        self._submit(self._home_if_outside)
+
+    def _home_if_outside(self) -> None:
+        if not self.bridge.envelope.contains(*self.bridge.position_mm()):
+            self.panel.say("The arm is slowly moving into its workspace...")
+            self.bridge.home_if_outside()
+            self._update_position()
+            self.panel.say("")
 
     # ------------------------------------------------------------------ episodes
     def attach(self, episode: EpisodeWidget) -> EpisodeWidget:
@@ -132,6 +142,7 @@ class UArmTeaching:
         try:
             return job(*args)
         except SwiftProStopped:
+            self.panel.resume_button.layout.display = None
             self.panel.say("The arm is stopped. Press Resume arm when it is safe to move it again.")
         except (SwiftProError, UnsafeMoveError) as exc:
             log.warning("arm job %s failed: %r", getattr(job, "__name__", job), exc)
@@ -143,16 +154,15 @@ class UArmTeaching:
 
     def _show_state(self, state) -> Future:
         state = np.array(state, dtype=float)
+        return self._submit(self._show_state_now, state)
 
-        def show():
-            if self.bridge.stop_requested:
-                raise SwiftProStopped("stopped")
-            self.panel.say("The arm is moving to the next situation...")
-            self.bridge.show_state(state)
-            self._update_position()
-            self.panel.say("")
-
-        return self._submit(show)
+    def _show_state_now(self, state) -> None:
+        if self.bridge.stop_requested:
+            raise SwiftProStopped("stopped")
+        self.panel.say("The arm is moving to the next situation...")
+        self.bridge.show_state(state)
+        self._update_position()
+        self.panel.say("")
 
     def execute(self, trajectory) -> Future:
         """Play a reproduction on the arm (queued after the arm's earlier work)."""
@@ -192,22 +202,40 @@ class UArmTeaching:
         else:
             self.panel.say("The arm is stopped. Press Resume arm when it is safe to move it again.")
 
-    def resume(self) -> None:
-        """Let the arm move again and bring it back to the current query state."""
-        self.bridge.resume()
+    def resume(self) -> Future:
+        """Let the arm move again and bring it back to the current query state.
+
+        Queued on the worker (on firmware 4.0-4.4 resuming waits for the move the stop cut
+        short to end), so the kernel stays free for the Stop button, which wins meanwhile.
+        """
         self.panel.resume_button.layout.display = "none"
-        self.panel.say("")
-        episode = self.episode
-        if episode is not None and episode.phase != "finished":
-            self._show_state(episode.query_states[min(episode.state_index, len(episode.query_states) - 1)])
+        self.panel.say("The arm is getting ready to move again...")
+
+        def resume_and_show():
+            try:
+                self.bridge.resume()
+            except BaseException:
+                self.panel.resume_button.layout.display = None
+                raise
+            self._update_position()
+            self.panel.say("")
+            episode = self.episode
+            if episode is not None and episode.phase != "finished":
+                self._show_state_now(episode.query_states[min(episode.state_index, len(episode.query_states) - 1)])
+
+        return self._submit(resume_and_show)
 
     def wait(self, timeout: float | None = None) -> None:
         """Block until the arm's queued work is done (for scripts and tests)."""
         self._submit(lambda: None).result(timeout)
 
     def close(self) -> None:
-        """Finish the queued work and close the connection."""
-        self._worker.shutdown(wait=True)
+        """Stop the arm, drop the queued work (a reproduction waiting in the queue never
+        starts, a running one is cut short) and close the connection."""
+        message = self.bridge.stop()
+        if message:
+            log.info("stop on close: %s", message)
+        self._worker.shutdown(wait=True, cancel_futures=True)
         self.bridge.arm.close()
 
 

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import re
+import time
 
-import mt_widgets.hardware  # noqa: F401  (registers uarm-sim://)
+# Importing the package (for SwiftPro) also registers the uarm-sim:// URL handler.
 from mt_widgets.hardware import SwiftPro
 
 _MOVE = re.compile(r"^#\d+ (G0|G1|G2204|G2201|G2205) (.*)$")
@@ -45,3 +46,17 @@ def is_move(line: str) -> bool:
 
 def is_stop(line: str) -> bool:
     return re.match(r"^#\d+ (S1100|S1000 V0|G2203)\b", line) is not None
+
+
+def wait_until(condition, timeout: float = 10.0, what: str = "the condition") -> None:
+    """Poll ``condition()`` until true; fail after ``timeout`` s (a guard against hangs only)."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"{what} did not happen within {timeout} s")
+        time.sleep(0.002)
+
+
+def arm_is_moving(arm: SwiftPro) -> bool:
+    """Whether the simulated arm behind ``arm`` has a move under way now."""
+    return device_of(arm).moving_at(time.monotonic())

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import time
 
 import numpy as np
 import pytest
@@ -11,9 +12,10 @@ from ipywidgets import Button
 from mt_widgets.apps.study_app import participant_texts
 from mt_widgets.apps.uarm_bridge import arm_to_plant_cm
 from mt_widgets.apps.uarm_study import UArmEpisodePage, UArmStudyApp, UArmTeaching
+from mt_widgets.core import Trajectory
 from mt_widgets.hardware import SwiftPro
 
-from .helpers import device_of, is_move, received, sim_url
+from .helpers import arm_is_moving, device_of, is_move, moves, received, sim_url, wait_until
 
 ONE_EPISODE = """
 format = 1
@@ -123,3 +125,36 @@ def test_in_the_study_a_lost_arm_gives_a_message_and_the_demonstrations_are_logg
         assert "control" not in texts and "target group" not in texts
     finally:
         app.arm_teaching.close()
+
+
+def test_an_arm_outside_the_envelope_at_connection_is_brought_in_slowly_first():
+    arm = SwiftPro(sim_url(start="120,0,150"), timeout=1.0)
+    arm.connect()
+    teaching = UArmTeaching(arm)
+    try:
+        teaching.wait(30)
+        assert arm.envelope.contains(*arm.position())
+        assert moves(received(arm)) and all(m["F"] <= arm.envelope.entry_speed_mm_s for m in moves(received(arm)))
+        page = UArmEpisodePage(teaching, "uarm-point", seed=0)
+        teaching.wait(10)
+        np.testing.assert_allclose(arm_to_plant_cm(arm.position()), page.episode.query_states[0], atol=1e-3)
+    finally:
+        teaching.close()
+
+
+def test_close_stops_the_arm_and_drops_queued_reproductions():
+    arm = SwiftPro(sim_url(motion_scale=1), timeout=1.0)  # real-time moves
+    arm.connect()
+    teaching = UArmTeaching(arm)
+    teaching.wait(5)
+    out = np.array([[20.0 + k, 0.0] for k in range(10)])  # 9 steps of 1 cm, 0.5 s each
+    positions = np.vstack([out, out[::-1][1:]])
+    zeros = np.zeros_like(positions)
+    reproduction = Trajectory(np.arange(len(positions)) * 0.5, positions, positions, zeros, zeros, False, None, "cm")
+    running, queued = teaching.execute(reproduction), teaching.execute(reproduction)
+    wait_until(lambda: arm_is_moving(arm), what="the reproduction to start")
+    started = time.monotonic()
+    teaching.close()
+    assert time.monotonic() - started < 5.0  # two 9 s reproductions were queued
+    assert running.result(0).stopped and queued.cancelled()
+    assert not arm.connected

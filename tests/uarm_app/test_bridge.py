@@ -12,9 +12,9 @@ import pytest
 from mt_widgets.apps.uarm_bridge import (MM_PER_CM, UArmBridge, arm_to_plant_cm, connect_arm, describe_error,
                                          is_simulated, plant_to_arm_mm, polar_waypoints)
 from mt_widgets.core import SKILLS, Trajectory
-from mt_widgets.hardware import TEACHING_HEIGHT_MM, SwiftPro, SwiftProDisconnected, SwiftProStopped
+from mt_widgets.hardware import TEACHING_HEIGHT_MM, SwiftPro, SwiftProDisconnected, SwiftProStopped, UnsafeMoveError
 
-from .helpers import device_of, is_move, is_stop, moves, received, sim_url
+from .helpers import arm_is_moving, device_of, is_move, is_stop, moves, received, sim_url, wait_until
 
 
 # ----------------------------------------------------------------------------- mapping
@@ -150,16 +150,16 @@ def test_stop_halts_the_reproduction_and_no_move_is_sent_after_it():
         skill = SKILLS["uarm-point"]
         trajectory = skill.reproduce(skill.theta)
         bridge.show_state(trajectory.positions[0])
-        reports = []
-        worker = threading.Thread(target=lambda: reports.append(bridge.execute(trajectory)))
+        reports, steps = [], []
+        worker = threading.Thread(target=lambda: reports.append(bridge.execute(trajectory, on_step=lambda k, xy:
+                                                                                steps.append(k))))
         worker.start()
-        time.sleep(1.2)  # two or three steps in
-        stopped_at = time.monotonic()
+        wait_until(lambda: steps and steps[-1] >= 2 and arm_is_moving(arm), what="step 3 under way")
         assert bridge.stop() is None
-        worker.join(timeout=2.0)
-        assert not worker.is_alive() and time.monotonic() - stopped_at < 1.0
+        worker.join(timeout=5.0)  # a guard against a hang; the stop itself is immediate
+        assert not worker.is_alive()
         report = reports[0]
-        assert report.stopped and report.error is None and 1 <= report.steps_done < report.steps_planned
+        assert report.stopped and report.error is None and 2 <= report.steps_done < report.steps_planned
         lines = received(arm)
         last_stop = max(i for i, line in enumerate(lines) if is_stop(line))
         assert not any(is_move(line) for line in lines[last_stop + 1:])
@@ -243,3 +243,93 @@ def test_the_bridge_checks_its_arguments(arm):
         UArmBridge(arm, step_period_s=0)
     with pytest.raises(ValueError, match="waypoint_mm"):
         UArmBridge(arm, waypoint_mm=500.0)
+
+
+# ----------------------------------------------------------------------------- stop always wins
+class _StopRightAfterTheCheck(threading.Event):
+    """The bridge's stop flag, which presses Stop right after a job read it as clear: the
+    window between a job's check and its move being sent."""
+
+    def __init__(self, bridge):
+        super().__init__()
+        self.bridge, self.armed = bridge, False
+
+    def is_set(self):
+        answer = super().is_set()
+        if self.armed and not answer:
+            self.armed = False
+            assert self.bridge.stop() is None
+        return answer
+
+
+def test_a_stop_right_after_a_job_checked_the_flag_still_keeps_its_move_from_being_sent(bridge, arm):
+    flag = _StopRightAfterTheCheck(bridge)
+    bridge._stop_requested = flag
+    flag.armed = True
+    with pytest.raises(SwiftProStopped):
+        bridge.show_state([25.0, 5.0])
+    lines = received(arm)
+    last_stop = max(i for i, line in enumerate(lines) if is_stop(line))
+    assert not any(is_move(line) for line in lines[last_stop + 1:])
+    assert sum(is_stop(line) for line in lines) == 1  # one stop command is enough
+    assert arm.position()[:2] == pytest.approx((200.0, 0.0))
+
+
+def test_resume_on_firmware_4_2_moves_the_arm_again_and_the_cut_move_never_comes_back():
+    # Before 4.5 stop pauses (S1000 V0); resume must un-pause and finish the cut move first.
+    with SwiftPro(sim_url(version="4.2", motion_scale=1), timeout=1.0) as arm:
+        bridge = UArmBridge(arm)
+        worker = threading.Thread(target=lambda: pytest.raises(SwiftProStopped, bridge.show_state, [29.0, 0.0]))
+        worker.start()  # 90 mm at 60 mm/s
+        wait_until(lambda: arm_is_moving(arm), what="the move to start")
+        assert bridge.stop() is None
+        worker.join(timeout=5.0)
+        assert bridge.stop_requested
+        bridge.resume()
+        assert not bridge.stop_requested
+        bridge.show_state([21.0, 2.0])  # the arm answers: not left paused
+        time.sleep(0.3)
+        assert arm.position() == pytest.approx((210.0, 20.0, TEACHING_HEIGHT_MM), abs=0.01)
+        assert not arm_is_moving(arm) and not arm.paused
+
+
+def test_a_stop_while_resuming_wins():
+    with SwiftPro(sim_url(version="4.2", motion_scale=1), timeout=1.0) as arm:
+        bridge = UArmBridge(arm)
+        worker = threading.Thread(target=lambda: pytest.raises(SwiftProStopped, bridge.show_state, [29.0, 0.0]))
+        worker.start()
+        wait_until(lambda: arm_is_moving(arm), what="the move to start")
+        bridge.stop()
+        worker.join(timeout=5.0)
+        errors = []
+
+        def resume():
+            try:
+                bridge.resume()
+            except SwiftProStopped as exc:
+                errors.append(exc)
+
+        resumer = threading.Thread(target=resume)
+        resumer.start()
+        wait_until(lambda: arm_is_moving(arm), what="the cut move to carry on")
+        bridge.stop()
+        resumer.join(timeout=5.0)
+        assert errors and bridge.stop_requested and arm.paused
+        held = arm.position()
+        time.sleep(0.3)
+        assert arm.position() == pytest.approx(held)
+        with pytest.raises(SwiftProStopped):
+            bridge.show_state([21.0, 0.0])
+
+
+def test_an_arm_outside_the_envelope_is_brought_in_once_by_home(tmp_path):
+    with SwiftPro(sim_url(start="120,0,150"), timeout=1.0) as arm:
+        bridge = UArmBridge(arm)
+        with pytest.raises(UnsafeMoveError, match="home"):
+            bridge.show_state([20.0, 0.0])
+        assert bridge.home_if_outside() is True
+        assert arm.envelope.contains(*arm.position())
+        assert all(m["F"] <= arm.envelope.entry_speed_mm_s for m in moves(received(arm)))
+        assert bridge.home_if_outside() is False
+        bridge.show_state([25.0, 0.0])
+        assert arm.position()[:2] == pytest.approx((250.0, 0.0), abs=0.01)
