@@ -119,7 +119,7 @@ class StudyApp(VBox):
     def __init__(self, protocol: str = "paper-sim", log_folder=None, theme=None, practice_seed: int = 12345):
         self.theme = theme
         self.session: Session | None = None
-        #: The error that stopped the participant flow, or None (see ``stop``).
+        #: The error that stopped the participant flow, or None (see ``stop_for_experimenter``).
         self.stopped_by: BaseException | None = None
         self.episode: EpisodeWidget | None = None
         self._episode_key = None
@@ -219,7 +219,7 @@ class StudyApp(VBox):
         return button
 
     def _safely(self, action, reraise: bool = False) -> None:
-        """Runs a participant action; any error stops the participant flow (see ``stop``).
+        """Runs a participant action; any error stops the participant flow (``stop_for_experimenter``).
 
         Args:
             action: what a button or a widget callback does (log, then show).
@@ -235,11 +235,11 @@ class StudyApp(VBox):
         try:
             action()
         except Exception as error:  # noqa: BLE001 - any error: what is shown may not be on disk
-            self.stop(error)
+            self.stop_for_experimenter(error)
             if reraise:
                 raise
 
-    def stop(self, error: BaseException) -> None:
+    def stop_for_experimenter(self, error: BaseException) -> None:
         """Stops the participant flow and asks for the experimenter.
 
         Whatever error a step raised (the log could not be written, or the session refused the
