@@ -743,11 +743,6 @@ class SwiftPro:
         3.x ``G2203``. UNCERTAIN (the doc): whether the firmware ever answers the cut move,
         so its number is retired here.
         """
-        with self._stop_lock:
-            self._stop_generation += 1
-            self._stopped = True
-            move = self._current_move
-            target = self._current_target if move is not None else None
         version = self.firmware_version or (4, 0, 0)
         if version[0] == 3:
             command = ("G2203",)
@@ -755,10 +750,15 @@ class SwiftPro:
             command = ("S1100",)
         else:
             command = ("S1000", ("V", 0))
-            # Paused from now on, even if the reply is lost: refusing moves is the safe side.
-            if target is not None:
-                self._paused_target = target
-            self._paused = True
+        with self._stop_lock:
+            self._stop_generation += 1
+            self._stopped = True
+            move = self._current_move
+            if command[0] == "S1000":
+                # Paused from now on, even if the reply is lost: refusing moves is the safe side.
+                if move is not None and self._current_target is not None:
+                    self._paused_target = self._current_target
+                self._paused = True
         try:
             self._request(*command, is_stop=True)
         finally:
@@ -795,7 +795,13 @@ class SwiftPro:
                 return
             generation = self._stop_generation
             target = self._paused_target
-            self._request("S1000", ("V", 1))
+            # Sent like a move, only if no stop came since resume began (checked atomically with
+            # sending): a stop either finds it on the wire, and its S1000 V0 follows, or wins.
+            pending = self._submit("S1000", ("V", 1), move_generation=generation)
+            try:
+                self._wait(pending, self.timeout)
+            finally:
+                self._current_move = None
             here = self.position()
             wait_s = self.timeout
             if target is not None:
@@ -807,10 +813,11 @@ class SwiftPro:
                 self._wait(pending, wait_s)
             finally:
                 self._current_move = None
-            if self._stop_generation != generation:
-                raise SwiftProStopped("resume was cut short by stop(): the arm is paused again")
-            self._paused = False
-            self._paused_target = None
+            with self._stop_lock:
+                if self._stop_generation != generation:
+                    raise SwiftProStopped("resume was cut short by stop(): the arm is paused again")
+                self._paused = False
+                self._paused_target = None
             self._last_target = self.position()
 
     def beep(self, frequency_hz: float = 1000.0, duration_ms: float = 200.0) -> None:

@@ -450,6 +450,30 @@ def test_on_firmware_4_2_stop_pauses_and_resume_ends_the_cut_move_before_any_new
         assert arm.position() == pytest.approx((250.0, 0.0, 100.0)) and not arm_is_moving(arm)
 
 
+def test_a_stop_just_as_resume_un_pauses_the_arm_wins():
+    with SwiftPro(sim_url(version="4.2", motion_scale=1), timeout=1.0) as arm:
+        worker, errors = _move_in_thread(arm, 300.0, 0.0, 100.0, speed=50.0)
+        arm.stop()
+        worker.join(timeout=5.0)
+        submit = arm._submit
+
+        def stop_first(command, *params, **options):
+            if command == "S1000" and params == (("V", 1),):
+                arm.stop()  # Stop pressed just before the un-pause goes out
+            return submit(command, *params, **options)
+
+        arm._submit = stop_first
+        with pytest.raises(SwiftProStopped):
+            arm.resume()
+        arm._submit = submit
+        lines = sent_lines(arm)
+        last_pause = max(i for i, line in enumerate(lines) if line.endswith("S1000 V0"))
+        assert not any(line.endswith("S1000 V1") for line in lines[last_pause:])
+        assert arm.paused and not arm_is_moving(arm)
+        arm.resume()  # a later resume still works
+        assert arm.position() == pytest.approx((300.0, 0.0, 100.0)) and not arm.paused
+
+
 def test_resume_does_nothing_where_stop_is_no_pause(arm3):
     arm3.stop()
     arm3.resume()  # 3.x: no S1000 (it would time out as an unknown command)
