@@ -1,4 +1,4 @@
-"""Every module of the study runner, its app, the teaching widgets and their tests uses what it imports
+"""Every module of the package, the tests and the benchmarks uses what it imports
 (there is no linter in the test environment; an unused import hides a missing use or a stale one)."""
 
 import ast
@@ -6,10 +6,8 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-CHECKED = sorted({*ROOT.glob("mt_widgets/study/*.py"), *ROOT.glob("mt_widgets/widgets/*.py"),
-                  ROOT / "mt_widgets/apps/study_app.py", ROOT / "benchmarks/bench_study.py",
-                  *ROOT.glob("tests/study/*.py"), *ROOT.glob("tests/widgets/*.py")})
+ROOT = Path(__file__).resolve().parents[1]
+CHECKED = sorted({*ROOT.glob("mt_widgets/**/*.py"), *ROOT.glob("tests/**/*.py"), *ROOT.glob("benchmarks/*.py")})
 
 
 def _words(tree) -> set[str]:
