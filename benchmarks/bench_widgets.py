@@ -104,23 +104,21 @@ def pointer_tips(ee: np.ndarray, velocity_px: np.ndarray, width: int, height: in
 
 def browser_figures(moves: int = 30) -> dict:
     """Playback frame intervals (requestAnimationFrame) and pointer-to-arrow latency in Chromium via Voila."""
-    sys.path.insert(0, str(ROOT))
+    # The browser tests' own server and page helpers (tests/ on the path, as pytest puts it).
+    sys.path[:0] = [str(ROOT / "tests"), str(ROOT)]
     from playwright.sync_api import sync_playwright
 
-    from tests.browser.conftest import CHROMIUM, CHROMIUM_ARGS, Server, _copy_pages, _free_port
+    from browser_support import CHROMIUM, CHROMIUM_ARGS, local_page, voila
+    from tests.browser.conftest import _copy_pages
     from tests.browser.helpers import OKABE, ee_pixel, reference_episode, to_page, wait_for_color, wait_for_status
 
     root = Path(tempfile.mkdtemp(prefix="bench-widgets-"))
     _copy_pages(root)
-    port = _free_port()
-    server = Server([str(Path(sys.executable).parent / "voila"), str(root / "notebooks"), "--no-browser",
-                     f"--port={port}", "--Voila.ip=127.0.0.1"], port, root, "voila", f"http://127.0.0.1:{port}")
+    server = voila(root)
     try:
         with sync_playwright() as playwright:
             browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-            page = browser.new_page(viewport={"width": 1280, "height": 1100})
-            page.route("**/*", lambda r: r.continue_() if r.request.url.startswith(
-                ("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:")) else r.abort())
+            _, page = local_page(browser)
             page.goto(server.url("/voila/render/episode_sim.ipynb"), timeout=60_000)
             reference = reference_episode()
             view = reference.teaching.view

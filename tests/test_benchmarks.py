@@ -1,0 +1,28 @@
+"""The benchmark scripts still run and print their figures (a smoke test: speed is reported by
+the scripts, never asserted here; bench_core does fail on disagreement with MuJoCo, a
+correctness check)."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+
+EXPECTED = {
+    "bench_core.py": ["agreement with MuJoCo", "(a) one 10 s rollout", "(b) 1000 rollouts", "fit + optimal_actions"],
+    "bench_study.py": ["in-silico study, 32 participants", "power by simulation"],
+    "bench_uarm.py": ["P2220 round trip", "worst overhead per round trip"],
+    "bench_widgets.py": ["feedback latency", "animation message", "Chromium playback", "pointer-to-arrow latency"],
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("script", sorted(EXPECTED))
+def test_benchmark_runs_and_prints_its_figures(script):
+    result = subprocess.run([sys.executable, str(REPO / "benchmarks" / script)], capture_output=True, text=True,
+                            cwd=REPO, timeout=900)
+    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-3000:]
+    for line in EXPECTED[script]:
+        assert line in result.stdout, f"{script} no longer prints {line!r}:\n{result.stdout[-2000:]}"
