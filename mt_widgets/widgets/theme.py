@@ -53,10 +53,9 @@ class Theme:
     axes: str = "#7F7F7F"
     text: str = "#222222"
     arm: str = "#4D4D4D"
-    joint: str = "#FFFFFF"
     end_effector: str = OKABE_ITO["yellow"]
     end_effector_outline: str = "#000000"
-    uarm_state: str = "#000000"
+    state_dot: str = "#000000"
     target: str = OKABE_ITO["vermillion"]
     ghost: str = OKABE_ITO["reddish_purple"]
     ghost_alpha: float = 0.35
