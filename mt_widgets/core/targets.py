@@ -6,6 +6,7 @@ methods and never tells targets apart by their attributes:
 - ``distance(positions)``: how far positions are from the target;
 - ``nearest(positions)``: the target's nearest points (so ``nearest(p) - p`` is the way to it);
 - ``shape(view)``: a ``TargetShape`` (a point, or a segment clipped to the view) to draw;
+- ``dimension``: 0 for a point, 1 for a line;
 - ``noun`` and ``describe(color, label)``: the target in words, e.g. "the orange point marked goal".
 
 A user's target subclasses ``Target`` and implements the same four.
@@ -27,6 +28,8 @@ class Target:
 
     #: What the target is, in a word or two ("point", "vertical line").
     noun: str = "target"
+    #: Its geometric dimension: 0 for a point (one place to reach), 1 for a line (anywhere on it).
+    dimension: int = 0
 
     def nearest(self, positions) -> np.ndarray:
         """The target's nearest point to each position: (..., 2) -> (..., 2)."""
@@ -58,6 +61,7 @@ class PointTarget(Target):
 
     point: tuple[float, float]
     noun = "point"
+    dimension = 0
 
     def __post_init__(self):
         point = as_float_array("point", self.point, ndim=1, shape=(2,))
@@ -78,6 +82,7 @@ class LineTarget(Target):
 
     point: tuple[float, float]
     direction: tuple[float, float]
+    dimension = 1
 
     def __post_init__(self):
         point = as_float_array("point", self.point, ndim=1, shape=(2,))

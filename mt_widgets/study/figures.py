@@ -200,14 +200,11 @@ def _draw_target(ax, skill) -> None:
     target = skill.target
     if target is None:
         return
-    if hasattr(target, "direction"):
-        box = skill.workspace
-        span = max(box.xlim[1] - box.xlim[0], box.ylim[1] - box.ylim[0])
-        p, d = np.asarray(target.point), np.asarray(target.direction)
-        ends = np.array([p - span * d, p + span * d])
-        ax.plot(ends[:, 0], ends[:, 1], gid="target", label="target", **TARGET_STYLE)
+    shape = skill.target_shape()
+    if not shape.is_point:
+        ax.plot(shape.points[:, 0], shape.points[:, 1], gid="target", label="target", **TARGET_STYLE)
     else:
-        ax.plot([target.point[0]], [target.point[1]], marker="*", markersize=14, linestyle="none", gid="target",
+        ax.plot(shape.points[:, 0], shape.points[:, 1], marker="*", markersize=14, linestyle="none", gid="target",
                 label="target", color=TARGET_STYLE["color"])
 
 

@@ -93,7 +93,7 @@ def imagined_line_target(protocol, phase_index: int):
     """
     phase = protocol.phases[phase_index]
     skill = SKILLS[phase.skill]
-    if not hasattr(skill.target, "direction"):
+    if skill.target is None or skill.target.dimension == 0:
         return None
     before = [protocol.practice.skill] if protocol.practice.duration_s > 0 else []
     before += [p.skill for p in protocol.phases[:phase_index]]
@@ -101,7 +101,7 @@ def imagined_line_target(protocol, phase_index: int):
     for key in before:
         other = SKILLS[key]
         if type(other.plant) is type(skill.plant) and other.target is not None \
-                and not hasattr(other.target, "direction"):
+                and other.target.dimension == 0:
             anchor = np.asarray(other.target.point, dtype=float)
     return anchor
 

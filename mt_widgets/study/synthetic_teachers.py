@@ -223,14 +223,7 @@ def naive_offsets(positions: np.ndarray, target) -> np.ndarray:
         (..., 2) offsets in the positions' units (zero on the target).
     """
     positions = np.asarray(positions, dtype=float)
-    point = np.asarray(target.point, dtype=float)
-    if hasattr(target, "direction"):
-        along = np.asarray(target.direction, dtype=float)
-        offset = positions - point
-        nearest = point + (offset @ along)[..., None] * along
-    else:
-        nearest = np.broadcast_to(point, positions.shape)
-    return nearest - positions
+    return target.nearest(positions) - positions
 
 
 def line_foot(point, target) -> np.ndarray:
@@ -250,7 +243,7 @@ def along_line_offsets(positions: np.ndarray, target, anchor) -> np.ndarray:
         (..., 2) offsets along the line; zeros for a point target or without an anchor.
     """
     positions = np.asarray(positions, dtype=float)
-    if anchor is None or not hasattr(target, "direction"):
+    if anchor is None or target.dimension == 0:
         return np.zeros_like(positions)
     anchor = np.asarray(anchor, dtype=float)
     if anchor.shape != (2,) or not np.all(np.isfinite(anchor)):
