@@ -73,7 +73,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import mt_widgets
-from mt_widgets.core import SKILLS, SeedSchedule, analyse_demonstrations
+from mt_widgets.core import SeedSchedule, analyse_demonstrations
 
 from .log import LogError, MemoryLog, ParticipantLog, StudyFolder, to_jsonable
 from .protocol import Phase, Protocol
@@ -359,7 +359,7 @@ class Session:
 
     def _start_episode(self, slot: _Slot) -> None:
         phase = self._phase(slot)
-        skill = SKILLS[phase.skill]
+        skill = self.protocol.skills[phase.skill]
         participant = self.enrolment["index"] if self.protocol.query_states == "per-participant" else None
         seed = SeedSchedule(self.protocol.seed).seed(phase.states_index, slot.episode - 1, participant)
         states = skill.query_states(seed=seed, n=phase.demonstrations)
@@ -427,7 +427,7 @@ class Session:
     def _result(self, key) -> EpisodeResult:
         event = self._finished_episodes[key]
         if key not in self._trajectories:
-            skill = SKILLS[event["skill"]]
+            skill = self.protocol.skills[event["skill"]]
             self._trajectories[key] = skill.reproduce(np.asarray(event["theta_hat"]),
                                                       duration=self.protocol.reproduction_duration_s)
         return EpisodeResult(event["phase"], event["phase_index"], event["episode"], event["skill"],
@@ -498,7 +498,7 @@ class Session:
                                     f"it was already recorded or is not reached yet")
         key = (slot.phase_index, slot.episode)
         started = self._episodes[key]
-        skill = SKILLS[started["skill"]]
+        skill = self.protocol.skills[started["skill"]]
         try:
             action = np.asarray(action, dtype=float).reshape(-1)
         except (TypeError, ValueError):
@@ -536,7 +536,7 @@ class Session:
         slot = self._expect("finish_episode", "episode_end")
         key = (slot.phase_index, slot.episode)
         started = self._episodes[key]
-        skill = SKILLS[started["skill"]]
+        skill = self.protocol.skills[started["skill"]]
         U = np.array(self._actions[key])
         analysis = analyse_demonstrations(np.asarray(started["features"]), U, skill.theta, self.protocol.lam)
         trajectory = skill.reproduce(analysis.theta_hat, duration=self.protocol.reproduction_duration_s)
