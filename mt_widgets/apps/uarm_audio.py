@@ -17,6 +17,8 @@ import wave
 import numpy as np
 from ipywidgets import Audio, HBox, Layout
 
+from mt_widgets.core.validation import as_bool
+
 #: Pitch of the first and of the last demonstration's cue (Hz): an octave, A4 to A5.
 LOW_HZ, HIGH_HZ = 440.0, 880.0
 #: The episode's end: higher than any demonstration's cue.
@@ -93,7 +95,7 @@ class AudioCues(HBox):
     def __init__(self, arm_beep=None, enabled: bool = True):
         super().__init__([], layout=Layout(width="0px", height="0px", overflow="hidden"))
         self.arm_beep = arm_beep
-        self.enabled = bool(enabled)
+        self.enabled = as_bool("enabled", enabled)
         self.played: list[tuple[float, float]] = []
 
     def play(self, frequency_hz: float, duration_s: float) -> None:

@@ -26,7 +26,7 @@ from ipywidgets import HTML, Button, Layout, VBox
 from traitlets import Float, Int, List, Unicode
 
 from mt_widgets.core import DEFAULT_LAMBDA, SKILLS, Skill, TeachingEpisode
-from mt_widgets.core.validation import as_float_array, as_positive
+from mt_widgets.core.validation import as_bool, as_float_array, as_positive
 
 from .callbacks import Callbacks
 from .guidance import GuidancePanel
@@ -165,8 +165,9 @@ class EpisodeWidget(VBox):
                                       seed=None if query_states is not None else seed, lam=lam, duration=duration)
         #: The ``TeachingEpisode`` shown: the science of this episode lives there.
         self.episode = episode
-        self.guidance = bool(guidance)
-        self.show_ghost = bool(ghost)
+        self.guidance = as_bool("guidance", guidance)
+        self.show_ghost = as_bool("ghost", ghost)
+        show_description = as_bool("show_description", show_description)
         self.episode_index = int(episode_index)
         self.result: EpisodeResult | None = None
         self.records: list[DemonstrationRecord] = []
