@@ -1,6 +1,9 @@
 """The batched form of a teaching episode: many teachers' demonstrations of one skill at once.
 
-One episode of a study gives every teacher the same skill and (per study) the same query
+``TeachingEpisode`` (``mt_widgets.core.episode``) is one teacher's episode, demonstration by
+demonstration; ``EpisodeBatch`` is the same episode for many teachers who have all given their
+demonstrations, with the same names and the same definitions (``theta_hat``, ``error``, ``rho1``,
+``rho2``, ``bound``, ``residual_norm``, ``reproduction`` over ``duration`` seconds). One episode of a study gives every teacher the same skill and (per study) the same query
 states, so one SVD of each feature matrix serves all the teachers who answer it. An
 ``EpisodeBatch`` holds, for K sets of query states, the learner's map
 ``A = (Phi^T Phi + lam I)^-1 Phi^T``, the optimal actions ``U_bar`` and ``rho1 = ||A||_2``;
@@ -21,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from .learner import DEFAULT_LAMBDA
 from .ridge_kernels import svd_with_rank
 from .skills import Skill
 from .validation import as_float_array, as_positive
@@ -68,7 +72,8 @@ class BatchOutcome:
         error: (B,) the teaching error ||Theta_hat - Theta||_F.
         rho1: (B,) ||A||_2 of each teacher's query states.
         rho2: (B,) ||U - U_bar||_F of each teacher's demonstrations.
-        bound: (B,) rho1 * rho2 plus the part no demonstration removes (0 when exact).
+        bound: (B,) rho1 * rho2 plus the norm of the part no demonstration removes (0 when
+            exact), as ``TeachingEpisode.bound``.
     """
 
     theta_hat: np.ndarray
@@ -82,42 +87,46 @@ class BatchOutcome:
 class EpisodeBatch:
     """One episode of a skill on K sets of query states, for many teachers at once.
 
-    Build with ``EpisodeBatch.of(skill, query_states, lam)``.
+    Build with ``EpisodeBatch.of(skill, query_states, lam, duration)``.
 
     Attributes:
         skill: the ``Skill`` taught.
         query_states: (K, N, state_dim) the states of each set.
         lam: the learner's ridge parameter.
+        duration: seconds of each reproduction (the skill's ``default_duration`` unless given).
         features: (K, N, S) Phi of each set.
         learner_map: (K, S, N) A of each set.
         optimal_actions: (K, N, R) U_bar of each set.
         rho1: (K,) ||A||_2 of each set.
         rank: (K,) the rank of each Phi.
-        residual: (K,) ||A U_bar - Theta^T||, 0 where exact teaching is possible.
+        residual_norm: (K,) ||(A U_bar)^T - Theta||, 0 where exact teaching is possible.
     """
 
     skill: Skill
     query_states: np.ndarray
     lam: float
+    duration: float
     features: np.ndarray
     learner_map: np.ndarray
     optimal_actions: np.ndarray
     rho1: np.ndarray
     rank: np.ndarray
-    residual: np.ndarray
+    residual_norm: np.ndarray
 
     @classmethod
-    def of(cls, skill: Skill, query_states, lam: float) -> "EpisodeBatch":
+    def of(cls, skill: Skill, query_states, lam: float = DEFAULT_LAMBDA,
+           duration: float | None = None) -> "EpisodeBatch":
         """Decomposes the learner's map for each of K sets of query states (K, N, state_dim)."""
         if not isinstance(skill, Skill):
             raise TypeError(f"skill: expected a Skill, got {type(skill).__name__}")
         states = as_float_array("query_states", query_states, ndim=3, shape=(None, None, skill.state_dim))
         lam = as_positive("lam", lam, allow_zero=True)
+        duration = skill.default_duration if duration is None else as_positive("duration", duration)
         Phi = skill.features(states.reshape(-1, states.shape[-1])).reshape(states.shape[:2] + (-1,))
         theta = np.asarray(skill.theta, dtype=float)
         A, optimal, rho1, rank = batched_ridge_maps(np.ascontiguousarray(Phi), np.ascontiguousarray(theta.T), lam)
-        residual = np.linalg.norm((A @ optimal - theta.T).reshape(len(A), -1), axis=1)
-        return cls(skill, states, lam, Phi, A, optimal, rho1, rank, residual)
+        residual_norm = np.linalg.norm((A @ optimal - theta.T).reshape(len(A), -1), axis=1)
+        return cls(skill, states, lam, duration, Phi, A, optimal, rho1, rank, residual_norm)
 
     def __len__(self) -> int:
         return len(self.query_states)
@@ -162,9 +171,10 @@ class EpisodeBatch:
         error = np.linalg.norm((theta_hat - theta).reshape(len(actions), -1), axis=1)
         rho2 = np.linalg.norm((actions - self.optimal_actions[which]).reshape(len(actions), -1), axis=1)
         rho1 = self.rho1[which]
-        return BatchOutcome(theta_hat, error, rho1, rho2, rho1 * rho2 + self.residual[which])
+        return BatchOutcome(theta_hat, error, rho1, rho2, rho1 * rho2 + self.residual_norm[which])
 
-    def reproduce(self, theta_hats, duration: float | None = None, record_every: int | None = None):
-        """Rolls out learnt skills (B, R, S) from the skill's start as one ``TrajectoryBatch``."""
-        return self.skill.reproduce(as_float_array("theta_hats", theta_hats, ndim=3), duration=duration,
+    def reproduce(self, theta_hats, record_every: int | None = None):
+        """Rolls out learnt skills (B, R, S) from the skill's start over ``duration`` seconds, as one
+        ``TrajectoryBatch``: the reproductions of B episodes in one call."""
+        return self.skill.reproduce(as_float_array("theta_hats", theta_hats, ndim=3), duration=self.duration,
                                     record_every=record_every)

@@ -77,7 +77,7 @@ def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study
         skill = SKILLS[step["skill"]]
         guided = np.isin(groups, list(step["guidance"]))
         states = states_by_episode[e]
-        batch = EpisodeBatch.of(skill, states, protocol.lam)
+        batch = EpisodeBatch.of(skill, states, protocol.lam, protocol.reproduction_duration_s)
         positions, _ = skill.end_effector(states)
         offsets = naive_offsets(positions, skill.target)[study_of]                  # (B, N, 2)
         anchor = imagined_line_target(protocol, step["phase_index"])
@@ -184,8 +184,7 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
             columns = [e for e, step in enumerate(plan) if step["skill"] == skill_key]
             thetas = np.concatenate([results[e].theta_hat for e in columns])
             # One rollout batch per skill: every episode of that skill shares the plant and start.
-            batch = results[columns[0]].batch.reproduce(thetas, duration=protocol.reproduction_duration_s,
-                                                        record_every=record_every)
+            batch = results[columns[0]].batch.reproduce(thetas, record_every=record_every)
             for k, e in enumerate(columns):
                 for p in range(n_participants):
                     index = k * n_participants + p

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from mt_widgets.core import SKILLS, optimal_actions
+from mt_widgets.core import SKILLS
+from mt_widgets.core.episode import TeachingEpisode
 from mt_widgets.study.log import StudyFolder
 from mt_widgets.study.session import Session
 
@@ -63,7 +64,7 @@ class SessionTeacher:
             # What the teacher works from for this episode: where the target is from each tip
             # position, and the optimal arrows its understanding blends in.
             positions, _ = skill.end_effector(step.query_states)
-            optimal = optimal_actions(skill.features(step.query_states), skill.theta, self.protocol.lam)
+            optimal = TeachingEpisode(skill, step.query_states, lam=self.protocol.lam).optimal_actions
             anchor = imagined_line_target(self.protocol, step.phase_index)
             along = None if anchor is None else along_line_offsets(positions, skill.target, anchor)
             self._episode = (e, naive_offsets(positions, skill.target), optimal, along)

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from mt_widgets.core import SKILLS, analyse_demonstrations, optimal_actions, ridge_operator
+from mt_widgets.core.episode import TeachingEpisode
 from mt_widgets.core.episode_batch import EpisodeBatch
 
 
@@ -32,6 +33,24 @@ def test_each_teacher_is_fitted_and_scored_as_a_single_episode_would_be(skill):
     assert batch.exact.all()
 
 
+def test_a_batch_is_many_teaching_episodes_with_the_same_names_and_values(skill):
+    states = _states(skill, 2)
+    batch = EpisodeBatch.of(skill, states, lam=0.05, duration=0.3)
+    rng = np.random.default_rng(1)
+    actions = batch.optimal_actions + rng.normal(0, 0.5, batch.optimal_actions.shape)
+    outcome = batch.complete(actions)
+    trajectories = batch.reproduce(outcome.theta_hat)
+    for b in range(2):
+        episode = TeachingEpisode.from_actions(skill, states[b], actions[b], lam=0.05, duration=0.3)
+        assert batch.optimal_actions[b] == pytest.approx(episode.optimal_actions, abs=1e-10)
+        assert batch.exact[b] == episode.exact and batch.rank[b] == episode.rank
+        assert batch.residual_norm[b] == pytest.approx(episode.residual_norm, abs=1e-10)
+        for name in ("theta_hat", "error", "rho1", "rho2", "bound"):
+            assert getattr(outcome, name)[b] == pytest.approx(getattr(episode, name), abs=1e-10), name
+        assert np.asarray(trajectories[b].states)[-1] == pytest.approx(
+            np.asarray(episode.reproduction.states)[-1], abs=1e-9)
+
+
 def test_the_optimal_demonstration_teaches_the_skill_exactly(skill):
     batch = EpisodeBatch.of(skill, _states(skill, 2), lam=0.01)
     outcome = batch.complete(batch.optimal_actions)
@@ -54,9 +73,9 @@ def test_below_the_teaching_dimension_the_rank_rule_is_the_single_learners(skill
 
 
 def test_learnt_skills_are_rolled_out_as_one_batch(skill):
-    batch = EpisodeBatch.of(skill, _states(skill, 1), lam=0.01)
+    batch = EpisodeBatch.of(skill, _states(skill, 1), lam=0.01, duration=0.5)
     thetas = np.stack([skill.theta, skill.theta])
-    rolled = batch.reproduce(thetas, duration=0.5, record_every=50)
+    rolled = batch.reproduce(thetas, record_every=50)
     single = skill.reproduce(skill.theta, duration=0.5, record_every=50)
     assert np.asarray(rolled[1].states) == pytest.approx(np.asarray(single.states))
 
