@@ -21,6 +21,7 @@ Everything is computed from one SVD of Phi (``ridge_operator``), the same rank r
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,6 +66,27 @@ def _frozen(array: np.ndarray) -> np.ndarray:
     array = np.array(array, dtype=float)
     array.setflags(write=False)
     return array
+
+
+#: skill -> {duration: the target skill's own rollout}. Keyed by the skill object itself (a Skill
+#: hashes by identity), weakly: an entry goes with its skill, and a new skill that happens to
+#: get a freed skill's id never gets that skill's ghost.
+_TARGET_ROLLOUTS: "weakref.WeakKeyDictionary[Skill, dict[float, object]]" = weakref.WeakKeyDictionary()
+
+
+def target_reproduction(skill: Skill, duration: float | None = None):
+    """The target skill's own rollout (``skill.theta`` from ``skill.start``), computed once per skill and duration.
+
+    Views draw it faintly beside a learnt reproduction; it depends on nothing a teacher does,
+    so every episode of a skill shares one.
+    """
+    if not isinstance(skill, Skill):
+        raise TypeError(f"skill: expected a mt_widgets.core.Skill, got {type(skill).__name__}")
+    duration = skill.default_duration if duration is None else as_positive("duration", duration)
+    rollouts = _TARGET_ROLLOUTS.setdefault(skill, {})
+    if duration not in rollouts:
+        rollouts[duration] = skill.reproduce(skill.theta, duration=duration)
+    return rollouts[duration]
 
 
 class TeachingEpisode:
@@ -272,9 +294,14 @@ class TeachingEpisode:
         return self._reproduction
 
     @property
+    def target_reproduction(self):
+        """The target skill's own rollout over ``duration`` (shared by every episode of the skill)."""
+        return target_reproduction(self.skill, self.duration)
+
+    @property
     def reproduced(self) -> bool:
         """Whether the reproduction has been rolled out yet (it is, on first use of ``reproduction``)."""
         return self._reproduction is not None
 
 
-__all__ = ["DemonstrationAnalysis", "EpisodeStateError", "TeachingEpisode"]
+__all__ = ["DemonstrationAnalysis", "EpisodeStateError", "TeachingEpisode", "target_reproduction"]

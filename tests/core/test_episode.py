@@ -1,12 +1,14 @@
 """The headless teaching episode against computations made independently of it (numpy only)."""
 
 import dataclasses
+import gc
 
 import numpy as np
 import pytest
 
 from mt_widgets import SKILLS, RidgeLearner, optimal_actions, teaching_risk
 from mt_widgets.core import DEFAULT_LAMBDA, EpisodeStateError, Skill, TeachingEpisode, UnderdeterminedTeachingWarning
+from mt_widgets.core import episode as episode_module
 
 
 def _ridge_map(Phi, lam):
@@ -186,3 +188,17 @@ def test_bad_arguments_name_themselves():
     episode = TeachingEpisode(skill, seed=0)
     with pytest.raises(ValueError, match="read-only"):  # the states the optimal actions were computed for
         episode.query_states[0, 0] = 1.0
+
+
+def test_the_ghost_is_the_skills_own_motion_even_when_an_id_is_reused_and_dies_with_the_skill(monkeypatch):
+    base = SKILLS["sim-point"]
+    slow, fast = (dataclasses.replace(base, theta=base.theta * k) for k in (0.5, 2.0))
+    # CPython reuses the id of a freed object: make every skill share one, as a reused id would.
+    monkeypatch.setattr(episode_module, "id", lambda obj: 7, raising=False)
+    for skill in (slow, fast):
+        ghost = episode_module.target_reproduction(skill, 1.0)
+        np.testing.assert_allclose(ghost.positions, skill.reproduce(skill.theta, duration=1.0).positions)
+    before = len(episode_module._TARGET_ROLLOUTS)
+    del slow, fast, skill
+    gc.collect()
+    assert len(episode_module._TARGET_ROLLOUTS) == before - 2, "the cache keeps ghosts of skills that are gone"
