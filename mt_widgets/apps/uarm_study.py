@@ -30,11 +30,11 @@ import numpy as np
 from ipywidgets import HTML, Button, HBox, Label, Layout, VBox
 
 from mt_widgets.hardware import SwiftPro, SwiftProError, SwiftProStopped, UnsafeMoveError
+from mt_widgets.hardware.bridge import UArmBridge, connect_arm, describe_error, is_simulated
 from mt_widgets.widgets import EpisodeWidget
 
 from .study_app import StudyApp
 from .uarm_audio import AudioCues
-from .uarm_bridge import UArmBridge, connect_arm, describe_error, is_simulated
 from .uarm_screen import ScreenGeometry, fit_episode
 
 log = logging.getLogger(__name__)
