@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from ipywidgets import HTML
 
+from mt_widgets.core.validation import as_bool
 from mt_widgets.widgets import ViewTransform
 
 #: The paper's display: 518 mm x 325 mm (a 24-inch 16:10 monitor, 1920 x 1200 pixels).
@@ -162,6 +163,7 @@ class ScreenGeometry:
             raise ValueError(f"heading_deg: expected a finite angle in degrees, got {self.heading_deg!r}")
         if not (math.isfinite(self.action_length) and self.action_length > 0):
             raise ValueError(f"action_length: expected a positive number, got {self.action_length!r}")
+        as_bool("pinned", self.pinned)
 
     @property
     def pixels_per_mm_xy(self) -> tuple[float, float]:
@@ -287,6 +289,7 @@ def fit_episode(episode, geometry: ScreenGeometry, show_player: bool = True) -> 
     are pinned to the same corner); with ``show_player=False`` it stays hidden (the real
     arm plays the reproduction).
     """
+    as_bool("show_player", show_player)
     fit_view(episode.teaching.view, geometry)
     fit_view(episode.player.view, geometry)
     episode.teaching.scale_label.value = f"<small>Scale: true size ({episode.teaching.view.scale_text})</small>"

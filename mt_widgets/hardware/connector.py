@@ -190,6 +190,8 @@ class SwiftPro:
             if name != "SwiftPro":
                 raise SwiftProError(f"P2201 must name a SwiftPro, got {name!r}: this connector drives the Swift Pro only")
             self.firmware_version, self.device_name = version, name
+            log.info("connected to a %s on %r, firmware %s (dialect %s)", name, port,
+                     ".".join(map(str, version)), self.dialect.name)
             self._motion.connected_at(self.position())
         except BaseException:
             self.close()

@@ -132,7 +132,7 @@ class SerialLink:
                 raise err from exc
             raise SwiftProError(f"could not open port {port!r}: {exc}") from exc
         except ValueError as exc:
-            raise SwiftProError(f"port must be a device path or a known pyserial URL, got {port!r}: {exc}") from exc
+            raise SwiftProError(f"port: expected a device path or a known pyserial URL, got {port!r}: {exc}") from exc
         self.serial, self.port = ser, port
         try:
             # Output left over from an earlier run must not be read as ours (SDK issue #25).

@@ -619,7 +619,7 @@ def baseline_comparison(result, reference: dict | None = None, experiment: str |
     return pd.DataFrame(rows)
 
 
-#: The paper's printed summary figures, as in /work/shared/reference/paper_results.json: per
+#: The paper's printed summary figures (docs/design.md, "Reported results"): per
 #: experiment the changes (mean and SD per group) and the target group's percentage reductions.
 PAPER_RESULTS = {
     "simulation": {

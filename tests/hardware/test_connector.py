@@ -428,7 +428,7 @@ def test_a_move_begun_before_a_stop_is_refused_even_if_its_checks_start_after_it
 
 def test_on_firmware_4_2_stop_pauses_and_resume_ends_the_cut_move_before_any_new_one():
     # 4.0-4.4 has no S1100: stop is S1000 V0, a pause; the cut move waits at the head of the
-    # firmware's queue and every G/M command queues behind it (UARM_PROTOCOL.md, "Commands").
+    # firmware's queue and every G/M command queues behind it (docs/uarm-protocol.md, "Commands").
     with SwiftPro(sim_url(version="4.2", motion_scale=1), timeout=1.0) as arm:
         assert arm.firmware_version == (4, 2, 0)
         worker, errors = _move_in_thread(arm, 300.0, 0.0, 100.0, speed=50.0)  # 2 s
@@ -509,9 +509,9 @@ def test_arguments_take_any_real_number_but_not_a_bool():
         assert arm.position() == pytest.approx((210.0, 5.0, 80.0))
         arm.beep(np.float32(440.0), np.int64(50))
         arm.set_position_reports(np.float32(0.5))
-        with pytest.raises(UnsafeMoveError, match=r"x must be a finite real number of mm.*got True \(bool\)"):
+        with pytest.raises(UnsafeMoveError, match=r"x: expected a finite real number of mm.*got True \(bool\)"):
             arm.move_to(True, 0.0)
-        with pytest.raises(UnsafeMoveError, match=r"speed must be .* in \[1\.0, 100\.0\], got False"):
+        with pytest.raises(UnsafeMoveError, match=r"speed: expected .* in \[1\.0, 100\.0\], got False"):
             arm.move_to(210.0, 0.0, speed=False)
         with pytest.raises(ValueError, match="frequency_hz"):
             arm.beep(True, 100)
