@@ -247,7 +247,7 @@ def test_the_bridge_checks_its_arguments(arm):
 
 # ----------------------------------------------------------------------------- stop always wins
 class _StopRightAfterTheCheck(threading.Event):
-    """The bridge's stop flag, which presses Stop right after a job read it as clear: the
+    """The stop switch's held flag, which presses Stop right after a job read it as clear: the
     window between a job's check and its move being sent."""
 
     def __init__(self, bridge):
