@@ -158,7 +158,9 @@ class TeachingCanvas(VBox):
             HTML("<small>Keyboard: click the canvas, then arrow keys move the arrow tip "
                  "(Shift: finer), Enter confirms, Escape clears.</small>"),
         ], layout=Layout(min_width="300px", max_width="380px"))
-        super().__init__([HBox([canvas, controls], layout=Layout(flex_flow="row wrap", align_items="flex-start"))])
+        self.view.legend.add("user_arrow")
+        super().__init__([HBox([VBox([canvas, self.view.legend]), controls],
+                               layout=Layout(flex_flow="row wrap", align_items="flex-start"))])
         self._show_current_state()
 
     # -- public API ---------------------------------------------------------------------------------
@@ -237,6 +239,7 @@ class TeachingCanvas(VBox):
     def show_guidance(self, optimal_action) -> None:
         """Draw the optimal arrow (R,) beside the confirmed one at the current state."""
         self._guidance = np.array(optimal_action, dtype=float)
+        self.view.legend.add("optimal_arrow")
         self._draw_arrows()
 
     def advance(self) -> None:
