@@ -159,11 +159,11 @@ class ScreenGeometry:
         else:
             base = _pair("base_px", self.base_px, positive=False)
         object.__setattr__(self, "base_px", base)
+        object.__setattr__(self, "pinned", as_bool("pinned", self.pinned))
         if not math.isfinite(self.heading_deg):
             raise ValueError(f"heading_deg: expected a finite angle in degrees, got {self.heading_deg!r}")
         if not (math.isfinite(self.action_length) and self.action_length > 0):
             raise ValueError(f"action_length: expected a positive number, got {self.action_length!r}")
-        as_bool("pinned", self.pinned)
 
     @property
     def pixels_per_mm_xy(self) -> tuple[float, float]:
@@ -289,7 +289,7 @@ def fit_episode(episode, geometry: ScreenGeometry, show_player: bool = True) -> 
     are pinned to the same corner); with ``show_player=False`` it stays hidden (the real
     arm plays the reproduction).
     """
-    as_bool("show_player", show_player)
+    show_player = as_bool("show_player", show_player)
     fit_view(episode.teaching.view, geometry)
     fit_view(episode.player.view, geometry)
     episode.teaching.scale_label.value = f"<small>Scale: true size ({episode.teaching.view.scale_text})</small>"

@@ -86,6 +86,7 @@ class UArmTeaching:
 
     def __init__(self, arm: SwiftPro, geometry: ScreenGeometry | None = None, show_player: bool | None = None,
                  audio: bool = True, buzzer: bool = True):
+        audio, buzzer = as_bool("audio", audio), as_bool("buzzer", buzzer)
         self.bridge = UArmBridge(arm)
         self.geometry = geometry if geometry is not None else ScreenGeometry()
         if not isinstance(self.geometry, ScreenGeometry):
