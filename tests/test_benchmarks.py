@@ -24,8 +24,8 @@ ARGS = {"bench_kiosk.py": ["--loads", "2", "--no-study"]}
 @pytest.mark.slow
 @pytest.mark.parametrize("script", sorted(EXPECTED))
 def test_benchmark_runs_and_prints_its_figures(script):
-    result = subprocess.run([sys.executable, str(REPO / "benchmarks" / script), *ARGS.get(script, [])], capture_output=True, text=True,
-                            cwd=REPO, timeout=900)
+    command = [sys.executable, str(REPO / "benchmarks" / script), *ARGS.get(script, [])]
+    result = subprocess.run(command, capture_output=True, text=True, cwd=REPO, timeout=900)
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-3000:]
     for line in EXPECTED[script]:
         assert line in result.stdout, f"{script} no longer prints {line!r}:\n{result.stdout[-2000:]}"
