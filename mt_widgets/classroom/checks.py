@@ -30,7 +30,7 @@ def _describe(value) -> str:
     if isinstance(value, np.ndarray):
         return f"an array of shape {value.shape}"
     if value is None:
-        return "None (did the function return its result?)"
+        return "None (not answered yet, or a function that does not return its result)"
     return f"{type(value).__name__} {value!r}"[:100]
 
 
@@ -61,6 +61,23 @@ class ExerciseChecks:
     def true(self, check: str, condition: bool, message: str) -> None:
         """Passes when ``condition`` is true; else fails with ``message``."""
         self._result(check, None if bool(condition) else message)
+
+    def call(self, check: str, function, *args):
+        """Calls the student's ``function(*args)`` and returns its result; an exception fails the check.
+
+        A function still raising ``NotImplementedError`` (nbgrader's placeholder) is reported as
+        not written yet; any other error by its type and message.
+        """
+        name = getattr(function, "__name__", "the function")
+        if not callable(function):
+            self._result(check, f"{name}: expected a function, got {_describe(function)}.")
+        try:
+            return function(*args)
+        except NotImplementedError:
+            self._result(check, f"{name}: not written yet (its body still raises NotImplementedError); "
+                                f"replace the placeholder in its cell with your code and run that cell.")
+        except Exception as error:  # noqa: BLE001 - any error in a student's code becomes words
+            self._result(check, f"{name}: raised {type(error).__name__}: {error}.")
 
     def close(self, check: str, name: str, value, expected, *, atol: float = 1e-8, rtol: float = 1e-6,
               hint: str = "") -> None:
