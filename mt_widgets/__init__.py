@@ -11,6 +11,7 @@ from .core import (
     RidgeLearner,
     SeedSchedule,
     Skill,
+    TeachingEpisode,
     TwoLinkArm,
     analyse_demonstrations,
     optimal_actions,
@@ -19,5 +20,5 @@ from .core import (
 
 __version__ = "0.1.0"
 
-__all__ = ["DEFAULT_LAMBDA", "SKILLS", "RidgeLearner", "SeedSchedule", "Skill", "TwoLinkArm",
+__all__ = ["DEFAULT_LAMBDA", "SKILLS", "RidgeLearner", "SeedSchedule", "Skill", "TeachingEpisode", "TwoLinkArm",
            "analyse_demonstrations", "optimal_actions", "teaching_risk", "__version__"]

@@ -402,7 +402,9 @@ class StudyApp(VBox):
     def _on_episode_finished(self, result) -> None:
         def finish():
             if self.session.current_step().kind == "episode_end":
-                self.session.finish_episode()
+                # The episode the participant saw is the one logged: its one reproduction
+                # (already played) is what the log describes.
+                self.session.finish_episode(result.episode)
             self._show_reproduction_controls()
         self._safely(finish)
 

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from ipywidgets import HTML
 
+from mt_widgets.core.validation import as_bool
 from mt_widgets.widgets import ViewTransform
 
 #: The paper's display: 518 mm x 325 mm (a 24-inch 16:10 monitor, 1920 x 1200 pixels).
@@ -158,6 +159,7 @@ class ScreenGeometry:
         else:
             base = _pair("base_px", self.base_px, positive=False)
         object.__setattr__(self, "base_px", base)
+        object.__setattr__(self, "pinned", as_bool("pinned", self.pinned))
         if not math.isfinite(self.heading_deg):
             raise ValueError(f"heading_deg: expected a finite angle in degrees, got {self.heading_deg!r}")
         if not (math.isfinite(self.action_length) and self.action_length > 0):
@@ -287,6 +289,7 @@ def fit_episode(episode, geometry: ScreenGeometry, show_player: bool = True) -> 
     are pinned to the same corner); with ``show_player=False`` it stays hidden (the real
     arm plays the reproduction).
     """
+    show_player = as_bool("show_player", show_player)
     fit_view(episode.teaching.view, geometry)
     fit_view(episode.player.view, geometry)
     episode.teaching.scale_label.value = f"<small>Scale: true size ({episode.teaching.view.scale_text})</small>"

@@ -1,11 +1,12 @@
 """The science of mt-widgets, with numpy and numba only (no Jupyter, no widgets, no serial).
 
 Arm dynamics, plants, feature maps, skills, the ridge learner, exact machine teaching,
-query-state selection and rollouts.
+query-state selection, rollouts, and the teaching episode that ties them together.
 """
 
 from .arm import ArmParameters, TwoLinkArm
 from .arm_plant import ArmPlant
+from .episode import DemonstrationAnalysis, EpisodeStateError, TeachingEpisode
 from .fast_mode import running_under_test
 from .features import EndEffectorFeatures, FeatureMap, FunctionFeatures, PositionFeatures
 from .learner import DEFAULT_LAMBDA, RidgeLearner
@@ -28,8 +29,9 @@ from .workspace import AnnulusSector, Box
 
 __all__ = [
     "ActionDifference", "AnnulusSector", "ArmParameters", "ArmPlant", "Box", "ContinuousPlant", "DEFAULT_LAMBDA",
-    "EndEffectorFeatures", "FeatureMap", "FunctionFeatures", "KinematicPlant", "LineTarget", "Plant",
-    "PointTarget", "PositionFeatures", "RidgeLearner", "SKILLS", "SeedSchedule", "Skill", "TeachingAnalysis",
+    "DemonstrationAnalysis", "EndEffectorFeatures", "EpisodeStateError", "FeatureMap", "FunctionFeatures",
+    "KinematicPlant", "LineTarget", "Plant", "PointTarget", "PositionFeatures", "RidgeLearner", "SKILLS",
+    "SeedSchedule", "Skill", "TeachingAnalysis", "TeachingEpisode",
     "Trajectory", "TrajectoryBatch", "TwoLinkArm", "UARM_WORKSPACE_CM", "UArmPlant",
     "UnderdeterminedTeachingWarning", "action_difference", "analyse_demonstrations", "condition_number",
     "optimal_actions", "ridge_operator", "running_under_test", "sample_query_states", "teaching_risk",

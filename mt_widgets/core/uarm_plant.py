@@ -10,7 +10,7 @@ from .workspace import AnnulusSector
 
 #: The teaching workspace in centimetres: 14-30 cm from the base axis, within +-60 degrees of
 #: straight ahead. Kept well inside what the arm reaches at the teaching height (about
-#: 10.5-36 cm at z = 5 cm, per the firmware's kinematics in UARM_PROTOCOL.md), so that no
+#: 10.5-36 cm at z = 5 cm, per the firmware's kinematics in docs/uarm-protocol.md), so that no
 #: reproduction or query state asks the real arm for a place it cannot reach.
 UARM_WORKSPACE_CM = AnnulusSector(r_min=14.0, r_max=30.0, max_yaw_deg=60.0)
 

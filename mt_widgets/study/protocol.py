@@ -71,6 +71,8 @@ except ModuleNotFoundError:  # pragma: no cover - exercised only on Python 3.10
     except ModuleNotFoundError:
         _toml = None
 
+from mt_widgets.core import SKILLS
+
 FORMAT_VERSION = 1
 PROTOCOL_FOLDER = Path(__file__).parent / "protocols"
 #: The protocols shipped with the package, by short name.
@@ -334,7 +336,6 @@ class _Checker:
 
 
 def _skill_keys():
-    from mt_widgets.core import SKILLS  # imported here: the protocol module stays light to import
     return SKILLS
 
 

@@ -73,7 +73,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import mt_widgets
-from mt_widgets.core import SKILLS, SeedSchedule, analyse_demonstrations
+from mt_widgets.core import SKILLS, SeedSchedule, TeachingEpisode
 
 from .log import LogError, MemoryLog, ParticipantLog, StudyFolder, to_jsonable
 from .protocol import Phase, Protocol
@@ -116,9 +116,11 @@ class EpisodeResult:
     Attributes:
         theta_hat: (R, S) the learnt policy.
         teaching_error: E = ||vec(theta_hat) - vec(theta)||.
-        rho1, rho2: the risk decomposition (see ``mt_widgets.core.analyse_demonstrations``).
+        rho1, rho2: the risk decomposition (see ``mt_widgets.core.TeachingEpisode``).
         diverged: whether the reproduction left the plant's bounds.
-        trajectory: the reproduction (a ``Trajectory``) from the skill's start.
+        episode: the ``TeachingEpisode`` recorded (query states, actions, contributions, ...).
+        trajectory: the reproduction (a ``Trajectory``) from the skill's start: the episode's
+            one rollout, made when first read.
     """
 
     phase: str
@@ -130,7 +132,11 @@ class EpisodeResult:
     rho1: float
     rho2: float
     diverged: bool
-    trajectory: object = field(repr=False)
+    teaching_episode: TeachingEpisode = field(repr=False, compare=False)
+
+    @property
+    def trajectory(self):
+        return self.teaching_episode.reproduction
 
 
 @dataclass(frozen=True)
@@ -203,7 +209,7 @@ class Session:
         self._episodes: dict[tuple[int, int], dict] = {}
         self._actions: dict[tuple[int, int], list[np.ndarray]] = {}
         self._finished_episodes: dict[tuple[int, int], dict] = {}
-        self._trajectories: dict[tuple[int, int], object] = {}
+        self._teaching_episodes: dict[tuple[int, int], TeachingEpisode] = {}
         self._entered_at = time.monotonic()
         self._replay(log.events)
 
@@ -363,17 +369,12 @@ class Session:
         participant = self.enrolment["index"] if self.protocol.query_states == "per-participant" else None
         seed = SeedSchedule(self.protocol.seed).seed(phase.states_index, slot.episode - 1, participant)
         states = skill.query_states(seed=seed, n=phase.demonstrations)
-        features = skill.features(states)
-        # The optimal actions do not depend on the demonstrated ones: analysing zero actions
-        # gives them (and 'exact') with numpy alone, which keeps a resumed process from paying
-        # for loading a compiled kernel before the first state appears.
-        teaching = analyse_demonstrations(features, np.zeros((len(states), skill.plant.action_dim)), skill.theta,
-                                          self.protocol.lam)
-        optimal, exact = teaching.optimal, teaching.exact
+        teaching = self._new_teaching_episode(skill, states)
         event = self.log.append(
             "episode_started", phase=phase.id, phase_index=phase.index, episode=slot.episode, skill=phase.skill,
             guidance=phase.guidance_for(self.group), n_demonstrations=phase.demonstrations, query_states=states,
-            features=features, theta=skill.theta, lam=self.protocol.lam, optimal=optimal, exact=exact,
+            features=teaching.features, theta=skill.theta, lam=self.protocol.lam, optimal=teaching.optimal_actions,
+            exact=teaching.exact,
             seed={"study_seed": self.protocol.seed, "spawn_key": list(seed.spawn_key)})
         self._episodes[(phase.index, slot.episode)] = event
 
@@ -424,15 +425,25 @@ class Session:
             return Step("episode_end", **common)
         return Step("reproduction", texts["reproduction"], **common, result=self._result(key))
 
+    def _new_teaching_episode(self, skill, states, actions=()) -> TeachingEpisode:
+        """The episode of ``skill`` on ``states`` with this protocol's lambda and reproduction length."""
+        return TeachingEpisode.from_actions(skill, states, actions, lam=self.protocol.lam,
+                                            duration=self.protocol.reproduction_duration_s)
+
+    def _teaching_episode(self, key) -> TeachingEpisode:
+        """The recorded episode; after a resume, rebuilt from the log's states and actions."""
+        if key not in self._teaching_episodes:
+            started = self._episodes[key]
+            self._teaching_episodes[key] = self._new_teaching_episode(
+                SKILLS[started["skill"]], np.asarray(started["query_states"], dtype=float),
+                np.asarray(self._actions[key], dtype=float))
+        return self._teaching_episodes[key]
+
     def _result(self, key) -> EpisodeResult:
         event = self._finished_episodes[key]
-        if key not in self._trajectories:
-            skill = SKILLS[event["skill"]]
-            self._trajectories[key] = skill.reproduce(np.asarray(event["theta_hat"]),
-                                                      duration=self.protocol.reproduction_duration_s)
         return EpisodeResult(event["phase"], event["phase_index"], event["episode"], event["skill"],
                              np.asarray(event["theta_hat"]), event["teaching_error"], event["rho1"], event["rho2"],
-                             event["reproduction"]["diverged"], self._trajectories[key])
+                             event["reproduction"]["diverged"], self._teaching_episode(key))
 
     # -- driving --------------------------------------------------------------------------------------
     def _expect(self, call: str, *kinds: str) -> _Slot:
@@ -527,8 +538,14 @@ class Session:
         self._complete()
         return Feedback(slot.index, started["guidance"], optimal.copy() if started["guidance"] else None, action)
 
-    def finish_episode(self) -> EpisodeResult:
-        """Learns from the episode's demonstrations, reproduces the skill, logs it all.
+    def finish_episode(self, episode: TeachingEpisode | None = None) -> EpisodeResult:
+        """Records the finished episode (what was learnt, its error and its reproduction) in the log.
+
+        Args:
+            episode: the ``TeachingEpisode`` a view ran on this step's query states with the
+                logged actions (e.g. ``EpisodeWidget.episode``); it is recorded as it is, so its
+                one reproduction serves both the view and the log. None: the session builds it
+                from the logged states and actions (scripts, synthetic teachers).
 
         Returns:
             The ``EpisodeResult`` (the next step is the reproduction).
@@ -536,23 +553,46 @@ class Session:
         slot = self._expect("finish_episode", "episode_end")
         key = (slot.phase_index, slot.episode)
         started = self._episodes[key]
-        skill = SKILLS[started["skill"]]
-        U = np.array(self._actions[key])
-        analysis = analyse_demonstrations(np.asarray(started["features"]), U, skill.theta, self.protocol.lam)
-        trajectory = skill.reproduce(analysis.theta_hat, duration=self.protocol.reproduction_duration_s)
-        self._trajectories[key] = trajectory
+        if episode is not None:
+            self._check_recorded(episode, started, key)
+            self._teaching_episodes[key] = episode
+        teaching = self._teaching_episode(key)
+        trajectory = teaching.reproduction
         self.log.append(
             "episode_finished", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
-            skill=started["skill"], guidance=started["guidance"], actions=U, optimal=analysis.optimal,
-            theta_hat=analysis.theta_hat, teaching_error=analysis.risk, rho1=analysis.rho1, rho2=analysis.rho2,
-            bound=analysis.bound, residual=analysis.residual, contributions=analysis.contributions,
-            exact=analysis.exact,
+            skill=started["skill"], guidance=started["guidance"], actions=teaching.actions,
+            optimal=teaching.optimal_actions, theta_hat=teaching.theta_hat, teaching_error=teaching.error,
+            rho1=teaching.rho1, rho2=teaching.rho2, bound=teaching.bound, residual=teaching.residual_norm,
+            contributions=teaching.contribution_norms, exact=teaching.exact,
             reproduction={"diverged": trajectory.diverged, "diverged_at": trajectory.diverged_at,
                           "final_position": trajectory.final_position, "duration_s": float(trajectory.times[-1])},
             started_at=started["time"], duration_s=max(0.0, time.time() - _parse_time(started["time"])))
         self._finished_episodes[key] = self.log.events[-1]
         self._complete()
         return self._result(key)
+
+    def _check_recorded(self, episode, started: dict, key) -> None:
+        """Refuses an episode that is not the one this step logged (other states, actions, lambda...)."""
+        if not isinstance(episode, TeachingEpisode):
+            raise ValueError(f"episode: expected a TeachingEpisode or None, got {type(episode).__name__}")
+        logged = np.asarray(self._actions[key], dtype=float)
+        duration = self.protocol.reproduction_duration_s
+        duration = SKILLS[started["skill"]].default_duration if duration is None else duration
+        checks = (
+            ("skill", episode.skill.key == started["skill"]
+             and np.array_equal(episode.skill.theta, np.asarray(started["theta"], dtype=float)),
+             f"the skill {started['skill']!r} and its theta", repr(episode.skill.key)),
+            ("lam", episode.lam == self.protocol.lam, f"the protocol's lam {self.protocol.lam}", episode.lam),
+            ("duration", episode.duration == duration, f"the protocol's reproduction of {duration} s",
+             episode.duration),
+            ("query_states", np.array_equal(episode.query_states, np.asarray(started["query_states"], dtype=float)),
+             "this step's logged query states", "other states"),
+            ("actions", episode.complete and np.array_equal(episode.actions, logged),
+             f"the {len(logged)} logged actions, all given", f"{len(episode.demonstrations)} other or fewer"),
+        )
+        for name, ok, wanted, got in checks:
+            if not ok:
+                raise ValueError(f"episode: expected a TeachingEpisode with {wanted} (episode.{name}), got {got}")
 
     def close(self) -> None:
         """Releases the participant's log (the session can be resumed later)."""

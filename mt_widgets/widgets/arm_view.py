@@ -20,6 +20,8 @@ import numpy as np
 from ipycanvas import MultiCanvas
 from ipywidgets import Layout
 
+from mt_widgets.core.validation import as_bool
+
 from .coords import ViewTransform, nice_ticks
 from .redraw import drawing_batch, repaint_on_new_view
 from .robots import painter_for
@@ -262,6 +264,7 @@ class ArmView:
         state = np.array(state, dtype=float)
         if state.shape != (self.skill.state_dim,):
             raise ValueError(f"state: expected shape ({self.skill.state_dim},), got {state.shape}")
+        show_velocity = as_bool("show_velocity", show_velocity)
         self.show(lambda c: self.painter.draw_state(c, self.transform, self.theme, state, show_velocity), "robot")
 
     def end_effector_pixel(self, state) -> np.ndarray:

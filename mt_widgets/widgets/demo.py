@@ -11,6 +11,7 @@ from __future__ import annotations
 from ipywidgets import HTML, Box, Button, Checkbox, Layout, ToggleButtons, VBox
 
 from mt_widgets.core import SKILLS
+from mt_widgets.core.validation import as_bool
 
 from .episode import EpisodeResult, EpisodeWidget
 
@@ -57,7 +58,7 @@ class DemoPage(VBox):
         self.skill_chooser = ToggleButtons(options=list(DEMO_SKILLS), value=skill, description="Skill:",
                                            style={"button_width": "150px"},
                                            tooltips=[SKILLS[key].title for key in keys])
-        self.guidance_switch = Checkbox(value=bool(guidance), description="Guidance: show the best arrow after "
+        self.guidance_switch = Checkbox(value=as_bool("guidance", guidance), description="Guidance: show the best arrow after "
                                         "each of mine", indent=False, layout=Layout(width="auto"))
         self.new_states_button = Button(description="Try again with new states", icon="refresh",
                                         layout=Layout(width="auto"))
@@ -75,7 +76,7 @@ class DemoPage(VBox):
 
     def start_episode(self, new_states: bool = False) -> EpisodeWidget:
         """Replace the episode with a fresh one for the chosen skill and guidance setting."""
-        if new_states:
+        if as_bool("new_states", new_states):
             self.seed += 1
         if self.episode is not None:
             # A kiosk page may run for hours: the replaced episode's widgets leave the kernel too.

@@ -1,4 +1,4 @@
-"""One teaching episode: query states, demonstrations, guidance, learning, reproduction, error.
+"""One teaching episode on screen: query states, demonstrations, guidance, reproduction, error.
 
 Three lines give a full episode in a notebook::
 
@@ -6,28 +6,27 @@ Three lines give a full episode in a notebook::
     episode = EpisodeWidget("sim-point", guidance=True)
     episode
 
-The science comes from ``mt_widgets.core``: ``skill.features``, ``optimal_actions``,
-``RidgeLearner``, ``teaching_risk`` and ``skill.reproduce``; this widget sequences them and
-draws their results. A study runner drives it through constructor arguments, the
-observable traits (``phase``, ``state_index``, ``demonstrations``, ``error``) and the two
-callbacks ``on_demonstration`` and ``on_finished``.
+The episode itself is a ``mt_widgets.core.TeachingEpisode`` (``widget.episode``): it holds the
+query states, the optimal actions, the demonstrations with their analysis, what the robot
+learnt, the error and the reproduction (rolled out once). This widget only shows it: it takes
+the arrows, hands each to the episode, draws the guidance and plays the reproduction the
+episode gives. A study runner drives it through constructor arguments, the observable traits
+(``phase``, ``state_index``, ``demonstrations``, ``error``) and the two callbacks
+``on_demonstration`` and ``on_finished``.
 """
 
 from __future__ import annotations
 
 import time
-import warnings
-import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
 from ipywidgets import HTML, Button, Layout, VBox
 from traitlets import Float, Int, List, Unicode
 
-from mt_widgets.core import (DEFAULT_LAMBDA, SKILLS, RidgeLearner, UnderdeterminedTeachingWarning,
-                             optimal_actions, teaching_risk)
-from mt_widgets.core.validation import as_float_array, as_positive
+from mt_widgets.core import DEFAULT_LAMBDA, SKILLS, Skill, TeachingEpisode
+from mt_widgets.core.validation import as_bool, as_float_array, as_positive
 
 from .callbacks import Callbacks
 from .guidance import GuidancePanel
@@ -71,7 +70,7 @@ class DemonstrationRecord:
 
 @dataclass(frozen=True)
 class EpisodeResult:
-    """What an episode produced.
+    """What an episode produced (read from its ``TeachingEpisode``).
 
     Attributes:
         skill_key: The skill's key.
@@ -81,9 +80,10 @@ class EpisodeResult:
         lam: The learner's ridge parameter.
         theta_hat: (R, S) the learnt policy.
         error: The teaching error E = ||vec(theta_hat) - vec(theta)||.
-        trajectory: The learnt skill's reproduction (a core ``Trajectory``).
+        trajectory: The learnt skill's reproduction (a core ``Trajectory``; the episode's one rollout).
         diverged: True if the reproduction diverged.
         feedback_latency_s: Seconds from the last confirmation to the animation sent.
+        episode: The ``TeachingEpisode`` all of the above comes from (rho1, rho2, contributions, ...).
     """
 
     skill_key: str
@@ -96,43 +96,26 @@ class EpisodeResult:
     trajectory: object
     diverged: bool
     feedback_latency_s: float
+    episode: TeachingEpisode | None = field(default=None, repr=False, compare=False)
 
 
-def _resolve_skill(skill):
+def _resolve_skill(skill) -> Skill:
     if isinstance(skill, str):
         if skill not in SKILLS:
             raise ValueError(f"skill: expected a Skill or one of {sorted(SKILLS)}, got {skill!r}")
         return SKILLS[skill]
-    for name in ("theta", "features", "reproduce", "query_states", "robot"):
-        if not hasattr(skill, name):
-            raise ValueError(f"skill: expected a Skill (with .{name}) or a skill key, got {type(skill).__name__}")
+    if not isinstance(skill, Skill):
+        raise ValueError(f"skill: expected a Skill, a TeachingEpisode or a skill key, got {type(skill).__name__}")
     return skill
-
-
-#: skill -> {duration: the target skill's own rollout}. Keyed by the skill object itself (a Skill
-#: hashes by identity), weakly: an entry goes with its skill, and a new skill that happens to
-#: get a freed skill's id never gets that skill's ghost.
-_GHOSTS: "weakref.WeakKeyDictionary[object, dict[float, object]]" = weakref.WeakKeyDictionary()
-
-
-def _target_rollout(skill, duration: float):
-    # The target skill's own motion depends only on the skill and duration: computed once.
-    duration = float(duration)
-    try:
-        ghosts = _GHOSTS.setdefault(skill, {})
-    except TypeError:  # a skill-like object that cannot be weakly referenced: not cached
-        return skill.reproduce(skill.theta, duration=duration)
-    if duration not in ghosts:
-        ghosts[duration] = skill.reproduce(skill.theta, duration=duration)
-    return ghosts[duration]
 
 
 class EpisodeWidget(VBox):
     """A full teaching episode.
 
     Args:
-        skill: A ``Skill`` or a key of ``mt_widgets.SKILLS`` ("sim-point", "sim-line",
-            "uarm-point", "uarm-line").
+        skill: A ``Skill``, a key of ``mt_widgets.SKILLS`` ("sim-point", "sim-line",
+            "uarm-point", "uarm-line"), or a ``TeachingEpisode`` to show (then leave
+            ``query_states`` and ``duration`` unset; its demonstrations so far are shown).
         query_states: (N, state_dim) states to demonstrate at; default
             ``skill.query_states(seed=seed)`` (N = S, the teaching dimension).
         seed: Seed for the default query states.
@@ -168,23 +151,24 @@ class EpisodeWidget(VBox):
                  title: str | None = None, fps: float = 60.0, width=None, height=None, css_width=None,
                  action_length=None, target_label: str | None = "goal", show_description: bool = True,
                  show_outcome: bool = True):
-        self.skill = _resolve_skill(skill)
-        self.lam = as_positive("lam", lam, allow_zero=True)
-        self.guidance = bool(guidance)
-        self.duration = float(self.skill.default_duration if duration is None else duration)
-        if not self.duration > 0:
-            raise ValueError(f"duration: expected a positive number of seconds, got {duration!r}")
-        self.show_ghost = bool(ghost)
+        if isinstance(skill, TeachingEpisode):
+            for name, value in (("query_states", query_states), ("duration", duration)):
+                if value is not None:
+                    raise ValueError(f"{name}: expected None when a TeachingEpisode is shown (it has its own), "
+                                     f"got {value!r}"[:200])
+            lam = as_positive("lam", lam, allow_zero=True)
+            if lam not in (DEFAULT_LAMBDA, skill.lam):
+                raise ValueError(f"lam: expected the shown TeachingEpisode's own ({skill.lam}), got {lam}")
+            episode = skill
+        else:
+            episode = TeachingEpisode(_resolve_skill(skill), query_states,
+                                      seed=None if query_states is not None else seed, lam=lam, duration=duration)
+        #: The ``TeachingEpisode`` shown: the science of this episode lives there.
+        self.episode = episode
+        self.guidance = as_bool("guidance", guidance)
+        self.show_ghost = as_bool("ghost", ghost)
+        show_description = as_bool("show_description", show_description)
         self.episode_index = int(episode_index)
-        states = self.skill.query_states(seed=seed) if query_states is None else np.asarray(query_states, float)
-        if states.ndim != 2 or states.shape[1] != self.skill.state_dim:
-            raise ValueError(f"query_states: expected shape (N, {self.skill.state_dim}), got {states.shape}")
-        self.query_states = states
-        self.features = self.skill.features(states)
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", UnderdeterminedTeachingWarning)
-            self.optimal = optimal_actions(self.features, self.skill.theta, self.lam)
-        self.exact = not any(issubclass(w.category, UnderdeterminedTeachingWarning) for w in caught)
         self.result: EpisodeResult | None = None
         self.records: list[DemonstrationRecord] = []
         # Errors in callbacks propagate (ipywidgets' dispatcher would swallow them): a
@@ -198,10 +182,10 @@ class EpisodeWidget(VBox):
 
         view_args = dict(theme=theme, width=width, height=height, css_width=css_width, action_length=action_length,
                          target_label=target_label)
-        self.teaching = TeachingCanvas(self.skill, states, auto_advance=False, **view_args)
+        self.teaching = TeachingCanvas(self.skill, self.query_states, auto_advance=False, **view_args)
         self.theme = self.teaching.theme
         self.player = ReproductionPlayer(self.skill, fps=fps, show_outcome=show_outcome, **view_args)
-        self.progress = EffortProgress(len(states), max(int(episodes_total), self.episode_index + 1),
+        self.progress = EffortProgress(len(self.query_states), max(int(episodes_total), self.episode_index + 1),
                                        episodes_done=self.episode_index)
         self.guidance_panel = GuidancePanel(self.theme, self.skill.action_units)
         self.next_button = Button(description="Next state", icon="arrow-right", button_style="primary",
@@ -217,6 +201,41 @@ class EpisodeWidget(VBox):
                           self.player])
         if demonstrations is not None and len(demonstrations):
             self.restore(demonstrations)
+        elif self.episode.demonstrations:  # an episode resumed in core: show what it holds
+            self.restore(self.episode.actions)
+
+    # -- the episode's facts, as the widget's attributes ------------------------------------------------
+    @property
+    def skill(self) -> Skill:
+        return self.episode.skill
+
+    @property
+    def query_states(self) -> np.ndarray:
+        """(N, state_dim) the episode's query states."""
+        return self.episode.query_states
+
+    @property
+    def features(self) -> np.ndarray:
+        """(N, S) Phi."""
+        return self.episode.features
+
+    @property
+    def optimal(self) -> np.ndarray:
+        """(N, R) the optimal actions U_bar."""
+        return self.episode.optimal_actions
+
+    @property
+    def exact(self) -> bool:
+        return self.episode.exact
+
+    @property
+    def lam(self) -> float:
+        return self.episode.lam
+
+    @property
+    def duration(self) -> float:
+        """Seconds of the reproduction."""
+        return self.episode.duration
 
     # -- callbacks --------------------------------------------------------------------------------------
     def on_demonstration(self, callback: Callable[[DemonstrationRecord], None], remove: bool = False) -> None:
@@ -264,7 +283,8 @@ class EpisodeWidget(VBox):
         """Take already-given demonstrations (k, R) when resuming; finishes if all are there.
 
         Args:
-            demonstrations: (k, R) actions, k <= N, R = ``skill.plant.action_dim``.
+            demonstrations: (k, R) actions, k <= N, R = ``skill.plant.action_dim``. The episode
+                keeps the demonstrations it already holds when they are the first of these.
         """
         action_dim = self.skill.plant.action_dim
         if len(demonstrations) == 0:
@@ -277,29 +297,34 @@ class EpisodeWidget(VBox):
         if len(actions) > len(self.query_states):
             raise ValueError(f"demonstrations: expected at most {len(self.query_states)} (one per query state), "
                              f"got {len(actions)}")
+        held = self.episode.actions
+        if len(held) <= len(actions) and np.array_equal(held, actions[:len(held)]):
+            self.episode.restore(actions[len(held):])
+        else:  # other actions than the episode holds: a fresh episode on the same states takes them
+            self.episode = TeachingEpisode.from_actions(self.skill, self.query_states, actions, lam=self.lam,
+                                                        duration=self.duration)
         self.teaching.restore(actions)
         self.progress.demonstrations_done = len(actions)
         if len(actions) == len(self.query_states):
             self.finish()
 
     def finish(self) -> EpisodeResult:
-        """Learn from the demonstrations, play the reproduction, show the error."""
-        if len(self.teaching.demonstrations) != len(self.query_states):
+        """Show what the robot learnt: play the episode's reproduction and show the error."""
+        episode = self.episode
+        if not episode.complete:
             raise RuntimeError(f"finish: expected {len(self.query_states)} demonstrations, "
-                               f"got {len(self.teaching.demonstrations)}")
+                               f"got {len(episode.demonstrations)}")
         started = time.perf_counter()
-        U = np.array(self.teaching.demonstrations, dtype=float)
-        theta_hat = RidgeLearner(lam=self.lam).fit(self.features, U)
-        error = teaching_risk(theta_hat, self.skill.theta)
-        trajectory = self.skill.reproduce(theta_hat, duration=self.duration)
-        ghost = _target_rollout(self.skill, self.duration) if self.show_ghost else None
-        self.player.play(trajectory, error=error, ghost=ghost)
+        trajectory = episode.reproduction
+        ghost = episode.target_reproduction if self.show_ghost else None
+        self.player.play(trajectory, error=episode.error, ghost=ghost)
         latency = time.perf_counter() - started
         self.teaching._set_locked(True)
         self.progress.episodes_done = min(self.episode_index + 1, self.progress.episode_budget)
-        self.result = EpisodeResult(self.skill.key, self.query_states.copy(), U, self.optimal.copy(), self.lam,
-                                    theta_hat, float(error), trajectory, bool(trajectory.diverged), latency)
-        self.error = float(error)
+        self.result = EpisodeResult(self.skill.key, self.query_states.copy(), episode.actions,
+                                    self.optimal.copy(), self.lam, episode.theta_hat, episode.error, trajectory,
+                                    bool(trajectory.diverged), latency, episode)
+        self.error = episode.error
         self.phase = "finished"
         self._finished_callbacks(self.result)
         return self.result
@@ -318,6 +343,7 @@ class EpisodeWidget(VBox):
         # propagates through the canvas's confirm and nothing below happens, so the participant
         # never sees guidance for, or moves past, a demonstration that is not on disk.
         self._demonstration_callbacks(record)
+        self.episode.demonstrate(confirmed.action)
         self.teaching._record(confirmed)
         self.records.append(record)
         self.progress.demonstrations_done = index + 1

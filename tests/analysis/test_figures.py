@@ -6,15 +6,15 @@ import numpy as np
 import pytest
 
 from mt_widgets.core import SKILLS
-from mt_widgets.study.figures import (
+from mt_widgets.analysis.figures import (
     plot_changes,
     plot_error_by_episode,
     plot_trajectories,
     save_figure,
     teaching_report,
 )
-from mt_widgets.study.in_silico import run_in_silico
-from mt_widgets.study.statistics import participant_changes
+from mt_widgets.in_silico.engine import run_in_silico
+from mt_widgets.analysis.statistics import participant_changes
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from mt_widgets.apps.uarm_bridge import UArmBridge
+from mt_widgets.hardware.bridge import UArmBridge
 from mt_widgets.hardware import SwiftPro
 
 from .helpers import sim_url

@@ -10,7 +10,7 @@ import pytest
 from ipywidgets import Button
 
 from mt_widgets.apps.study_app import participant_texts
-from mt_widgets.apps.uarm_bridge import arm_to_plant_cm
+from mt_widgets.hardware.bridge import arm_to_plant_cm
 from mt_widgets.apps.uarm_study import UArmEpisodePage, UArmStudyApp, UArmTeaching
 from mt_widgets.core import Trajectory
 from mt_widgets.hardware import SwiftPro

@@ -171,24 +171,6 @@ def test_a_confirm_button_click_whose_callback_fails_does_not_record_the_arrow()
     assert episode.phase == "teaching" and episode.demonstrations == [] and episode.records == []
 
 
-def test_the_ghost_is_the_skills_own_motion_even_when_an_id_is_reused_and_dies_with_the_skill(monkeypatch):
-    import dataclasses
-    import gc
-
-    from mt_widgets.widgets import episode as episode_module
-    base = SKILLS["sim-point"]
-    slow, fast = (dataclasses.replace(base, theta=base.theta * k) for k in (0.5, 2.0))
-    # CPython reuses the id of a freed object: make every skill share one, as a reused id would.
-    monkeypatch.setattr(episode_module, "id", lambda obj: 7, raising=False)
-    for skill in (slow, fast):
-        ghost = episode_module._target_rollout(skill, 1.0)
-        np.testing.assert_allclose(ghost.positions, skill.reproduce(skill.theta, duration=1.0).positions)
-    before = len(episode_module._GHOSTS)
-    del slow, fast, skill
-    gc.collect()
-    assert len(episode_module._GHOSTS) == before - 2, "the cache keeps ghosts of skills that are gone"
-
-
 def test_restored_demonstrations_of_the_wrong_shape_are_refused_by_name_not_reshaped():
     skill = SKILLS["uarm-point"]
     episode = EpisodeWidget(skill, seed=3, guidance=False)
@@ -205,3 +187,29 @@ def test_restored_demonstrations_of_the_wrong_shape_are_refused_by_name_not_resh
     episode.restore([])
     episode.restore(np.zeros((0, 2)))
     assert episode.state_index == 0
+
+
+@pytest.mark.parametrize("guidance", [True, False])
+def test_the_typed_arrow_fields_start_empty_at_each_new_state(guidance):
+    skill = SKILLS["sim-point"]
+    episode = EpisodeWidget(skill, seed=2, guidance=guidance)
+    teaching = episode.teaching
+    for mode in ("components", "polar"):
+        teaching.entry_mode.value = mode
+        teaching.first_entry.value, teaching.second_entry.value = 30.0, 2.0
+        teaching.set_button.click()
+        assert teaching.pending_action is not None
+        teaching.confirm_button.click()
+        if guidance:
+            episode.next()
+        # The next state: no arrow yet, and nothing typed that "Set arrow" would re-apply.
+        assert teaching.pending_action is None
+        assert (teaching.first_entry.value, teaching.second_entry.value) == (0.0, 0.0)
+        teaching.set_button.click()
+        assert teaching.pending_action == [0.0, 0.0], "Set arrow re-applied the previous state's arrow"
+        teaching.clear_action()
+    teaching.set_action([1.5, -0.5])
+    teaching.entry_mode.value = "components"
+    assert (teaching.first_entry.value, teaching.second_entry.value) == (1.5, -0.5), "the fields show the arrow"
+    teaching.clear_action()
+    assert (teaching.first_entry.value, teaching.second_entry.value) == (0.0, 0.0)

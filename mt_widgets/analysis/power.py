@@ -5,7 +5,7 @@ statistic distributed as the noncentral t with df = 2n - 2 and noncentrality d s
 (scipy.stats.nct). With the paper's settings (d = 0.9, alpha = 0.05, power 0.8, one-tailed,
 as in G*Power 3.1) the smallest n is 16 per group, 32 in all.
 
-By simulation: many in-silico studies of synthetic teachers (``mt_widgets.study.in_silico``)
+By simulation: many in-silico studies of synthetic teachers (``mt_widgets.in_silico``)
 are run through the protocol and analysed with the test the real study will use; the share of
 studies in which the test rejects is the power. Unlike the analytic figure it needs no
 assumed effect size: the effect is whatever the teacher models produce.
@@ -16,9 +16,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 from scipy import stats
 
-from .statistics import _check_alternative
+from mt_widgets.in_silico.engine import run_many_studies
+
+from .statistics import PAPER_CHANGES, check_alternative, hedges_correction
 
 
 def _check_level(name: str, value: float) -> float:
@@ -44,7 +47,7 @@ def analytic_power(n_per_group: int, effect_size: float, alpha: float = 0.05,
     if isinstance(n_per_group, bool) or not isinstance(n_per_group, (int, np.integer)) or n_per_group < 2:
         raise ValueError(f"n_per_group: expected a whole number >= 2, got {n_per_group!r}")
     alpha = _check_level("alpha", alpha)
-    alternative = _check_alternative(alternative)
+    alternative = check_alternative(alternative)
     df = 2 * n_per_group - 2
     noncentrality = float(effect_size) * np.sqrt(n_per_group / 2)
     if alternative == "greater":
@@ -117,7 +120,6 @@ class SimulatedPower:
 
     def table(self):
         """One row per (change, test) with power, its standard error and the mean effect."""
-        import pandas as pd
         rows = [{"change": change, "test": test, "power": value, "mc_se": self.standard_error(change, test),
                  "mean_hedges_g": self.mean_effect[change], "n_per_group": self.n_per_group,
                  "n_studies": self.n_studies, "alpha": self.alpha}
@@ -127,7 +129,6 @@ class SimulatedPower:
 
 def _hedges_g_columns(target: np.ndarray, control: np.ndarray) -> np.ndarray:
     """Hedges' g of each row of two (studies, n) arrays, vectorised over studies."""
-    from .statistics import hedges_correction
     n1, n2 = target.shape[1], control.shape[1]
     pooled = np.sqrt(((n1 - 1) * target.var(axis=1, ddof=1) + (n2 - 1) * control.var(axis=1, ddof=1))
                      / (n1 + n2 - 2))
@@ -162,10 +163,8 @@ def simulated_power(n_per_group: int = 16, n_studies: int = 1000, alpha: float =
         A ``SimulatedPower``: the power of Welch's t-test ("welch") and of the Mann-Whitney U
         test ("mannwhitney") on each change.
     """
-    from .in_silico import run_many_studies
-    from .statistics import PAPER_CHANGES
     alpha = _check_level("alpha", alpha)
-    alternative = _check_alternative(alternative)
+    alternative = check_alternative(alternative)
     changes = PAPER_CHANGES if changes is None else tuple(changes)
     deltas = run_many_studies(n_studies, n_per_group, seed=seed, parameters=parameters, changes=changes,
                               progress=progress, protocol=protocol, share_states=share_states,

@@ -10,31 +10,21 @@ import pytest
 from mt_widgets.core import SKILLS
 from scipy import stats
 
-from mt_widgets.study.in_silico import (
-    Progress,
-    baseline_comparison,
-    compare_with_paper,
-    episode_plan,
-    imagined_line_target,
-    paper_changes,
-    paper_results,
-    resolve_protocol,
-    run_in_silico,
-    run_many_studies,
-    run_through_sessions,
-    teacher_seed,
-)
-from mt_widgets.study.power import simulated_power
-from mt_widgets.study.synthetic_teachers import (
+from mt_widgets.analysis.paper_comparison import baseline_comparison, compare_with_paper
+from mt_widgets.analysis.power import simulated_power
+from mt_widgets.in_silico.engine import run_in_silico, run_many_studies
+from mt_widgets.in_silico.paper_results import implied_baselines, paper_changes, paper_results
+from mt_widgets.in_silico.plan import episode_plan, imagined_line_target, paper_fit, resolve_protocol, teacher_seed
+from mt_widgets.in_silico.progress import Progress
+from mt_widgets.in_silico.sessions import run_through_sessions
+from mt_widgets.in_silico.teachers import (
     OPTIMAL_TEACHER,
     PAPER_FIT,
     PAPER_FIT_UARM,
     TeacherParameters,
     TeacherPopulation,
-    implied_baselines,
     line_foot,
     naive_offsets,
-    paper_fit,
     with_parameters,
 )
 
@@ -274,8 +264,8 @@ def test_progress_prints_a_text_line_outside_a_kernel(capsys):
 
 
 def test_the_study_analysis_imports_without_widgets():
-    code = ("import sys, mt_widgets.study.in_silico, mt_widgets.study.figures, mt_widgets.study.power, "
-            "mt_widgets.study.synthetic_teachers, mt_widgets.study.statistics; "
+    code = ("import sys, mt_widgets.in_silico, mt_widgets.analysis.figures, mt_widgets.analysis.power, "
+            "mt_widgets.in_silico.teachers, mt_widgets.analysis.statistics, mt_widgets.analysis; "
             "print(any(m in sys.modules for m in ('ipywidgets', 'ipycanvas', 'serial')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
@@ -289,8 +279,8 @@ def test_the_plan_follows_the_protocol():
 
 @pytest.mark.parametrize("which", ["sim", "uarm"])
 def test_the_shipped_synthetic_studies_are_what_the_current_model_writes(which, tmp_path):
-    # Fails when the teacher model or a fit changes without ``python -m mt_widgets.study.analysis``.
-    from mt_widgets.study import analysis
+    # Fails when the teacher model or a fit changes without ``python -m mt_widgets.analysis.example_studies``.
+    from mt_widgets.analysis import example_studies as analysis
     from mt_widgets.study.tidy import read_study
     folder, settings = {"sim": (analysis.EXAMPLE_STUDY, analysis.EXAMPLE_SETTINGS),
                         "uarm": (analysis.EXAMPLE_UARM_STUDY, analysis.EXAMPLE_UARM_SETTINGS)}[which]

@@ -55,7 +55,8 @@ engine, one demonstration at a time) therefore gets exactly the same arrows.
 ``PAPER_FIT`` holds parameters fitted (``fit_to_paper``) so that an in-silico run of the
 paper's simulation protocol lands near the paper's reported changes; ``PAPER_FIT_UARM`` the
 same model's parameters fitted to the physical (uArm) experiment. ``paper_fit(protocol)``
-picks the one for a protocol.
+(``mt_widgets.in_silico.plan``) picks the one for a protocol; ``mt_widgets.in_silico.fitting``
+fits them.
 """
 
 from __future__ import annotations
@@ -63,6 +64,8 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
+
+from mt_widgets.core import LineTarget
 
 #: Standard-normal draws kept per demonstration: direction slip, magnitude slip, the time to
 #: the first input and the drawing time.
@@ -175,33 +178,14 @@ UARM_FITTED_FIELDS = ("magnitude", "exploration", "learning_rate", "learning_spr
                       "retention", "transfer", "line_as_point")
 
 
-def runs_on_uarm(protocol) -> bool:
-    """Whether a ``Protocol`` teaches skills of the uArm (its phases' skills run on the uArm plant)."""
-    from mt_widgets.core import SKILLS
-    return any(type(SKILLS[phase.skill].plant).__name__ == "UArmPlant" for phase in protocol.phases)
-
-
-def paper_fit(protocol=None) -> TeacherParameters:
-    """The parameters fitted to the paper's experiment that ``protocol`` replicates.
-
-    Args:
-        protocol: a ``Protocol``, a shipped name ("paper-sim", "paper-uarm") or a path
-            (default "paper-sim").
-
-    Returns:
-        ``PAPER_FIT_UARM`` for a protocol on the uArm, else ``PAPER_FIT``.
-    """
-    from .in_silico import resolve_protocol
-    return PAPER_FIT_UARM if runs_on_uarm(resolve_protocol(protocol)) else PAPER_FIT
-
-
 #: A teacher who already knows the skill and draws without slips: the machine-teaching optimum.
 OPTIMAL_TEACHER = TeacherParameters(magnitude=1.0, magnitude_spread=0.0, direction_noise=0.0, magnitude_noise=0.0,
                                     exploration=0.0, learning_rate=0.0, learning_spread=0.0, retention=1.0,
                                     transfer=1.0, initial_understanding=1.0, timing_spread=0.0)
 
 
-def _logit(p: float) -> float:
+def logit(p: float) -> float:
+    """log(p / (1 - p)), with p kept inside (0, 1)."""
     p = min(max(p, 1e-9), 1 - 1e-9)
     return float(np.log(p / (1 - p)))
 
@@ -224,7 +208,7 @@ def naive_offsets(positions: np.ndarray, target) -> np.ndarray:
     """
     positions = np.asarray(positions, dtype=float)
     point = np.asarray(target.point, dtype=float)
-    if hasattr(target, "direction"):
+    if isinstance(target, LineTarget):
         along = np.asarray(target.direction, dtype=float)
         offset = positions - point
         nearest = point + (offset @ along)[..., None] * along
@@ -250,7 +234,7 @@ def along_line_offsets(positions: np.ndarray, target, anchor) -> np.ndarray:
         (..., 2) offsets along the line; zeros for a point target or without an anchor.
     """
     positions = np.asarray(positions, dtype=float)
-    if anchor is None or not hasattr(target, "direction"):
+    if anchor is None or not isinstance(target, LineTarget):
         return np.zeros_like(positions)
     anchor = np.asarray(anchor, dtype=float)
     if anchor.shape != (2,) or not np.all(np.isfinite(anchor)):
@@ -290,7 +274,7 @@ class TeacherPopulation:
         if p.learning_rate == 0:
             self.learning_rate = np.zeros(len(self.traits))
         else:
-            self.learning_rate = 1 / (1 + np.exp(-(_logit(p.learning_rate) + p.learning_spread * self.traits[:, 1])))
+            self.learning_rate = 1 / (1 + np.exp(-(logit(p.learning_rate) + p.learning_spread * self.traits[:, 1])))
         self.understanding = np.full(len(self.traits), float(p.initial_understanding))
         self.guided_skills: dict[str, np.ndarray] = {}
 
@@ -396,166 +380,3 @@ def with_parameters(base: TeacherParameters, **changes) -> TeacherParameters:
     """``base`` with some fields changed (validated)."""
     return replace(base, **changes)
 
-
-# -- fitting to the paper -------------------------------------------------------------------------
-
-#: The fields ``fit_to_paper`` can adjust, with the transform that keeps each in its range.
-TRANSFORMS = {
-    "magnitude": "log", "magnitude_spread": "log", "direction_noise": "log", "magnitude_noise": "log",
-    "exploration": "log", "learning_rate": "logit", "learning_spread": "log", "reproduction_learning": "logit",
-    "retention": "logit", "transfer": "logit", "line_as_point": "logit",
-}
-
-#: The fields fitted by default. The drawing slips (``direction_noise``, ``magnitude_noise``)
-#: are held at the start's values: fitted freely they shrink to nothing (the paper's small SDs
-#: leave no room for them), yet a hand never draws the same arrow twice, so they stay at a
-#: modest assumed size (0.05 rad, about 3 degrees, and 5 % in length).
-FITTED_FIELDS = ("magnitude", "magnitude_spread", "exploration", "learning_rate", "learning_spread",
-                 "reproduction_learning", "retention", "transfer", "line_as_point")
-
-
-def _to_free(parameters: TeacherParameters, names) -> np.ndarray:
-    values = []
-    for name in names:
-        value = getattr(parameters, name)
-        values.append(np.log(max(value, 1e-6)) if TRANSFORMS[name] == "log" else _logit(value))
-    return np.array(values)
-
-
-def _from_free(free: np.ndarray, base: TeacherParameters, names) -> TeacherParameters:
-    changes = {}
-    for value, name in zip(free, names):
-        changes[name] = float(np.exp(value)) if TRANSFORMS[name] == "log" else float(1 / (1 + np.exp(-value)))
-    # Rates must stay below 1 and shares at most 1: the logistic keeps them there except at
-    # the edges of floating point.
-    for name in ("learning_rate", "reproduction_learning"):
-        if name in changes:
-            changes[name] = min(changes[name], 0.999)
-    return replace(base, **changes)
-
-
-#: Which change each printed percentage reduction of the target group belongs to.
-_PERCENT_OF_CHANGE = {"during_P3": "P1_to_P3E8", "P3E8_vs_P1": "P1_to_P3E8", "P4_vs_P1": "P1_to_P4",
-                      "P5_vs_P2": "P2_to_P5"}
-
-
-def _baselines_by_change(reference: dict, experiment: str) -> dict:
-    """{change: the target group's baseline error implied by its change and % reduction}; a change
-    without a printed percentage borrows the value of another with the same baseline episode."""
-    from .in_silico import paper_changes
-    from .statistics import PAPER_CHANGES
-    changes = paper_changes(reference, experiment)
-    implied = {}
-    for key, percent in reference[experiment]["percent_reduction_target"].items():
-        name = _PERCENT_OF_CHANGE.get(key)
-        if name in changes:
-            implied[name] = -changes[name]["target"]["mean"] / (percent / 100)
-    before = {c.name: c.before for c in PAPER_CHANGES}
-    for name in changes:
-        if name not in implied:
-            same = [implied[other] for other in implied if before.get(other) == before.get(name)]
-            if same:
-                implied[name] = float(np.mean(same))
-    return implied
-
-
-def implied_baselines(reference: dict | None = None, experiment: str = "simulation") -> dict:
-    """The paper's baseline errors, by phase, implied by its changes and percentage reductions.
-
-    The paper prints no baseline means, but every target-group change with a percentage gives
-    one: baseline = -change / percent (simulation P2: 1.47 / 50.03 % = 2.94). Where two
-    percentages give the same baseline (simulation P1, from P3E8 and from P4) their mean is
-    used.
-
-    Args:
-        reference: the paper's results (default the shipped ones).
-        experiment: "simulation" or "physical".
-
-    Returns:
-        {phase: baseline teaching error}, e.g. {"P1": 2.93, "P2": 2.94}.
-    """
-    from .in_silico import paper_results
-    from .statistics import PAPER_CHANGES
-    reference = paper_results() if reference is None else reference
-    by_change = _baselines_by_change(reference, experiment)
-    phases: dict[str, list] = {}
-    for change in PAPER_CHANGES:
-        if change.name in by_change:
-            phases.setdefault(change.before[0], []).append(by_change[change.name])
-    return {phase: float(np.mean(values)) for phase, values in phases.items()}
-
-
-def paper_targets(reference: dict | None = None, experiment: str = "simulation") -> dict:
-    """What the fit aims at: the paper's change means and SDs per group (every row as later minus
-    earlier) and the target group's baseline error implied by its percentage reductions
-    (change / percent), per change."""
-    from .in_silico import paper_changes, paper_results
-    reference = paper_results() if reference is None else reference
-    return {"changes": paper_changes(reference, experiment), "baselines": _baselines_by_change(reference, experiment)}
-
-
-def fit_loss(deltas: dict, targets: dict) -> float:
-    """Squared gaps of the simulated change means and SDs from the paper's, in units of the
-    paper's SDs, plus the gaps of the target group's baseline error (in units of its SD)."""
-    loss = 0.0
-    for name, groups in targets["changes"].items():
-        for group, values in groups.items():
-            delta = deltas[name][group].ravel()
-            loss += ((delta.mean() - values["mean"]) / values["sd"]) ** 2
-            loss += ((delta.std(ddof=1) - values["sd"]) / values["sd"]) ** 2
-        before = deltas[name]["before"][:, : deltas[name]["target"].shape[1]].ravel()
-        loss += ((before.mean() - targets["baselines"][name]) / groups["target"]["sd"]) ** 2
-    return float(loss)
-
-
-def fit_to_paper(n_per_group: int = 1000, seed: int = 0, start: TeacherParameters | None = None, protocol=None,
-                 max_evaluations: int = 1500, reference: dict | None = None, fields=FITTED_FIELDS,
-                 experiment: str | None = None):
-    """Fits the teacher model so an in-silico run of the protocol lands near the paper's changes.
-
-    The loss (``fit_loss``) compares, for each of the paper's three changes and both groups,
-    the mean and SD of the simulated changes with the paper's, and the target group's baseline
-    error with the one the paper's percentages imply. The same simulated people (common random
-    numbers) are used at every evaluation, on the protocol's own query states, so the loss is a
-    smooth function of the parameters and Nelder-Mead can minimise it.
-
-    Args:
-        n_per_group: simulated participants per group (large: the population's moments).
-        seed: seed of the simulated people.
-        start: the starting parameters (default: the protocol's current fit, ``paper_fit``).
-        protocol: the protocol (default the paper's simulation protocol; "paper-uarm" for the
-            physical experiment).
-        max_evaluations: the optimiser's budget.
-        reference: the paper's results (default the shipped ones).
-        fields: the parameters to fit (the others stay at ``start``'s values).
-        experiment: the paper's experiment to aim at, "simulation" or "physical" (default: the
-            protocol's, "physical" for a uArm protocol).
-
-    Returns:
-        (fitted ``TeacherParameters``, final loss).
-    """
-    from scipy.optimize import minimize
-
-    from .in_silico import episode_plan, query_states_for, resolve_protocol, simulate_changes, teacher_seed
-    from .in_silico import experiment_of
-    protocol = resolve_protocol(protocol)
-    start = paper_fit(protocol) if start is None else start
-    targets = paper_targets(reference, experiment_of(protocol) if experiment is None else experiment)
-    plan = episode_plan(protocol)
-    states = [query_states_for(protocol, step)[None] for step in plan]
-    n = 2 * n_per_group
-    people = TeacherPopulation.draw(start, [teacher_seed(seed, p) for p in range(n)], len(plan),
-                                    max(step["demonstrations"] for step in plan))
-
-    unknown = [name for name in fields if name not in TRANSFORMS]
-    if unknown:
-        raise ValueError(f"fields: expected names from {sorted(TRANSFORMS)}, got also {unknown}")
-
-    def loss(free):
-        parameters = _from_free(free, start, fields)
-        deltas = simulate_changes(protocol, people.with_parameters(parameters), 1, n_per_group, states)
-        return fit_loss(deltas, targets)
-
-    result = minimize(loss, _to_free(start, fields), method="Nelder-Mead",
-                      options={"maxfev": max_evaluations, "xatol": 1e-3, "fatol": 1e-4, "adaptive": True})
-    return _from_free(result.x, start, fields), float(result.fun)

@@ -20,8 +20,11 @@ import textwrap
 from pathlib import Path
 
 import numpy as np
+import matplotlib as mpl
 import pandas as pd
 from matplotlib.figure import Figure
+
+from mt_widgets.core import SKILLS, LineTarget
 
 from .statistics import GROUPS, PAPER_CHANGES, episodes_frame, participant_changes, phase_summary
 
@@ -178,7 +181,6 @@ def learnt_trajectories(episodes, participants, phases, duration: float | None =
     Returns:
         {(participant, phase, episode): Trajectory}.
     """
-    from mt_widgets.core import SKILLS
     frame = episodes_frame(episodes)
     if "theta_hat" not in frame.columns or "skill" not in frame.columns:
         raise ValueError("episodes: expected the columns 'skill' and 'theta_hat' to roll out the learnt skills")
@@ -200,7 +202,7 @@ def _draw_target(ax, skill) -> None:
     target = skill.target
     if target is None:
         return
-    if hasattr(target, "direction"):
+    if isinstance(target, LineTarget):
         box = skill.workspace
         span = max(box.xlim[1] - box.xlim[0], box.ylim[1] - box.ylim[0])
         p, d = np.asarray(target.point), np.asarray(target.direction)
@@ -227,8 +229,6 @@ def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration
         The figure. Each trajectory is a line with ``gid`` "<participant>/<phase>E<episode>"
         through the end-effector positions; earlier episodes of a phase are lighter.
     """
-    from mt_widgets.core import SKILLS
-    import matplotlib as mpl
     frame = episodes_frame(episodes)
     participants = [str(p) for p in participants]
     if not participants:
@@ -359,7 +359,6 @@ def teaching_report(episodes, demonstrations, participant, changes=PAPER_CHANGES
     paths = figure.add_subplot(grid[2, 1])
     trained = mine["skill"].iloc[0] if "skill" in mine.columns else None
     if trained is not None and "theta_hat" in mine.columns:
-        from mt_widgets.core import SKILLS
         skill_rows = mine[mine["skill"] == trained]
         first, last = skill_rows.iloc[0], skill_rows.iloc[-1]
         skill = SKILLS[trained]

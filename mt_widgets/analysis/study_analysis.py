@@ -1,29 +1,22 @@
 """One call from a study folder to every table and figure: ``analyse_study(folder)``.
 
 The default folder is the small synthetic study shipped with the package
-(``EXAMPLE_STUDY``: 8 synthetic teachers run through the paper's simulation protocol by the
-session engine, see ``write_example_study``), so the analysis notebook runs out of the box.
+(``mt_widgets.analysis.example_studies.EXAMPLE_STUDY``), so the analysis notebook runs out of
+the box.
 """
 
 from __future__ import annotations
 
-import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import pandas as pd
 
+from mt_widgets.study.tidy import read_study
+
+from .example_studies import EXAMPLE_STUDY
+from .figures import plot_changes, plot_error_by_episode, plot_trajectories, save_figure
 from .statistics import PAPER_CHANGES, StudyStatistics, analyse_changes
-
-#: The synthetic study shipped with the package.
-EXAMPLE_STUDY = Path(__file__).parent / "data" / "synthetic-sim"
-
-#: How the shipped study was made (``write_example_study`` uses these).
-EXAMPLE_SETTINGS = {"n_participants": 8, "protocol": "paper-sim", "seed": 2024}
-
-#: The synthetic uArm study shipped with the package: the same, on the physical protocol.
-EXAMPLE_UARM_STUDY = Path(__file__).parent / "data" / "synthetic-uarm"
-EXAMPLE_UARM_SETTINGS = {"n_participants": 8, "protocol": "paper-uarm", "seed": 2024}
 
 
 @dataclass
@@ -50,7 +43,6 @@ class StudyAnalysis:
 
     def save(self, out_folder, formats=("png", "pdf")) -> list[Path]:
         """Writes the tables as CSV and every figure in each format into ``out_folder``."""
-        from .figures import save_figure
         out = Path(out_folder)
         out.mkdir(parents=True, exist_ok=True)
         tables = {"phase_summary": self.statistics.phases, "participant_changes": self.statistics.changes,
@@ -87,8 +79,6 @@ def analyse_study(folder=None, alternative: str = "less", alpha: float = 0.05, c
     Returns:
         A ``StudyAnalysis``.
     """
-    from .figures import plot_changes, plot_error_by_episode, plot_trajectories
-    from .tidy import read_study
     folder = EXAMPLE_STUDY if folder is None else Path(folder)
     episodes, demonstrations = read_study(folder)
     if not episodes:
@@ -103,35 +93,3 @@ def analyse_study(folder=None, alternative: str = "less", alpha: float = 0.05, c
     if trajectories_for:
         figures["trajectories"] = plot_trajectories(episodes, trajectories_for, duration=trajectory_duration)
     return StudyAnalysis(folder, episodes, demonstrations, statistics, figures)
-
-
-def write_example_study(folder=EXAMPLE_STUDY, overwrite: bool = False, **settings) -> Path:
-    """(Re)generates the shipped synthetic study through the session engine.
-
-    Args:
-        folder: where (default: the package's ``data/synthetic-sim``).
-        overwrite: replace an existing folder.
-        **settings: override ``EXAMPLE_SETTINGS`` (n_participants, protocol, seed).
-
-    Returns:
-        The folder.
-    """
-    from .in_silico import run_through_sessions
-    folder = Path(folder)
-    if folder.exists():
-        if not overwrite:
-            raise FileExistsError(f"folder: {folder} exists; pass overwrite=True to regenerate it")
-        shutil.rmtree(folder)
-    options = {**EXAMPLE_SETTINGS, **settings}
-    run_through_sessions(folder, options["n_participants"], protocol=options["protocol"], seed=options["seed"])
-    # Once every session is closed the engine's lock folder holds only empty, released lock
-    # files; a shipped dataset has no use for them.
-    locks = folder / ".locks"
-    if locks.is_dir() and all(p.suffix == ".lock" and p.stat().st_size == 0 for p in locks.iterdir()):
-        shutil.rmtree(locks)
-    return folder
-
-
-if __name__ == "__main__":  # python -m mt_widgets.study.analysis  regenerates the shipped studies
-    print(write_example_study(overwrite=True))
-    print(write_example_study(EXAMPLE_UARM_STUDY, overwrite=True, **EXAMPLE_UARM_SETTINGS))

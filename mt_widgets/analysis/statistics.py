@@ -1,8 +1,9 @@
 """Statistics of a teaching study, as the paper reports them and a little more.
 
-Everything starts from the tidy episode rows (``mt_widgets.study.tidy``: one row per completed
-episode with ``participant``, ``group``, ``phase``, ``episode`` and ``teaching_error``, the
-paper's E_l2). From them:
+The comparisons (``Change``, ``PAPER_CHANGES``) are the study's analysis plan
+(``mt_widgets.study.analysis_plan``), fixed with the protocol. Everything starts from the tidy
+episode rows (``mt_widgets.study.tidy``: one row per completed episode with ``participant``,
+``group``, ``phase``, ``episode`` and ``teaching_error``, the paper's E_l2). From them:
 
 - ``phase_summary``: per group, phase and episode, the mean, SD, median and a t confidence
   interval of the teaching error (the paper's Fig. 3a).
@@ -30,6 +31,8 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, special, stats
 
+from mt_widgets.study.analysis_plan import PAPER_CHANGES, Change  # noqa: F401  (Change: re-exported)
+
 #: The two groups of the between-subjects design, in the order tables and figures use.
 GROUPS = ("target", "control")
 
@@ -37,37 +40,10 @@ GROUPS = ("target", "control")
 ALTERNATIVES = ("two-sided", "less", "greater")
 
 
-@dataclass(frozen=True)
-class Change:
-    """A change of teaching error between two episodes: ``after`` minus ``before``.
-
-    Attributes:
-        name: a key for tables ("P1_to_P3E8").
-        before: (phase, episode) of the earlier episode; episode is 1-based, or None for the
-            phase's last episode.
-        after: (phase, episode) of the later episode, the same way.
-        label: a human label ("P1 -> P3E8").
-        meaning: what the change measures, in one phrase ("effect of guidance").
-    """
-
-    name: str
-    before: tuple[str, int | None]
-    after: tuple[str, int | None]
-    label: str
-    meaning: str
-
-
-#: The paper's three comparisons (its Fig. 3b-d and the rows of paper_results.json).
-PAPER_CHANGES = (
-    Change("P1_to_P3E8", ("P1", 1), ("P3", 8), "P1 -> P3E8", "effect of guidance"),
-    Change("P1_to_P4", ("P1", 1), ("P4", 1), "P1 -> P4", "retention"),
-    Change("P2_to_P5", ("P2", 1), ("P5", 1), "P2 -> P5", "transfer to a new skill"),
-)
-
 _REQUIRED = ("participant", "group", "phase", "episode", "teaching_error")
 
 
-def _check_alternative(alternative: str) -> str:
+def check_alternative(alternative: str) -> str:
     if alternative not in ALTERNATIVES:
         raise ValueError(f"alternative: expected one of {ALTERNATIVES}, got {alternative!r}")
     return alternative
@@ -336,7 +312,7 @@ def between_group_tests(changes_table: pd.DataFrame, alternative: str = "less",
         ``welch_p``, ``mannwhitney_u``, ``mannwhitney_p``, ``hedges_g``, ``g_ci_low``,
         ``g_ci_high`` and ``alternative``. Tests that cannot run (fewer than 2 per group) are NaN.
     """
-    alternative = _check_alternative(alternative)
+    alternative = check_alternative(alternative)
     rows = []
     for name, part in changes_table.groupby("change", sort=False):
         target = part.loc[part["group"] == "target", "delta"].to_numpy()
@@ -368,7 +344,7 @@ def within_group_tests(changes_table: pd.DataFrame, alternative: str = "less") -
         One row per (change, group) with ``n``, ``paired_t``, ``paired_p``, ``wilcoxon_w`` and
         ``wilcoxon_p`` (NaN where a test cannot run: fewer than 2 pairs, or all changes zero).
     """
-    alternative = _check_alternative(alternative)
+    alternative = check_alternative(alternative)
     rows = []
     for (name, group), part in changes_table.groupby(["change", "group"], sort=False):
         before, after = part["before"].to_numpy(), part["after"].to_numpy()
@@ -465,7 +441,7 @@ def analyse_changes(episodes, changes=PAPER_CHANGES, alternative: str = "less", 
         alpha: the significance level the summary uses.
         confidence: coverage of every confidence interval.
     """
-    _check_alternative(alternative)
+    check_alternative(alternative)
     if not 0 < alpha < 1:
         raise ValueError(f"alpha: expected a level strictly between 0 and 1, got {alpha!r}")
     frame = episodes_frame(episodes)

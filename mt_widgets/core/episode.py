@@ -1,0 +1,307 @@
+"""One teaching episode, headless: the model that a view renders and a study session records.
+
+An episode is the paper's unit of teaching: a skill, its query states x_1..x_N and their
+features Phi (N x S), the learner's lambda, the optimal actions U_bar, and the teacher's
+demonstrations u_1..u_N given one at a time. Each demonstration is analysed as it comes (its
+gap to the optimal action, and how much that gap can move the learnt skill). Once all N are
+given the episode knows what the robot learnt and how far it is from the skill:
+
+- ``theta_hat``: (R, S) ``Theta_hat^T = A U`` with ``A = (Phi^T Phi + lam I)^-1 Phi^T``;
+- ``error``: E = ||vec(Theta_hat) - vec(Theta)||_2;
+- ``rho1 = ||A||_2``, ``rho2 = ||U - U_bar||_F`` and the bound ``rho1 * rho2 >= E``;
+- ``contributions``: each demonstration's exact term of the error,
+  ``Theta_hat - Theta = sum_n (u_n - u_bar_n) a_n^T + residual`` (a_n the n-th column of A;
+  the residual ``(A U_bar)^T - Theta`` is zero when exact teaching is possible);
+- ``reproduction``: the learnt skill rolled out from the skill's start, computed once, on first
+  use, and kept, so a view that plays it and a log that records it share one rollout.
+
+Everything is computed from one SVD of Phi (``ridge_operator``), the same rank rule as
+``RidgeLearner`` and ``optimal_actions``. Nothing here does I/O or knows about widgets.
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+
+from .learner import DEFAULT_LAMBDA
+from .machine_teaching import ActionDifference, action_difference, ridge_operator, teaching_risk
+from .skills import Skill
+from .validation import as_float_array, as_positive
+
+
+class EpisodeStateError(RuntimeError):
+    """A call that does not fit the episode's progress (a demonstration too many, a result too early)."""
+
+
+@dataclass(frozen=True)
+class DemonstrationAnalysis:
+    """One demonstration and what can be said about it as soon as it is given.
+
+    Attributes:
+        index: 0-based position of the query state in the episode.
+        state: (state_dim,) the query state.
+        action: (R,) the demonstrated action u_n, in the skill's action units.
+        optimal_action: (R,) the optimal action u_bar_n at this state.
+        gap: (R,) u_n - u_bar_n.
+        action_difference: angle, size ratio and distance of the arrow against the optimal one
+            (an ``ActionDifference``) for planar actions (R = 2); None otherwise.
+        contribution_norm: ||a_n|| ||u_n - u_bar_n||, the size of this demonstration's term
+            (u_n - u_bar_n) a_n^T in Theta_hat - Theta. Known before the episode is complete,
+            since a_n depends only on the query states.
+    """
+
+    index: int
+    state: np.ndarray
+    action: np.ndarray
+    optimal_action: np.ndarray
+    gap: np.ndarray
+    action_difference: ActionDifference | None
+    contribution_norm: float
+
+
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array = np.array(array, dtype=float)
+    array.setflags(write=False)
+    return array
+
+
+#: skill -> {duration: the target skill's own rollout}. Keyed by the skill object itself (a Skill
+#: hashes by identity), weakly: an entry goes with its skill, and a new skill that happens to
+#: get a freed skill's id never gets that skill's ghost.
+_TARGET_ROLLOUTS: "weakref.WeakKeyDictionary[Skill, dict[float, object]]" = weakref.WeakKeyDictionary()
+
+
+def target_reproduction(skill: Skill, duration: float | None = None):
+    """The target skill's own rollout (``skill.theta`` from ``skill.start``), computed once per skill and duration.
+
+    Views draw it faintly beside a learnt reproduction; it depends on nothing a teacher does,
+    so every episode of a skill shares one.
+    """
+    if not isinstance(skill, Skill):
+        raise TypeError(f"skill: expected a mt_widgets.core.Skill, got {type(skill).__name__}")
+    duration = skill.default_duration if duration is None else as_positive("duration", duration)
+    rollouts = _TARGET_ROLLOUTS.setdefault(skill, {})
+    if duration not in rollouts:
+        rollouts[duration] = skill.reproduce(skill.theta, duration=duration)
+    return rollouts[duration]
+
+
+class TeachingEpisode:
+    """One teaching episode of a skill on its query states.
+
+    Args:
+        skill: the ``Skill`` taught.
+        query_states: (N, state_dim) the states to demonstrate at; default
+            ``skill.query_states(seed=seed)`` (N = S, the teaching dimension).
+        seed: seed of the default query states (int, ``SeedSequence``, ``Generator`` or None);
+            only when ``query_states`` is not given.
+        lam: the learner's ridge parameter (>= 0), also used for the optimal actions.
+        duration: seconds of the reproduction (default: the skill's ``default_duration``).
+
+    Attributes:
+        features: (N, S) Phi.
+        optimal_actions: (N, R) U_bar, the demonstration that teaches the skill (exactly when
+            ``exact``).
+        exact: True when Phi has rank S (the query states reach the teaching dimension); when
+            False no demonstration teaches Theta exactly (``optimal_actions`` of
+            ``mt_widgets.core`` then warns with ``UnderdeterminedTeachingWarning``) and U_bar is
+            the least-error one.
+        rank: the rank of Phi.
+        demonstrations: the ``DemonstrationAnalysis`` of each demonstration given so far.
+    """
+
+    def __init__(self, skill: Skill, query_states=None, *, seed=None, lam: float = DEFAULT_LAMBDA,
+                 duration: float | None = None):
+        if not isinstance(skill, Skill):
+            raise TypeError(f"skill: expected a mt_widgets.core.Skill, got {type(skill).__name__}")
+        self.skill = skill
+        self.lam = as_positive("lam", lam, allow_zero=True)
+        self.duration = skill.default_duration if duration is None else as_positive("duration", duration)
+        if query_states is None:
+            states = skill.query_states(seed=seed)
+        else:
+            if seed is not None:
+                raise ValueError(f"seed: expected None when query_states are given (the states are not drawn), "
+                                 f"got {seed!r}")
+            states = as_float_array("query_states", query_states, ndim=2, shape=(None, skill.state_dim))
+            if len(states) == 0:
+                raise ValueError(f"query_states: expected at least one state of {skill.state_dim} numbers, "
+                                 f"got shape {states.shape}")
+        self.query_states = _frozen(states)
+        self.features = _frozen(skill.features(self.query_states))
+        operator = ridge_operator(self.features, self.lam)
+        self._A = operator.matrix()                      # (S, N)
+        self._a_norms = np.linalg.norm(self._A, axis=0)  # (N,) ||a_n||
+        # U_bar = pinv(A) Theta^T over the directions Phi spans (see machine_teaching).
+        kept = slice(0, operator.rank)
+        s = operator.singular[kept]
+        self.optimal_actions = _frozen((operator.left[:, kept] * ((s**2 + self.lam) / s))
+                                       @ (operator.right_t[kept] @ skill.theta.T))
+        self.rank = operator.rank
+        self.exact = bool(operator.exact)
+        self.rho1 = operator.rho1()
+        self.demonstrations: list[DemonstrationAnalysis] = []
+        self._reproduction = None
+
+    @classmethod
+    def from_actions(cls, skill: Skill, query_states, actions, *, lam: float = DEFAULT_LAMBDA,
+                     duration: float | None = None) -> "TeachingEpisode":
+        """An episode resumed with actions already given (k, R), k <= N (complete when k = N)."""
+        episode = cls(skill, query_states, lam=lam, duration=duration)
+        episode.restore(actions)
+        return episode
+
+    def __repr__(self) -> str:
+        return (f"TeachingEpisode({self.skill.key!r}, {len(self.demonstrations)}/{self.n_states} demonstrations, "
+                f"lam={self.lam})")
+
+    # -- progress ---------------------------------------------------------------------------------
+    @property
+    def n_states(self) -> int:
+        """N, the number of query states (and of demonstrations a complete episode has)."""
+        return len(self.query_states)
+
+    @property
+    def action_dim(self) -> int:
+        return self.skill.plant.action_dim
+
+    @property
+    def complete(self) -> bool:
+        """True once every query state has its demonstration."""
+        return len(self.demonstrations) == self.n_states
+
+    @property
+    def next_index(self) -> int | None:
+        """The index of the query state awaiting a demonstration, or None when complete."""
+        return None if self.complete else len(self.demonstrations)
+
+    @property
+    def actions(self) -> np.ndarray:
+        """(k, R) the demonstrated actions so far."""
+        if not self.demonstrations:
+            return np.zeros((0, self.action_dim))
+        return np.array([d.action for d in self.demonstrations])
+
+    # -- demonstrating ------------------------------------------------------------------------------
+    def check_action(self, action) -> np.ndarray:
+        """Validates one action (R,) without recording it; returns it as a float array."""
+        return as_float_array("action", action, ndim=1, shape=(self.action_dim,))
+
+    def demonstrate(self, action) -> DemonstrationAnalysis:
+        """Records the action (R,) for the next query state and returns its analysis."""
+        if self.complete:
+            raise EpisodeStateError(f"demonstrate: expected at most {self.n_states} demonstrations (one per query "
+                                    f"state); the episode is complete")
+        action = _frozen(self.check_action(action))
+        index = len(self.demonstrations)
+        optimal = self.optimal_actions[index]
+        gap = _frozen(action - optimal)
+        difference = action_difference(action, optimal) if self.action_dim == 2 else None
+        analysis = DemonstrationAnalysis(index, self.query_states[index], action, optimal, gap, difference,
+                                         float(self._a_norms[index] * np.linalg.norm(gap)))
+        self.demonstrations.append(analysis)
+        return analysis
+
+    def restore(self, actions) -> None:
+        """Records already-given actions (k, R) in order, after any given so far (resuming)."""
+        try:
+            given = len(actions)
+        except TypeError:
+            raise ValueError(f"actions: expected shape (k, {self.action_dim}), one action per row, got "
+                             f"{type(actions).__name__} {actions!r}"[:200]) from None
+        if given == 0:
+            return
+        actions = as_float_array("actions", actions)
+        if actions.ndim != 2 or actions.shape[1] != self.action_dim:
+            raise ValueError(f"actions: expected shape (k, {self.action_dim}), one action per row, got "
+                             f"{actions.shape}")
+        if len(self.demonstrations) + len(actions) > self.n_states:
+            raise ValueError(f"actions: expected at most {self.n_states - len(self.demonstrations)} more (one per "
+                             f"remaining query state), got {len(actions)}")
+        for action in actions:
+            self.demonstrate(action)
+
+    # -- the result (complete episodes) -------------------------------------------------------------
+    def _require_complete(self, name: str) -> None:
+        if not self.complete:
+            raise EpisodeStateError(f"{name}: expected a complete episode ({self.n_states} demonstrations), "
+                                    f"got {len(self.demonstrations)}")
+
+    @property
+    def theta_hat(self) -> np.ndarray:
+        """(R, S) the learnt policy, Theta_hat^T = A U."""
+        self._require_complete("theta_hat")
+        return (self._A @ self.actions).T
+
+    @property
+    def error(self) -> float:
+        """E = ||vec(Theta_hat) - vec(Theta)||_2, the teaching error."""
+        return teaching_risk(self.theta_hat, self.skill.theta)
+
+    @property
+    def rho2(self) -> float:
+        """||U - U_bar||_F over the demonstrations given so far (all of them once complete)."""
+        if not self.demonstrations:
+            return 0.0
+        return float(np.linalg.norm([d.gap for d in self.demonstrations]))
+
+    @property
+    def bound(self) -> float:
+        """rho1 * rho2 (+ the residual norm below the teaching dimension), an upper bound on E."""
+        self._require_complete("bound")
+        return self.rho1 * self.rho2 + self.residual_norm
+
+    @property
+    def contributions(self) -> np.ndarray:
+        """(N, R, S) each demonstration's exact term (u_n - u_bar_n) a_n^T of Theta_hat - Theta.
+
+        They add up, with ``residual``, to Theta_hat - Theta exactly. Their norms
+        (``contribution_norms``) say how large each term is but do NOT add up to E: the terms
+        point in different directions and partly cancel, so E <= sum of the norms (+ the
+        residual's), with equality only when they are aligned.
+        """
+        self._require_complete("contributions")
+        gaps = np.array([d.gap for d in self.demonstrations])           # (N, R)
+        return gaps[:, :, None] * self._A.T[:, None, :]                  # (N, R, S)
+
+    @property
+    def contribution_norms(self) -> np.ndarray:
+        """(N,) ||(u_n - u_bar_n) a_n^T||_F = ||a_n|| ||u_n - u_bar_n|| (see ``contributions``)."""
+        self._require_complete("contribution_norms")
+        return np.array([d.contribution_norm for d in self.demonstrations])
+
+    @property
+    def residual(self) -> np.ndarray:
+        """(R, S) (A U_bar)^T - Theta: the part of the error no demonstration can remove (0 when exact)."""
+        return (self._A @ self.optimal_actions).T - self.skill.theta
+
+    @property
+    def residual_norm(self) -> float:
+        return float(np.linalg.norm(self.residual))
+
+    @property
+    def reproduction(self):
+        """The learnt skill's ``Trajectory`` from the skill's start over ``duration`` seconds.
+
+        Rolled out on first use and kept: every reader (a view, a log, a result) gets this one.
+        """
+        self._require_complete("reproduction")
+        if self._reproduction is None:
+            self._reproduction = self.skill.reproduce(self.theta_hat, duration=self.duration)
+        return self._reproduction
+
+    @property
+    def target_reproduction(self):
+        """The target skill's own rollout over ``duration`` (shared by every episode of the skill)."""
+        return target_reproduction(self.skill, self.duration)
+
+    @property
+    def reproduced(self) -> bool:
+        """Whether the reproduction has been rolled out yet (it is, on first use of ``reproduction``)."""
+        return self._reproduction is not None
+
+
+__all__ = ["DemonstrationAnalysis", "EpisodeStateError", "TeachingEpisode", "target_reproduction"]

@@ -1,0 +1,89 @@
+"""A finished episode is rolled out exactly once, whoever shows it (the widget, the study app)
+or logs it (the session): they all read one ``TeachingEpisode``'s reproduction."""
+
+import numpy as np
+import pytest
+
+from mt_widgets import SKILLS
+from mt_widgets.apps import StudyApp
+from mt_widgets.core import Skill
+from mt_widgets.study import Session, read_events
+from mt_widgets.widgets import EpisodeWidget
+
+from .scripted import SHORT_PROTOCOL, short_protocol
+from .test_app import act
+
+
+@pytest.fixture
+def rollouts(monkeypatch):
+    """Every ``Skill.reproduce`` call, as (skill key, theta), whoever makes it."""
+    calls = []
+    original = Skill.reproduce
+
+    def counting(self, theta, *args, **kwargs):
+        calls.append((self.key, np.array(theta, dtype=float)))
+        return original(self, theta, *args, **kwargs)
+
+    monkeypatch.setattr(Skill, "reproduce", counting)
+    return calls
+
+
+def _learnt(calls, skill_key):
+    """The calls that rolled out a learnt policy (not the target skill's own motion, the ghost)."""
+    return [theta for key, theta in calls if not np.array_equal(theta, SKILLS[key].theta)]
+
+
+def test_an_episode_shown_by_the_widget_and_logged_by_the_session_is_rolled_out_once(rollouts):
+    session = Session.lesson(short_protocol(), group="target")
+    finished = 0
+    while not session.finished:
+        step = session.current_step()
+        if step.kind != "demonstration":
+            session.advance() if step.kind != "practice" else session.finish_practice(duration_s=1.0)
+            continue
+        rollouts.clear()
+        widget = EpisodeWidget(step.skill, query_states=step.query_states, lam=session.protocol.lam,
+                               duration=session.protocol.reproduction_duration_s, ghost=True,
+                               guidance=step.guidance)
+        widget.on_demonstration(lambda record: session.submit_demonstration(record.action, index=record.index))
+        widget.on_finished(lambda result: session.finish_episode(result.episode))
+        skill = SKILLS[step.skill]
+        for state in step.query_states:
+            widget.demonstrate(skill.target_actions(state[None])[0] + 0.3)
+            if widget.phase == "guidance":
+                widget.next()
+        assert widget.phase == "finished"
+        # Everything that shows or reads the reproduction afterwards: the session's step and
+        # result, the widget's result, a replay.
+        reproduction = session.current_step()
+        assert reproduction.kind == "reproduction"
+        assert reproduction.result.trajectory is widget.result.trajectory is widget.episode.reproduction
+        widget.player.replay_button.click()
+        assert reproduction.result.teaching_error == pytest.approx(widget.error)
+        learnt = _learnt(rollouts, step.skill)
+        assert len(learnt) == 1, f"the learnt skill was rolled out {len(learnt)} times"
+        np.testing.assert_allclose(learnt[0], widget.episode.theta_hat)
+        assert len(rollouts) - len(learnt) <= 1, "the target skill's own motion is rolled out at most once"
+        finished += 1
+        session.advance()
+    assert finished == short_protocol().n_episodes
+
+
+def test_the_study_app_rolls_out_each_logged_episode_once(tmp_path, rollouts):
+    protocol_file = tmp_path / "short.toml"
+    protocol_file.write_text(SHORT_PROTOCOL)
+    app = StudyApp(protocol=str(protocol_file), log_folder=tmp_path / "logs")
+    app.start_participant("P01", group="target")
+    while not app.session.finished:
+        step = app.session.current_step()
+        if step.kind == "reproduction":
+            assert step.result.trajectory is app.episode.result.trajectory
+        act(app)
+    events, _ = read_events(tmp_path / "logs" / "P01.jsonl")
+    logged = [event for event in events if event["type"] == "episode_finished"]
+    assert len(logged) == short_protocol().n_episodes
+    # The practice was not taught (act() continues past it): every rollout is a logged episode's.
+    learnt = [theta for key, theta in rollouts]
+    assert len(learnt) == len(logged), f"{len(learnt)} rollouts for {len(logged)} episodes"
+    for event, theta in zip(logged, learnt):
+        np.testing.assert_allclose(theta, event["theta_hat"], atol=1e-12)
