@@ -94,8 +94,6 @@ class UArmTeaching:
             raise ValueError(f"geometry: expected a ScreenGeometry, got {type(geometry).__name__}")
         self.simulated = is_simulated(arm)
         self.show_player = self.simulated if show_player is None else as_bool("show_player", show_player)
-        as_bool("audio", audio)
-        as_bool("buzzer", buzzer)
         where = f"{arm.port_used} (simulated arm)" if self.simulated else f"Swift Pro on {arm.port_used}"
         self.panel = ArmPanel(f"{where}, firmware {'.'.join(map(str, arm.firmware_version or ()))}")
         self.panel.stop_button.on_click(lambda _: self.stop())
