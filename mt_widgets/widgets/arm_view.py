@@ -104,6 +104,9 @@ class ArmView:
         #: The legend of the marks this view draws (an HTML widget for the caller to place).
         self.legend = CanvasLegend(self.theme, self.drawing, skill.target, target_label,
                                    marks=("target", "base", "links", "outline", "robot", "velocity"))
+        # No wider than the canvas: its entries wrap under it instead of widening the column
+        # they share (a stretched canvas would follow the legend's width).
+        self.legend.layout.max_width = css_width if css_width and css_width.strip().endswith("px") else f"{width}px"
         self.show(self.draw_background, "background")
 
     # -- layers -----------------------------------------------------------------------------------

@@ -61,7 +61,7 @@ def explain_difference(action, optimal, units: str) -> str:
 
 
 class GuidancePanel(HTML):
-    """Shows the legend and the explanation after each demonstration (when guidance is on)."""
+    """Shows the explanation in words after each demonstration (when guidance is on)."""
 
     def __init__(self, theme: Theme, units: str):
         self.theme = theme
@@ -72,8 +72,8 @@ class GuidancePanel(HTML):
         """Explain the difference between ``action`` and ``optimal`` (both (2,))."""
         note = "" if as_bool("exact", exact) else ("<br><small>With fewer query states than features no demonstration teaches the "
                                  "skill exactly; the optimal arrow is the least-error one.</small>")
-        self.value = (f"<div>{legend_html(self.theme)}</div>"
-                      f"<div style='margin-top:4px'>{explain_difference(action, optimal, self.units)}</div>{note}")
+        # The arrows' legend is under the canvas (legend.py), beside every other mark.
+        self.value = f"<div style='margin-top:4px'>{explain_difference(action, optimal, self.units)}</div>{note}"
 
     def hide(self) -> None:
         self.value = ""
