@@ -43,8 +43,9 @@ def _dot_svg(color: str, radius: float, outline: str | None = None) -> str:
 
 
 def _entry(picture: str, words: str) -> str:
+    # The words may wrap (a legend is no wider than its canvas); the picture never shrinks.
     return (f"<span class='mt-legend-entry' style='display:inline-flex;align-items:center;gap:4px;"
-            f"margin:0 12px 2px 0;white-space:nowrap'>{picture}<span>{words}</span></span>")
+            f"margin:0 12px 2px 0;max-width:100%'>{picture}<span>{words}</span></span>")
 
 
 def legend_entries(theme: Theme, drawing, target=None, target_label: str | None = "goal",
@@ -68,13 +69,12 @@ def legend_entries(theme: Theme, drawing, target=None, target_label: str | None 
         if mark == "target" and target is not None:
             picture = (_dot_svg(theme.target, 5) if target.dimension == 0 else _line_svg(theme.target, 2.5))
             name = f"{target_label}: " if target_label else ""
-            entries.append((mark, _entry(picture, f"{name}{target.describe(theme.color_name('target'))}, "
-                                                  f"where the skill takes the robot")))
+            entries.append((mark, _entry(picture, f"{name}{target.describe(theme.color_name('target'))} to reach")))
         elif mark == "base" and drawing.base is not None:
             entries.append((mark, _entry(_svg(f"<rect x='12' y='3' width='16' height='9' fill='{theme.arm}'/>"),
                                          "the robot's fixed base")))
         elif mark == "links" and drawing.links == "rigid":
-            entries.append((mark, _entry(_line_svg(theme.arm, 7), "the arm's links (white square: a joint)")))
+            entries.append((mark, _entry(_line_svg(theme.arm, 7), "the arm (white square: its elbow joint)")))
         elif mark == "links" and drawing.links == "reach":
             entries.append((mark, _entry(_line_svg(theme.axes, 2, (4, 4)), "which way the arm reaches")))
         elif mark == "outline" and drawing.outline:
@@ -84,11 +84,10 @@ def legend_entries(theme: Theme, drawing, target=None, target_label: str | None 
                 picture, words = _dot_svg(theme.end_effector, 5, theme.end_effector_outline), "the robot's hand"
             else:
                 picture, words = _dot_svg(theme.state_dot, 5), "the robot's position"
-            entries.append((mark, _entry(picture, f"{words} ({theme.marker_words(drawing)}): press on it and drag")))
+            entries.append((mark, _entry(picture, f"{words} ({theme.marker_words(drawing)}): drag from it")))
         elif mark == "velocity" and drawing.has_velocity:
             entries.append((mark, _entry(_arrow_svg(theme.velocity_arrow),
-                                         f"its velocity now ({theme.color_name('velocity_arrow') or 'thin'} "
-                                         f"arrow): where it is moving")))
+                                         f"its velocity ({theme.color_name('velocity_arrow') or 'thin'} arrow)")))
         elif mark == "user_arrow":
             entries.append((mark, _entry(_arrow_svg(theme.user_arrow), theme.legend_user)))
         elif mark == "optimal_arrow":

@@ -20,6 +20,20 @@ GREEN = (0, 158, 115)          # Okabe-Ito bluish green: the velocity arrow
 ARM = (77, 77, 77)             # the theme's arm grey: links and base
 
 
+def draw_arrow_pair_offset(theme) -> float:
+    """The sideways offset ``draw_arrow_pair`` gives an optimal arrow aligned with the user's."""
+    from mt_widgets.widgets.arrows import draw_arrow_pair
+
+    class Sink:
+        def __getattr__(self, name):
+            return lambda *args, **kwargs: None
+
+        def __setattr__(self, name, value):
+            pass
+
+    return draw_arrow_pair(Sink(), (0, 0), (100, 0), (60, 0), theme.user_arrow, theme.optimal_arrow)
+
+
 def open_page(page, voila_server, name: str = "episode_sim.ipynb"):
     page.goto(voila_server.url(f"/voila/render/{name}"), timeout=60_000)
     page.wait_for_selector("canvas", timeout=60_000)
@@ -39,8 +53,8 @@ def test_the_legend_names_every_mark_and_the_arrows_stay_apart(page, voila_serve
     wait_for_color(page, 0, *ee, OKABE["yellow"])
     legend = page.locator(".mt-canvas-legend").first
     text = legend.inner_text()
-    for words in ("goal: the red-orange point", "the robot's fixed base", "the robot's hand (the yellow dot)",
-                  "its velocity now (green arrow)", "your action (solid)"):
+    for words in ("goal: the red-orange point to reach", "the robot's fixed base", "the robot's hand (the yellow dot)",
+                  "its velocity (green arrow)", "your action (solid)"):
         assert words in text, (words, text)
     # The target is drawn in the colour its words name (red-orange: Okabe-Ito vermillion).
     wait_for_color(page, 0, *view.transform.to_pixel(reference.skill.target.point), OKABE["vermillion"], tolerance=25)
@@ -50,6 +64,10 @@ def test_the_legend_names_every_mark_and_the_arrows_stay_apart(page, voila_serve
     tip = view.transform.to_pixel(origin[0] + view.painter.velocity_length * velocity[0])
     head = tip - 3 * (tip - ee) / np.hypot(*(tip - ee))
     wait_for_color(page, 0, *head, GREEN, tolerance=30, radius=1)
+    # Every entry of the legend is inside the page's width and fully shown (no clipped words).
+    clipped = legend.evaluate("l => Array.from(l.querySelectorAll('.mt-legend-entry')).filter("
+                              "e => e.scrollWidth > e.clientWidth + 1).length")
+    assert clipped == 0
     page.screenshot(path=artifacts("legend"))
 
     # The user's arrow along the optimal one, 1.6 times as long: the optimal arrow is the
@@ -59,10 +77,14 @@ def test_the_legend_names_every_mark_and_the_arrows_stay_apart(page, voila_serve
     wait_for_status(page, "s.pending !== null")
     page.get_by_role("button", name="Confirm").click()
     wait_for_status(page, "s.phase === 'guidance'")
-    inside_head = optimal_tip - 5 * (optimal_tip - ee) / np.hypot(*(optimal_tip - ee))
-    wait_for_color(page, 0, *inside_head, OKABE["orange"], tolerance=30, radius=1)
-    beyond = optimal_tip + 25 * (optimal_tip - ee) / np.hypot(*(optimal_tip - ee))
-    wait_for_color(page, 0, *beyond, OKABE["blue"], tolerance=30, radius=1)     # the user's arrow goes on
+    # Aligned, the two are drawn side by side: the optimal one moved a few pixels to its left.
+    along = (optimal_tip - ee) / np.hypot(*(optimal_tip - ee))
+    side = np.array([along[1], -along[0]]) * draw_arrow_pair_offset(view.theme)
+    wait_for_color(page, 0, *(optimal_tip + side - 5 * along), OKABE["orange"], tolerance=30, radius=1)
+    # ... while the user's arrow shows beside it all along, and beyond its tip.
+    for fraction in (0.4, 0.8):
+        wait_for_color(page, 0, *(ee + fraction * (optimal_tip - ee)), OKABE["blue"], tolerance=30, radius=1)
+    wait_for_color(page, 0, *(optimal_tip + 25 * along), OKABE["blue"], tolerance=30, radius=1)
     assert "optimal action (dashed)" in legend.inner_text()
     page.screenshot(path=artifacts("aligned"))
 
@@ -125,8 +147,10 @@ def test_demo_page_layout_screenshots(browser, voila_server, artifacts, width, h
         page.get_by_role("button", name="Confirm").click()
         page.get_by_role("button", name="Next state").wait_for(timeout=10_000)
         tip = view.transform.action_tip(origin, reference.optimal[0])
-        wait_for_color(page, 0, *(tip - 5 * (tip - ee) / np.hypot(*(tip - ee))), OKABE["orange"], radius=1,
-                       tolerance=30)
+        along = (tip - ee) / np.hypot(*(tip - ee))
+        side = np.array([along[1], -along[0]]) * draw_arrow_pair_offset(view.theme)     # aligned: beside
+        wait_for_color(page, 0, *(tip + side - 5 * along), OKABE["orange"], radius=1, tolerance=30)
+        wait_for_color(page, 0, *(ee + 0.5 * (tip - ee)), OKABE["blue"], radius=1, tolerance=30)
         # Everything of the canvas fits the screen's width (no sideways scrolling to see it).
         box = page.locator("canvas").first.bounding_box()
         assert box["x"] >= 0 and box["x"] + box["width"] <= width + 1, box

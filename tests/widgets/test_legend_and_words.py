@@ -100,8 +100,8 @@ def test_the_teaching_legend_lists_every_mark_the_canvas_draws():
     legend = episode.teaching.view.legend
     assert legend.marks == ("target", "base", "links", "robot", "velocity", "user_arrow")
     value = legend.value
-    for words in ("goal: the red-orange point", "the robot's fixed base", "the arm's links", "the robot's hand",
-                  "its velocity now (green arrow)", "your action (solid)"):
+    for words in ("goal: the red-orange point to reach", "the robot's fixed base", "the arm (white square",
+                  "the robot's hand (the yellow dot)", "its velocity (green arrow)", "your action (solid)"):
         assert words in value, words
     theme = episode.theme
     for colour in (theme.target, theme.end_effector, theme.velocity_arrow.color, theme.user_arrow.color, theme.arm):
@@ -128,3 +128,34 @@ def test_the_reproduction_legend_explains_its_paths_and_a_divergence():
     player.play(skill.reproduce(-5 * skill.theta, duration=5.0))
     assert "diverged" in player.view.legend.marks and "ghost" not in player.view.legend.marks
     assert "left its safe range" in player.view.legend.value
+
+
+def test_an_optimal_arrow_aligned_with_the_users_is_drawn_beside_it_and_last(recorder):
+    from mt_widgets.widgets import TeachingCanvas
+
+    skill = SKILLS["sim-point"]
+    teach = TeachingCanvas(skill, skill.query_states(seed=0))
+    view, theme = teach.view, teach.theme
+    origin = skill.end_effector(teach.current_state[None])[0][0]
+    optimal = np.array([1.0, 1.5])
+    for user, aligned in ((1.6 * optimal, True), (0.5 * optimal, True), (np.array([1.5, -1.0]), False)):
+        teach.set_action(user)
+        recorder.clear()
+        teach.show_guidance(optimal)
+        commands = recorder.on(view.layer("arrows"))
+        colours = [a[1] for n, a in commands if n == "set" and a[1] in (theme.user_arrow.color,
+                                                                       theme.optimal_arrow.color)]
+        assert colours[-1] == theme.optimal_arrow.color, "the optimal arrow is drawn last"
+        last = max(k for k, (n, a) in enumerate(commands) if n == "set" and a[1] == theme.optimal_arrow.color)
+        optimal_points = np.array([a[:2] for n, a in commands[last:] if n in ("moveTo", "lineTo")], dtype=float)
+        start = view.transform.to_pixel(origin)
+        tip = view.transform.action_tip(origin, optimal)
+        along = (tip - start) / np.hypot(*(tip - start))
+        sideways = (optimal_points - start) @ np.array([along[1], -along[0]])
+        if aligned:
+            # The optimal shaft moved sideways (perpendicular to the arrows) by more than the
+            # shafts' half-widths, so the two do not overlap; its start still on the hand marker.
+            shaft = sideways[0]
+            assert (theme.user_arrow.width + theme.optimal_arrow.width) / 2 < shaft < 8
+        else:
+            assert abs(sideways[0]) < 0.1, "not aligned: both start at the hand"
