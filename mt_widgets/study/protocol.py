@@ -483,7 +483,10 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
 
     texts_raw = check.get(raw, ("texts",), "table")
     check.unknown(texts_raw, ("texts",), _TEXT_KEYS + tuple(OPTIONAL_TEXTS))
-    texts = {key: check.get(texts_raw, ("texts", key), "text", nonempty=True) for key in _TEXT_KEYS}
+    # A protocol with its own consent step says it there; texts.consent is the default consent's.
+    own_consent = any(isinstance(e, dict) and e.get("kind") == "consent" for e in raw.get("before", []) or [])
+    texts = {key: check.get(texts_raw, ("texts", key), "text", nonempty=True, default="" if own_consent and
+                            key == "consent" else ...) for key in _TEXT_KEYS}
     texts.update({key: check.get(texts_raw, ("texts", key), "text", nonempty=True, default=default)
                   for key, default in OPTIONAL_TEXTS.items()})
 
