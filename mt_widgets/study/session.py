@@ -634,10 +634,10 @@ class Session:
             path.unlink(missing_ok=True)
         return self.current_step()
 
-    def _end(self, reason: str, **fields) -> None:
-        self._ended = reason
+    def _end(self, ending: str, **fields) -> None:
+        self._ended = ending
         if self.folder is not None:
-            outcome = {"declined": "declined", "ineligible": "ineligible", "withdrawn": "withdrawn"}[reason]
+            outcome = {"declined": "declined", "ineligible": "ineligible", "withdrawn": "withdrawn"}[ending]
             self.folder.record_outcome(self.participant, outcome, **fields)
 
     def finish_practice(self, duration_s: float | None = None) -> Step:
