@@ -552,10 +552,11 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
 
     data = copy.deepcopy(raw)
     for position, steps in (("before", before), ("after", after)):
-        # A video file is stored resolved, so a study folder rebuilt from study.json finds it.
+        # A video's content is part of the protocol (and so of its hash); its file name stays as
+        # written, so the hash does not depend on where the study runs.
         for entry, step in zip(data.get(position, []), steps):
-            if step.kind == "video" and "file" in entry:
-                entry["file"] = step.video
+            if step.kind == "video" and step.video_sha256 is not None:
+                entry["sha256"] = step.video_sha256
     data.setdefault("groups", list(groups))
     data.setdefault("query_states", query_states)
     data["assignment"].setdefault("method", "block")

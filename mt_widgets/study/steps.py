@@ -24,9 +24,14 @@ labels), ``choice`` (``options``), ``number`` (``minimum``, ``maximum``, ``integ
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import dataclass
 from pathlib import Path
+
+#: Where the shipped protocols' media are; a relative video file not found beside the protocol
+#: is looked for here (a protocol rebuilt from a study folder's study.json).
+SHIPPED_MEDIA = Path(__file__).parent / "protocols"
 
 STEP_KINDS = ("text", "video", "information", "consent", "eligibility", "demographics", "questionnaire")
 ITEM_KINDS = ("likert", "choice", "number", "text")
@@ -129,7 +134,9 @@ class StudyStep:
         title: a heading (may be empty).
         text: what the step says (markdown-free plain text, paragraphs split by blank lines).
         items: the questions of an asking step.
-        video: a video step's file path (absolute, resolved from the protocol file) or URL.
+        video: a video step's file path (absolute, resolved from the protocol file) or URL;
+            None when a stored protocol's video file is not on this machine.
+        video_sha256: the video file's sha256 (part of the protocol's data, so of its hash).
         require_watched: a video step: Continue only once the video has played to the end.
         agree_label, decline_label: a consent step's buttons.
     """
@@ -144,6 +151,7 @@ class StudyStep:
     require_watched: bool = False
     agree_label: str = "I agree"
     decline_label: str = "I do not agree"
+    video_sha256: str | None = None
 
     @property
     def video_is_url(self) -> bool:
@@ -192,7 +200,7 @@ def parse_steps(check, raw: dict, position: str, protocol_folder: Path | None, i
         kind = check.get(entry, path + ("kind",), "text", choices=STEP_KINDS)
         allowed = ["id", "kind", "title", "text"]
         if kind == "video":
-            allowed += ["file", "url", "require_watched"]
+            allowed += ["file", "url", "require_watched", "sha256"]
         if kind in ASKING_KINDS:
             allowed += ["items"]
         if kind == "consent":
@@ -202,9 +210,9 @@ def parse_steps(check, raw: dict, position: str, protocol_folder: Path | None, i
         text = check.get(entry, path + ("text",), "text", default="", nonempty=kind in ("information", "consent"))
         if kind in ("information", "consent") and not text:
             check.fail(path + ("text",), f"missing required field (text): a {kind} step shows its text")
-        video, watched = None, False
+        video, watched, sha = None, False, None
         if kind == "video":
-            video, watched = _parse_video(check, entry, path, protocol_folder, check_files)
+            video, watched, sha = _parse_video(check, entry, path, protocol_folder, check_files)
         items: tuple[Item, ...] = ()
         if kind in ASKING_KINDS:
             if "items" in entry or kind != "demographics":
@@ -215,7 +223,8 @@ def parse_steps(check, raw: dict, position: str, protocol_folder: Path | None, i
         if kind == "consent":
             labels = {key: check.get(entry, path + (key,), "text", nonempty=True, default=default)
                       for key, default in (("agree_label", "I agree"), ("decline_label", "I do not agree"))}
-        steps.append(StudyStep(step_id, kind, position, title, text, items, video, watched, **labels))
+        steps.append(StudyStep(step_id, kind, position, title, text, items, video, watched, **labels,
+                               video_sha256=sha))
     return tuple(steps)
 
 
@@ -226,20 +235,25 @@ def _parse_video(check, entry, path, protocol_folder, check_files):
     watched = entry.get("require_watched", True)
     if not isinstance(watched, bool):
         check.fail(path + ("require_watched",), f"expected true or false, got {watched!r}")
+    stated = check.get(entry, path + ("sha256",), "text", default=None)
     if has_url:
         url = check.get(entry, path + ("url",), "text", nonempty=True)
         if url.split(":", 1)[0] not in ("http", "https"):
             check.fail(path + ("url",), f"expected an http(s) URL, got {url!r}")
-        return url, watched
+        return url, watched, stated
     name = check.get(entry, path + ("file",), "text", nonempty=True)
     file = Path(name).expanduser()
     if not file.is_absolute():
-        if protocol_folder is None:
-            check.fail(path + ("file",), f"a relative video file ({name!r}) needs the protocol loaded from a file")
-        file = protocol_folder / file
-    if check_files and not file.is_file():
-        check.fail(path + ("file",), f"no video file at {file}")
-    return str(file.resolve()), watched
+        candidates = ([protocol_folder / file] if protocol_folder is not None else []) + [SHIPPED_MEDIA / file]
+        file = next((c for c in candidates if c.is_file()), candidates[0])
+    if not file.is_file():
+        if check_files:
+            check.fail(path + ("file",), f"no video file at {file}")
+        return None, watched, stated
+    sha = hashlib.sha256(file.read_bytes()).hexdigest()
+    if stated is not None and stated != sha:
+        check.fail(path + ("sha256",), f"the video file {file} has sha256 {sha}, not the protocol's {stated}")
+    return str(file.resolve()), watched, sha
 
 
 def _parse_items(check, entry, path, kind) -> tuple[Item, ...]:
