@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .validation import as_float_array, as_positive
+from .validation import as_bool, as_float_array, as_positive
 
 
 def _pair(name: str, value, *, allow_zero: bool = False) -> tuple[float, float]:
@@ -76,14 +76,12 @@ class TwoLinkArm:
         else:
             i1, i2 = _pair("inertias", inertias, allow_zero=True)
         gravity = as_positive("gravity", gravity, allow_zero=True)
-        if not isinstance(gravity_compensation, (bool, np.bool_)):
-            raise ValueError(f"gravity_compensation: expected True or False, got {gravity_compensation!r}")
         self.link_lengths = (l1, l2)
         self.masses = (m1, m2)
         self.com_fractions = (float(fractions[0]), float(fractions[1]))
         self.inertias = (i1, i2)
         self.gravity = gravity
-        self.gravity_compensation = bool(gravity_compensation)
+        self.gravity_compensation = as_bool("gravity_compensation", gravity_compensation)
         self.parameters = ArmParameters(l1, l2, m1, m2, fractions[0] * l1, fractions[1] * l2, i1, i2, gravity)
         p = self.parameters
         # det M(q) = (m1 lc1^2 + I1 + m2 l1^2)(m2 lc2^2 + I2) - (m2 l1 lc2 cos q2)^2; positive for
@@ -139,6 +137,7 @@ class TwoLinkArm:
         Raises ValueError for positions outside the annulus the arm can reach.
         """
         position = as_float_array("position", position, shape=(2,))
+        elbow_up = as_bool("elbow_up", elbow_up)
         l1, l2 = self.link_lengths
         distance_sq = np.sum(position**2, axis=-1)
         cos_q2 = (distance_sq - l1**2 - l2**2) / (2 * l1 * l2)

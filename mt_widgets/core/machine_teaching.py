@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .learner import check_demonstrations
+from .learner import DEFAULT_LAMBDA, check_demonstrations
 from .ridge_kernels import optimal_actions_kernel, svd_with_rank
 from .validation import as_float_array, as_positive
 
@@ -84,13 +84,14 @@ def _optimal_from(operator: RidgeOperator, theta: np.ndarray) -> np.ndarray:
     return (operator.left[:, kept] * inverse_gains) @ (operator.right_t[kept] @ theta.T)
 
 
-def optimal_actions(Phi, theta, lam) -> np.ndarray:
+def optimal_actions(Phi, theta, lam: float = DEFAULT_LAMBDA) -> np.ndarray:
     """The demonstration that teaches ``theta`` to a ridge learner with parameter ``lam``.
 
     Args:
         Phi: (N, S) features of the query states.
         theta: (R, S) the skill to teach.
-        lam: the learner's ridge parameter (>= 0).
+        lam: the learner's ridge parameter (>= 0); by default the learner's own default,
+            ``DEFAULT_LAMBDA`` (what ``RidgeLearner()`` uses).
 
     Returns:
         U_bar: (N, R). Learning from it gives back theta exactly when Phi has rank S; below

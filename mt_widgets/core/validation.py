@@ -70,3 +70,10 @@ def as_count(name: str, value, *, minimum: int = 1) -> int:
     if value < minimum:
         raise ValueError(f"{name}: expected a whole number >= {minimum}, got {value}")
     return int(value)
+
+
+def as_bool(name: str, value) -> bool:
+    """Checks a boolean option: only ``True`` or ``False`` (not 0, 1, None or a string)."""
+    if not isinstance(value, bool):
+        raise ValueError(f"{name}: expected True or False, got {_describe(value)}")
+    return value

@@ -422,7 +422,7 @@ class Session:
 
     def _start_episode(self, slot: _Slot) -> None:
         phase = self._phase(slot)
-        skill = self.protocol.skill(phase.skill)
+        skill = self.protocol.skills[phase.skill]
         participant = self.enrolment["index"] if self.protocol.query_states == "per-participant" else None
         seed = SeedSchedule(self.protocol.seed).seed(phase.states_index, slot.episode - 1, participant)
         states = skill.query_states(seed=seed, n=phase.demonstrations)
@@ -511,7 +511,7 @@ class Session:
         if key not in self._teaching_episodes:
             started = self._episodes[key]
             self._teaching_episodes[key] = self._new_teaching_episode(
-                self.protocol.skill(started["skill"]), np.asarray(started["query_states"], dtype=float),
+                self.protocol.skills[started["skill"]], np.asarray(started["query_states"], dtype=float),
                 np.asarray(self._actions[key], dtype=float))
         return self._teaching_episodes[key]
 
@@ -673,7 +673,7 @@ class Session:
                                     f"it was already recorded or is not reached yet")
         key = (slot.phase_index, slot.episode)
         started = self._episodes[key]
-        skill = self.protocol.skill(started["skill"])
+        skill = self.protocol.skills[started["skill"]]
         try:
             action = np.asarray(action, dtype=float).reshape(-1)
         except (TypeError, ValueError):
@@ -742,7 +742,7 @@ class Session:
             raise ValueError(f"episode: expected a TeachingEpisode or None, got {type(episode).__name__}")
         logged = np.asarray(self._actions[key], dtype=float)
         duration = self.protocol.reproduction_duration_s
-        duration = self.protocol.skill(started["skill"]).default_duration if duration is None else duration
+        duration = self.protocol.skills[started["skill"]].default_duration if duration is None else duration
         checks = (
             ("skill", episode.skill.key == started["skill"]
              and np.array_equal(episode.skill.theta, np.asarray(started["theta"], dtype=float)),

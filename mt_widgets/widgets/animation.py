@@ -2,7 +2,7 @@
 
 A Python loop with ``time.sleep`` would send one message per frame, block the kernel and
 drop frames; ipycanvas can instead queue all frames in one ``hold_canvas`` batch, and the
-front end's canvas manager plays them, awaiting each ``sleep`` (DESIGN.md section 7).
+front end's canvas manager plays them, awaiting each ``sleep`` (docs/design.md, "Widgets").
 The kernel cannot know when playback ends; the layer's final content is recorded so a
 new browser view shows the last frame.
 """

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from typing import Callable
 
+from mt_widgets.core.validation import as_bool
+
 
 class Callbacks:
     """An ordered set of callbacks; calling it calls each, and an exception stops it and propagates.
@@ -25,7 +27,7 @@ class Callbacks:
         """Adds ``callback`` (once), or removes it with ``remove=True``."""
         if not callable(callback):
             raise ValueError(f"callback: expected a callable, got {type(callback).__name__}")
-        if remove:
+        if as_bool("remove", remove):
             if callback in self.callbacks:
                 self.callbacks.remove(callback)
         elif callback not in self.callbacks:

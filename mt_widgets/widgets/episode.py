@@ -27,7 +27,7 @@ from traitlets import Float, Int, List, Unicode
 
 from mt_widgets.core import DEFAULT_LAMBDA, SKILLS, Skill, TeachingEpisode
 from mt_widgets.core.guidance import guidance_parts
-from mt_widgets.core.validation import as_float_array, as_positive
+from mt_widgets.core.validation import as_bool, as_float_array, as_positive
 
 from .callbacks import Callbacks
 from .guidance import GuidancePanel
@@ -171,11 +171,10 @@ class EpisodeWidget(VBox):
                                       seed=None if query_states is not None else seed, lam=lam, duration=duration)
         #: The ``TeachingEpisode`` shown: the science of this episode lives there.
         self.episode = episode
-        if not isinstance(guidance, (bool, np.bool_)):
-            raise TypeError(f"guidance: expected a bool, got {type(guidance).__name__} {guidance!r}")
         # Guidance that shows nothing is no guidance: the episode does not stop after each arrow.
-        self.guidance = bool(guidance) and (self.guidance_arrows or self.guidance_words)
-        self.show_ghost = bool(ghost)
+        self.guidance = as_bool("guidance", guidance) and (self.guidance_arrows or self.guidance_words)
+        self.show_ghost = as_bool("ghost", ghost)
+        show_description = as_bool("show_description", show_description)
         self.episode_index = int(episode_index)
         self.result: EpisodeResult | None = None
         self.records: list[DemonstrationRecord] = []

@@ -12,6 +12,7 @@ import numpy as np
 from ipywidgets import HTML
 
 from mt_widgets.core import action_difference
+from mt_widgets.core.validation import as_bool
 
 from .theme import ArrowStyle, Theme
 
@@ -67,7 +68,8 @@ class GuidancePanel(HTML):
     def show(self, action, optimal, exact: bool = True, legend: bool = True) -> None:
         """Explain the difference between ``action`` and ``optimal`` (both (2,)); ``legend``: with the
         two arrows' legend (when the arrows are drawn too)."""
-        note = "" if exact else ("<br><small>With fewer query states than features no demonstration teaches the "
+        note = "" if as_bool("exact", exact) else ("<br><small>With fewer query states than features no "
+                                                   "demonstration teaches the "
                                  "skill exactly; the optimal arrow is the least-error one.</small>")
         self.value = (f"<div>{legend_html(self.theme) if legend else ''}</div>"
                       f"<div style='margin-top:4px'>{explain_difference(action, optimal, self.units)}</div>{note}")

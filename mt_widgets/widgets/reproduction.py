@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 from ipywidgets import HTML, Button, HBox, Layout, VBox
 
+from mt_widgets.core.validation import as_bool
+
 from .animation import DEFAULT_FPS, frame_times, play_frames, sample_at, set_style_now
 from .arm_view import ArmView
 from .redraw import drawing_batch
@@ -52,7 +54,7 @@ class ReproductionPlayer(VBox):
     def __init__(self, skill, theme=None, fps: float = DEFAULT_FPS, width=None, height=None, css_width=None,
                  action_length=None, target_label: str | None = "goal", show_outcome: bool = True):
         self.skill = skill
-        self.show_outcome = bool(show_outcome)
+        self.show_outcome = as_bool("show_outcome", show_outcome)
         self.fps = float(fps)
         self.view = ArmView(skill, width=width, height=height, theme=theme, action_length=action_length,
                             css_width=css_width, target_label=target_label)
@@ -119,7 +121,7 @@ class ReproductionPlayer(VBox):
             painter.begin_frames(canvas, theme)
 
         ghost_fill = _with_alpha(theme.ghost, 0.45)
-        robot_fill = theme.end_effector if self.skill.robot == "sim" else theme.uarm_state
+        robot_fill = painter.marker_fill(theme)
 
         def draw_frame(canvas, index):
             if ghost_pixels is not None:

@@ -24,7 +24,7 @@ import numpy as np
 from ipywidgets import HTML, Button, FloatText, HBox, Layout, ToggleButtons, VBox
 from traitlets import Any, Bool, Int, List
 
-from mt_widgets.core.validation import as_float_array
+from mt_widgets.core.validation import as_bool, as_float_array
 
 from .arm_view import ArmView
 from .arrows import draw_arrow
@@ -109,7 +109,7 @@ class TeachingCanvas(VBox):
         self.action_dim = int(skill.plant.action_dim)
         self.query_states = states
         self.grab_radius = float(grab_radius)
-        self.auto_advance = bool(auto_advance)
+        self.auto_advance = as_bool("auto_advance", auto_advance)
         self.view = ArmView(skill, width=width, height=height, theme=theme, action_length=action_length,
                             css_width=css_width, target_label=target_label)
         self.theme = self.view.theme
@@ -203,6 +203,7 @@ class TeachingCanvas(VBox):
         self.pending_action = None
         self._draw_arrows()
         self._update_readout()
+        self._sync_entries()
 
     def confirm(self) -> ConfirmedAction:
         """Record the pending arrow as the demonstration at the current state."""
@@ -277,6 +278,7 @@ class TeachingCanvas(VBox):
                 self.view.show_state(state)
             self._draw_arrows()
         self._update_readout()
+        self._sync_entries()
         self.confirm_button.disabled = True
 
     def _draw_arrows(self, rubber_band: bool = False) -> None:
@@ -292,10 +294,12 @@ class TeachingCanvas(VBox):
         style = theme.rubber_band if rubber_band else theme.user_arrow
 
         def paint(canvas):
-            if optimal is not None:
-                draw_arrow(canvas, start, optimal, theme.optimal_arrow)
+            # The optimal arrow last: dashed and outlined, it stays visible on the user's arrow
+            # when the two are aligned and it is the shorter, and the user's shows in its gaps.
             if user is not None:
                 draw_arrow(canvas, start, user, style)
+            if optimal is not None:
+                draw_arrow(canvas, start, optimal, theme.optimal_arrow)
 
         view.show(paint, "arrows")
 
@@ -318,6 +322,9 @@ class TeachingCanvas(VBox):
     def _sync_entries(self) -> None:
         u = self.pending_action
         if u is None:
+            # No arrow (a new state, or the arrow cleared): empty fields, so "Set arrow" never
+            # re-applies the previous state's numbers.
+            self.first_entry.value = self.second_entry.value = 0.0
             return
         if self.entry_mode.value == "components":
             self.first_entry.value, self.second_entry.value = round(u[0], 4), round(u[1], 4)

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mt_widgets import RidgeLearner, analyse_demonstrations, optimal_actions, teaching_risk
-from mt_widgets.core import UnderdeterminedTeachingWarning, action_difference
+from mt_widgets import SKILLS, RidgeLearner, analyse_demonstrations, optimal_actions, teaching_risk
+from mt_widgets.core import DEFAULT_LAMBDA, UnderdeterminedTeachingWarning, action_difference
 
 
 @st.composite
@@ -140,3 +140,13 @@ def test_analysis_and_optimal_actions_agree_on_rank():
         optimal_actions(Phi, np.ones((2, 5)), 0.01)
     warned = any(issubclass(w.category, UnderdeterminedTeachingWarning) for w in caught)
     assert analyse_demonstrations(Phi, np.ones((5, 2)), np.ones((2, 5)), 0.01).exact == (not warned)
+
+
+def test_optimal_actions_defaults_to_the_learners_lambda():
+    skill = SKILLS["sim-point"]
+    Phi = skill.features(skill.query_states(seed=0))
+    U_bar = optimal_actions(Phi, skill.theta)
+    np.testing.assert_array_equal(U_bar, optimal_actions(Phi, skill.theta, DEFAULT_LAMBDA))
+    # The README's promise: with the defaults on both sides, the optimal arrows teach theta.
+    assert teaching_risk(RidgeLearner().fit(Phi, U_bar), skill.theta) < 1e-10
+    assert not np.allclose(U_bar, optimal_actions(Phi, skill.theta, 0.0), atol=1e-6), "lam must matter here"

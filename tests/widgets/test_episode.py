@@ -187,3 +187,29 @@ def test_restored_demonstrations_of_the_wrong_shape_are_refused_by_name_not_resh
     episode.restore([])
     episode.restore(np.zeros((0, 2)))
     assert episode.state_index == 0
+
+
+@pytest.mark.parametrize("guidance", [True, False])
+def test_the_typed_arrow_fields_start_empty_at_each_new_state(guidance):
+    skill = SKILLS["sim-point"]
+    episode = EpisodeWidget(skill, seed=2, guidance=guidance)
+    teaching = episode.teaching
+    for mode in ("components", "polar"):
+        teaching.entry_mode.value = mode
+        teaching.first_entry.value, teaching.second_entry.value = 30.0, 2.0
+        teaching.set_button.click()
+        assert teaching.pending_action is not None
+        teaching.confirm_button.click()
+        if guidance:
+            episode.next()
+        # The next state: no arrow yet, and nothing typed that "Set arrow" would re-apply.
+        assert teaching.pending_action is None
+        assert (teaching.first_entry.value, teaching.second_entry.value) == (0.0, 0.0)
+        teaching.set_button.click()
+        assert teaching.pending_action == [0.0, 0.0], "Set arrow re-applied the previous state's arrow"
+        teaching.clear_action()
+    teaching.set_action([1.5, -0.5])
+    teaching.entry_mode.value = "components"
+    assert (teaching.first_entry.value, teaching.second_entry.value) == (1.5, -0.5), "the fields show the arrow"
+    teaching.clear_action()
+    assert (teaching.first_entry.value, teaching.second_entry.value) == (0.0, 0.0)

@@ -12,11 +12,12 @@ Y left, origin on the base axis. The arm works in millimetres at the fixed teach
   plant step per move, each step within the plant's per-step limit and the envelope's speed
   limit, every move through ``SwiftPro.move_to`` (which checks the safety envelope and asks
   the arm M2222 before sending anything);
-- :meth:`UArmBridge.stop` halts at once: the connector's stop command, and no further moves:
-  each job (showing a state, a reproduction) reads the connector's stop generation when it
-  starts and passes it to every ``move_to``, so a stop at any moment since the job began
-  makes its moves refuse to be sent; :meth:`UArmBridge.resume` lets the arm move again (on
-  firmware 4.0-4.4, whose stop is a pause, through ``SwiftPro.resume``);
+- :meth:`UArmBridge.stop` halts at once: the connector's stop, through the arm's one
+  :class:`~mt_widgets.hardware.stop.StopSwitch`, and no further moves: each job (showing a
+  state, a reproduction) refuses to start while the switch is held and reads its
+  generation when it starts, passing it to every ``move_to``, so a stop at any moment since
+  the job began makes its moves refuse to be sent; :meth:`UArmBridge.resume` releases the
+  switch (``SwiftPro.resume``, which on firmware 4.0-4.4, whose stop is a pause, un-pauses);
 - an arm outside the safety envelope (after power-up) is brought in once, by
   :meth:`UArmBridge.home_if_outside` (``SwiftPro.home``), which the app calls at connection;
 - a connector error never escapes :meth:`execute`: it comes back as a message in the
@@ -38,10 +39,20 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mt_widgets.core import SKILLS, running_under_test
-from mt_widgets.hardware import (TEACHING_RADIUS_MM, SafetyEnvelope, SwiftPro, SwiftProDisconnected, SwiftProError,
-                                 SwiftProNotFound, SwiftProPortBusy, SwiftProStopped, SwiftProTimeout,
-                                 SwiftProUnreachable, UnsafeMoveError)
-from mt_widgets.hardware.envelope import is_real, polar_waypoints
+from mt_widgets.core.validation import as_positive
+
+from .connector import SwiftPro
+from .envelope import TEACHING_RADIUS_MM, SafetyEnvelope, polar_waypoints
+from .errors import (
+    SwiftProDisconnected,
+    SwiftProError,
+    SwiftProNotFound,
+    SwiftProPortBusy,
+    SwiftProStopped,
+    SwiftProTimeout,
+    SwiftProUnreachable,
+    UnsafeMoveError,
+)
 
 log = logging.getLogger(__name__)
 
@@ -184,23 +195,22 @@ class UArmBridge:
             raise ValueError(f"arm: expected a connected SwiftPro, got {type(arm).__name__}")
         self.arm = arm
         self.envelope: SafetyEnvelope = arm.envelope
-        self.step_period_s = _positive("step_period_s", _PLANT.step_period if step_period_s is None else step_period_s)
-        self.max_step_mm = _positive("max_step_mm", _PLANT.max_step_cm * MM_PER_CM if max_step_mm is None
-                                     else max_step_mm)
+        self.step_period_s = as_positive("step_period_s",
+                                         _PLANT.step_period if step_period_s is None else step_period_s)
+        self.max_step_mm = as_positive("max_step_mm", _PLANT.max_step_cm * MM_PER_CM if max_step_mm is None
+                                       else max_step_mm)
         self.approach_speed_mm_s = self.envelope.check_speed(approach_speed_mm_s)
-        self.waypoint_mm = _positive("waypoint_mm", waypoint_mm)
+        self.waypoint_mm = as_positive("waypoint_mm", waypoint_mm)
         if self.waypoint_mm > self.envelope.max_step_mm:
             raise ValueError(f"waypoint_mm: expected at most the envelope's max_step_mm = {self.envelope.max_step_mm}, "
                              f"got {waypoint_mm}")
-        if not (is_real(min_move_mm) and math.isfinite(min_move_mm) and min_move_mm >= 0):
-            raise ValueError(f"min_move_mm: expected a number of mm >= 0, got {min_move_mm!r}")
-        self.min_move_mm = float(min_move_mm)
+        self.min_move_mm = as_positive("min_move_mm", min_move_mm, allow_zero=True)
         self.z_mm = float(arm.teaching_height_mm if z_mm is None else z_mm)
         self.envelope.check_point(self.envelope.min_radius_mm + 1.0, 0.0, self.z_mm)
-        self._stop_requested = threading.Event()
-        # Counts stop() calls, so that resume() never clears a stop that came while it ran.
-        self._flag_lock = threading.Lock()
-        self._stops = 0
+        # The arm's stop switch, not one of our own: a stop by the bridge or on the arm is one stop.
+        self._switch = arm.stop_switch
+        # One job (showing a state, a reproduction, homing) at a time: two would interleave
+        # their moves. Held for a whole job; stop() never takes it.
         self._busy = threading.Lock()
         self.moves_sent = 0
 
@@ -224,14 +234,15 @@ class UArmBridge:
     # ------------------------------------------------------------------ moving
     @property
     def stop_requested(self) -> bool:
-        return self._stop_requested.is_set()
+        """True from a stop (here or on the arm) until :meth:`resume`."""
+        return self._switch.held
 
     def _job_generation(self) -> int:
-        """Start a job: read the connector's stop generation first, then the stop flag. A stop
-        before this call is seen in the flag; one after it changes the generation, and every
+        """Start a job: read the switch's generation first, then whether it is held. A stop
+        before this call holds the switch; one after it changes the generation, and every
         ``move_to(..., unless_stopped_since=generation)`` of the job then refuses to be sent."""
-        generation = self.arm.stop_generation
-        if self._stop_requested.is_set():
+        generation = self._switch.generation
+        if self._switch.held:
             raise SwiftProStopped("stop was requested; no further moves until resume")
         return generation
 
@@ -333,12 +344,12 @@ class UArmBridge:
             except SwiftProStopped:
                 report.stopped = True
             except (SwiftProError, UnsafeMoveError) as exc:
-                if self._stop_requested.is_set():
+                if self._switch.held:
                     report.stopped = True
                 else:
                     log.warning("reproduction on the arm ended by %r", exc)
                     report.error = describe_error(exc)
-            report.stopped = report.stopped or self._stop_requested.is_set()
+            report.stopped = report.stopped or self._switch.held
         report.duration_s = time.monotonic() - started
         return report
 
@@ -352,9 +363,6 @@ class UArmBridge:
             None, or a sentence for the screen if the stop command could not be sent (the
             link is down: the arm is not being driven by us anyway).
         """
-        with self._flag_lock:
-            self._stops += 1
-            self._stop_requested.set()
         try:
             self.arm.stop()
         except (SwiftProError, OSError) as exc:
@@ -373,13 +381,7 @@ class UArmBridge:
             SwiftProStopped: a stop came while resuming.
             SwiftProError: the link failed (the stop stays in force).
         """
-        with self._flag_lock:
-            seen = self._stops
         self.arm.resume()
-        with self._flag_lock:
-            if self._stops != seen:
-                raise SwiftProStopped("stop was pressed while resuming; the arm stays stopped")
-            self._stop_requested.clear()
 
     def beep(self, frequency_hz: float, duration_ms: float) -> str | None:
         """Sound the arm's buzzer (M2210); returns a message instead of raising if the link fails."""
@@ -388,12 +390,6 @@ class UArmBridge:
         except SwiftProError as exc:
             return describe_error(exc)
         return None
-
-
-def _positive(name: str, value) -> float:
-    if not (is_real(value) and math.isfinite(value) and value > 0):
-        raise ValueError(f"{name}: expected a positive number, got {value!r}")
-    return float(value)
 
 
 __all__ = ["ExecutionReport", "FAST_SIMULATOR_URL", "MM_PER_CM", "SIMULATOR_URL", "UArmBridge", "arm_to_plant_cm",
