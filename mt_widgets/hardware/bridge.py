@@ -43,8 +43,16 @@ from mt_widgets.core.validation import as_positive
 
 from .connector import SwiftPro
 from .envelope import TEACHING_RADIUS_MM, SafetyEnvelope, polar_waypoints
-from .errors import (SwiftProDisconnected, SwiftProError, SwiftProNotFound, SwiftProPortBusy, SwiftProStopped,
-                     SwiftProTimeout, SwiftProUnreachable, UnsafeMoveError)
+from .errors import (
+    SwiftProDisconnected,
+    SwiftProError,
+    SwiftProNotFound,
+    SwiftProPortBusy,
+    SwiftProStopped,
+    SwiftProTimeout,
+    SwiftProUnreachable,
+    UnsafeMoveError,
+)
 
 log = logging.getLogger(__name__)
 

@@ -188,7 +188,8 @@ class SwiftPro:
             # 3.x answers "VSwiftPro", 4.x "SwiftPro".
             name = dialect_for(version).device_name(self._request("P2201").payload)
             if name != "SwiftPro":
-                raise SwiftProError(f"P2201 must name a SwiftPro, got {name!r}: this connector drives the Swift Pro only")
+                raise SwiftProError(f"P2201 must name a SwiftPro, got {name!r}: this connector drives the Swift Pro "
+                                    "only")
             self.firmware_version, self.device_name = version, name
             log.info("connected to a %s on %r, firmware %s (dialect %s)", name, port,
                      ".".join(map(str, version)), self.dialect.name)
