@@ -49,7 +49,8 @@ def wait_for_log(logs, participant, predicate, timeout=60.0):
         if predicate(events):
             return events
         time.sleep(0.1)
-    raise AssertionError(f"{participant}: the log never satisfied the condition; last: {log_events(logs, participant)[-1:]}")
+    last = log_events(logs, participant)[-1:]
+    raise AssertionError(f"{participant}: the log never satisfied the condition; last: {last}")
 
 
 def hex_rgb(colour: str) -> list[int]:
@@ -172,8 +173,9 @@ def phases(page, logs, participant, group, shot, withdraw_in_p1=False):
         page.get_by_text(f"Part {phase.index + 1} of {len(PROTOCOL.phases)}").first.wait_for(timeout=60_000)
         button(page, "Start").click()
         for episode in range(1, phase.episodes + 1):
-            events = wait_for_log(logs, participant, lambda ev: any(
-                e["type"] == "episode_started" and e["phase"] == phase.id and e["episode"] == episode for e in ev))
+            key = (phase.id, episode)
+            events = wait_for_log(logs, participant, lambda ev, key=key: any(
+                e["type"] == "episode_started" and (e["phase"], e["episode"]) == key for e in ev))
             started = [e for e in events if e["type"] == "episode_started"][-1]
             assert started["guidance_modality"] == "arrows"
             view = ArmView(PROTOCOL.skill(phase.skill))
@@ -182,9 +184,8 @@ def phases(page, logs, participant, group, shot, withdraw_in_p1=False):
                 pixel = view.end_effector_pixel(np.asarray(started["query_states"][index]))
                 wait_for_marker(page, pixel, canvases=2)
                 drag_and_confirm(page, pixel, (45 - 18 * index, -40 + 10 * index))
-                wait_for_log(logs, participant, lambda ev: any(
-                    e["type"] == "demonstration" and (e["phase"], e["episode"], e["index"]) == (phase.id, episode, index)
-                    for e in ev))
+                wait_for_log(logs, participant, lambda ev, key=key + (index,): any(
+                    e["type"] == "demonstration" and (e["phase"], e["episode"], e["index"]) == key for e in ev))
                 if withdraw_in_p1 and index == 1:
                     button(page, "Withdraw from the study").click()
                     page.get_by_text("Do you want to withdraw from the study?").wait_for()
@@ -208,8 +209,8 @@ def phases(page, logs, participant, group, shot, withdraw_in_p1=False):
                     if shot and episode == 1 and index == 0:
                         page.screenshot(path=shot("guidance-arrows-only"))
                     button(page, name).click()
-            wait_for_log(logs, participant, lambda ev: any(
-                e["type"] == "episode_finished" and (e["phase"], e["episode"]) == (phase.id, episode) for e in ev))
+            wait_for_log(logs, participant, lambda ev, key=key: any(
+                e["type"] == "episode_finished" and (e["phase"], e["episode"]) == key for e in ev))
             page.get_by_text("This is what the robot learnt").wait_for(timeout=30_000)
             if shot and phase.id == "P1":
                 page.screenshot(path=shot("reproduction"))
