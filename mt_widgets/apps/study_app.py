@@ -30,17 +30,9 @@ from pathlib import Path
 import numpy as np
 from ipywidgets import HTML, Button, Combobox, Dropdown, HBox, Layout, Text, VBox
 
-from mt_widgets.core import SKILLS, running_under_test
-from mt_widgets.study import (
-    BUILTIN_PROTOCOLS,
-    LogError,
-    LogFolderError,
-    ParticipantIdError,
-    ProtocolError,
-    Session,
-    StudyFolder,
-    load_protocol,
-)
+from mt_widgets.core import running_under_test
+from mt_widgets.study import (BUILTIN_PROTOCOLS, LogError, LogFolderError, ParticipantIdError, ProtocolError,
+                              Session, StudyFolder, load_protocol)
 from mt_widgets.widgets import EpisodeWidget
 
 _log = logging.getLogger(__name__)
@@ -316,8 +308,8 @@ class StudyApp(VBox):
     def _new_practice_round(self, step) -> None:
         seed = self._practice_seed.spawn(1)[0]
         self._practice_round += 1
-        episode = self._episode_widget(step.skill, SKILLS[step.skill].query_states(seed=seed), guidance=False,
-                                       index=0, total=1)
+        states = self.session.protocol.skills[step.skill].query_states(seed=seed)
+        episode = self._episode_widget(step.skill, states, guidance=False, index=0, total=1)
         episode.on_finished(lambda _: self._practice_round_over())
         self.episode = episode
         self._practice_again.layout.display = "none"
@@ -360,7 +352,8 @@ class StudyApp(VBox):
         # Blinding: no group word on the canvas ("target" names a group), and neither the skill's
         # formula (the answer), the target skill's ghost, nor the teaching error and distance to the
         # goal, none of which the paper's participants saw.
-        episode = EpisodeWidget(skill, query_states=states, guidance=guidance, lam=protocol.lam, theme=self.theme,
+        episode = EpisodeWidget(protocol.skills[skill], query_states=states, guidance=guidance, lam=protocol.lam,
+                                theme=self.theme,
                                 duration=protocol.reproduction_duration_s, ghost=False, target_label="goal",
                                 show_description=False, show_outcome=False,
                                 episode_index=index, episodes_total=total, on_demonstration=on_demonstration,

@@ -33,9 +33,12 @@ File format (TOML, or the same structure in JSON; ``format = 1``)::
     duration_s = 120                    # 0 skips practice
     text = "..."
 
+    [skills]                            # optional: a user's own skills
+    module = "my_skills.py"             # a Python file (relative to this file); its Skills by key
+
     [[phases]]                          # in order; one table per phase
     id = "P1"
-    skill = "sim-point"                 # a key of mt_widgets.SKILLS
+    skill = "sim-point"                 # a key of mt_widgets.SKILLS, of [skills], or "module:name"
     episodes = 1
     demonstrations = 5                  # optional, default: the skill's number of features
     guidance = []                       # groups that see guidance after each demonstration
@@ -56,12 +59,19 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import importlib
+import importlib.util
 import json
 import math
 import re
+import sys
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
+
+from mt_widgets.core import SKILLS, Skill, SkillRegistry
 
 try:  # Python >= 3.11
     import tomllib as _toml
@@ -70,8 +80,6 @@ except ModuleNotFoundError:  # pragma: no cover - exercised only on Python 3.10
         import tomli as _toml  # type: ignore[no-redef]
     except ModuleNotFoundError:
         _toml = None
-
-from mt_widgets.core import SKILLS
 
 FORMAT_VERSION = 1
 PROTOCOL_FOLDER = Path(__file__).parent / "protocols"
@@ -104,7 +112,7 @@ class Phase:
     Attributes:
         id: short name shown in logs and CSVs ("P3").
         index: 0-based position in the protocol.
-        skill: key of ``mt_widgets.SKILLS``.
+        skill: the skill's name in the protocol (``Protocol.skills[skill]`` is the ``Skill``).
         episodes: number of episodes (>= 1).
         demonstrations: demonstrations per episode (>= 1).
         guidance: groups that see guidance after each demonstration.
@@ -158,6 +166,9 @@ class Protocol:
     data: dict = field(repr=False, compare=False)
     source_text: str = field(default="", repr=False, compare=False)
     source: str = field(default="<string>", compare=False)
+    #: The skills its phases name, by name (see ``resolve_protocol_skills``).
+    skills: Mapping[str, Skill] = field(default_factory=lambda: MappingProxyType(dict(SKILLS)), repr=False,
+                                        compare=False)
 
     @property
     def hash(self) -> str:
@@ -335,8 +346,68 @@ class _Checker:
                 self.fail(path + (key,), f"unknown field (expected one of {sorted(allowed)}); check its spelling")
 
 
-def _skill_keys():
-    return SKILLS
+_SKILL_REFERENCE = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
+
+
+def resolve_protocol_skills(raw: dict, check: "_Checker", source: str) -> tuple[Mapping[str, Skill], dict | None]:
+    """The skills a protocol can name, by the names it uses.
+
+    - the paper's four (``SKILLS``: "sim-point", ...);
+    - every ``Skill`` (and every skill of a ``SkillRegistry``) defined at the top of the Python
+      file named by ``[skills] module = "path/to/skills.py"``, by its key; the path is relative
+      to the protocol file;
+    - a reference "package.module:name" to an importable module's ``Skill``, by that text.
+
+    Returns:
+        (name -> Skill, the ``[skills]`` table with the module's absolute path, or None). The
+        stored protocol (``study.json``) keeps the absolute path, so a study folder reopened
+        from anywhere finds the same file.
+    """
+    skills: dict[str, Skill] = dict(SKILLS)
+    table = raw.get("skills")
+    if table is not None:
+        table = check.get(raw, ("skills",), "table")
+        check.unknown(table, ("skills",), ("module",))
+        given = check.get(table, ("skills", "module"), "text", nonempty=True)
+        base = Path(source).parent if source not in ("<string>", "") else Path.cwd()
+        path = (base / given).resolve()
+        if not path.is_file():
+            check.fail(("skills", "module"), f"expected a Python file of skills (relative to {base}), got {given!r}: "
+                                             f"no file at {path}")
+        name = "mt_widgets_protocol_skills_" + hashlib.sha256(str(path).encode()).hexdigest()[:16]
+        module = sys.modules.get(name)  # loaded once per process: its skills keep their identity
+        if module is None:
+            spec = importlib.util.spec_from_file_location(name, path)
+            module = importlib.util.module_from_spec(spec)
+            try:
+                spec.loader.exec_module(module)
+            except Exception as error:  # the user's code: whatever it raises is reported with its file
+                check.fail(("skills", "module"), f"{path} failed to load: {type(error).__name__}: {error}")
+            sys.modules[name] = module
+        found = [value for value in vars(module).values() if isinstance(value, Skill)]
+        for registry in (value for value in vars(module).values() if isinstance(value, SkillRegistry)):
+            found.extend(registry.values())
+        for skill in found:
+            if skills.get(skill.key, skill) is not skill:
+                check.fail(("skills", "module"), f"expected skills with keys of their own, got a second skill "
+                                                 f"{skill.key!r} in {path}")
+            skills[skill.key] = skill
+        table = {"module": str(path)}
+    names = [raw.get("practice", {}).get("skill")] + [entry.get("skill") for entry in raw.get("phases", [])
+                                                      if isinstance(entry, dict)]
+    for i, reference in enumerate(names):
+        if not isinstance(reference, str) or reference in skills or not _SKILL_REFERENCE.match(reference):
+            continue
+        path = ("practice", "skill") if i == 0 else ("phases", i - 1, "skill")
+        module_name, attribute = reference.split(":")
+        try:
+            value = getattr(importlib.import_module(module_name), attribute)
+        except (ImportError, AttributeError) as error:
+            check.fail(path, f"expected a Skill at {reference!r} (module:name), got {type(error).__name__}: {error}")
+        if not isinstance(value, Skill):
+            check.fail(path, f"expected a Skill at {reference!r}, got {type(value).__name__}")
+        skills[reference] = value
+    return MappingProxyType(skills), table
 
 
 def parse_protocol(text: str, source: str = "<string>", kind: str | None = None) -> Protocol:
@@ -372,10 +443,10 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None)
         if not isinstance(raw, dict):
             raise ProtocolError(f"expected a JSON object at the top, got {type(raw).__name__}", source, 1)
     check = _Checker(_Locator(text, kind), source)
-    skills = _skill_keys()
+    skills, skills_table = resolve_protocol_skills(raw, check, source)
 
     top_keys = ("format", "name", "title", "groups", "lambda", "seed", "query_states", "reproduction_duration_s",
-                "assignment", "texts", "practice", "phases")
+                "assignment", "texts", "practice", "phases", "skills")
     check.unknown(raw, (), top_keys)
     version = check.get(raw, ("format",), "integer")
     if version != FORMAT_VERSION:
@@ -456,6 +527,8 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None)
         phases.append(Phase(phase_id, i, skill, episodes, demonstrations, tuple(guidance), instructions, states_index))
 
     data = copy.deepcopy(raw)
+    if skills_table is not None:
+        data["skills"] = skills_table
     data.setdefault("groups", list(groups))
     data.setdefault("query_states", query_states)
     data["assignment"].setdefault("method", "block")
@@ -463,7 +536,7 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None)
         entry.setdefault("demonstrations", phase.demonstrations)
         entry.setdefault("guidance", [])
     return Protocol(name, title, tuple(groups), lam, seed, query_states, duration, block_size, assignment_seed,
-                    texts, practice, tuple(phases), data, text, source)
+                    texts, practice, tuple(phases), data, text, source, skills)
 
 
 def load_protocol(path_or_name) -> Protocol:

@@ -73,7 +73,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import mt_widgets
-from mt_widgets.core import SKILLS, SeedSchedule, TeachingEpisode
+from mt_widgets.core import SeedSchedule, TeachingEpisode
 
 from .log import LogError, MemoryLog, ParticipantLog, StudyFolder, to_jsonable
 from .protocol import Phase, Protocol
@@ -365,7 +365,7 @@ class Session:
 
     def _start_episode(self, slot: _Slot) -> None:
         phase = self._phase(slot)
-        skill = SKILLS[phase.skill]
+        skill = self.protocol.skills[phase.skill]
         participant = self.enrolment["index"] if self.protocol.query_states == "per-participant" else None
         seed = SeedSchedule(self.protocol.seed).seed(phase.states_index, slot.episode - 1, participant)
         states = skill.query_states(seed=seed, n=phase.demonstrations)
@@ -435,7 +435,7 @@ class Session:
         if key not in self._teaching_episodes:
             started = self._episodes[key]
             self._teaching_episodes[key] = self._new_teaching_episode(
-                SKILLS[started["skill"]], np.asarray(started["query_states"], dtype=float),
+                self.protocol.skills[started["skill"]], np.asarray(started["query_states"], dtype=float),
                 np.asarray(self._actions[key], dtype=float))
         return self._teaching_episodes[key]
 
@@ -509,7 +509,7 @@ class Session:
                                     f"it was already recorded or is not reached yet")
         key = (slot.phase_index, slot.episode)
         started = self._episodes[key]
-        skill = SKILLS[started["skill"]]
+        skill = self.protocol.skills[started["skill"]]
         try:
             action = np.asarray(action, dtype=float).reshape(-1)
         except (TypeError, ValueError):
@@ -577,7 +577,7 @@ class Session:
             raise ValueError(f"episode: expected a TeachingEpisode or None, got {type(episode).__name__}")
         logged = np.asarray(self._actions[key], dtype=float)
         duration = self.protocol.reproduction_duration_s
-        duration = SKILLS[started["skill"]].default_duration if duration is None else duration
+        duration = self.protocol.skills[started["skill"]].default_duration if duration is None else duration
         checks = (
             ("skill", episode.skill.key == started["skill"]
              and np.array_equal(episode.skill.theta, np.asarray(started["theta"], dtype=float)),
