@@ -31,8 +31,16 @@ import numpy as np
 from ipywidgets import HTML, Button, Combobox, Dropdown, HBox, Layout, Text, VBox
 
 from mt_widgets.core import running_under_test
-from mt_widgets.study import (BUILTIN_PROTOCOLS, LogError, LogFolderError, ParticipantIdError, ProtocolError,
-                              Session, StudyFolder, load_protocol)
+from mt_widgets.study import (
+    BUILTIN_PROTOCOLS,
+    LogError,
+    LogFolderError,
+    ParticipantIdError,
+    ProtocolError,
+    Session,
+    StudyFolder,
+    load_protocol,
+)
 from mt_widgets.widgets import EpisodeWidget
 
 _log = logging.getLogger(__name__)
