@@ -38,6 +38,7 @@ def browser():
 #: slow test can as well carry ``@pytest.mark.slow`` itself.
 SLOW_TESTS = (
     "tests/analysis/test_figures.py::test_the_report_shows_the_participants_own_errors_and_arrows",
+    "tests/classroom/test_progress.py::test_two_kernels_of_one_student_writing_at_once_lose_nothing",
     "tests/core/test_energy_and_rollouts.py::test_energy_is_conserved_without_gravity",
     "tests/core/test_energy_and_rollouts.py::test_the_compiled_rollout_equals_the_generic_numpy_rollout",
     "tests/core/test_machine_teaching.py::test_learning_from_the_optimal_demonstration_gives_back_theta",
@@ -49,6 +50,7 @@ SLOW_TESTS = (
     "tests/in_silico/test_synthetic_teachers.py::test_without_an_effect_simulated_power_is_the_false_positive",
     "tests/study/test_concurrency.py::",
     "tests/study/test_crash_safety.py::test_killed_and_resumed_sessions_log_exactly_the_uninterrupted",
+    "tests/study/test_user_skill_protocol.py::",
     "tests/test_readme.py::test_readme_example_runs",
 )
 
