@@ -155,8 +155,7 @@ def test_the_nbgrader_exchange_works_on_the_hub(hub, tmp_path):
         assert result.returncode == 0, result.stdout + result.stderr
     submitters = {"student02": "solution", "student03": "untouched"}
     for name in submitters:
-        if not (hub.api("GET", f"/users/{name}").get("servers") or {}).get(""):
-            hub.spawn(name)
+        hub.ensure_running(name)
     ids = {"course_id": "mt-widgets", "assignment_id": ASSIGNMENT}
     for name, kind in submitters.items():
         listing = hub.server_api(name, "POST", "/assignments/fetch", data=ids)
