@@ -24,7 +24,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from mt_widgets.core import SKILLS
 from mt_widgets.core.episode_batch import EpisodeBatch
 from mt_widgets.study.analysis_plan import PAPER_CHANGES
 from mt_widgets.study.participants import block_assignment
@@ -74,7 +73,7 @@ def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study
     """
     results = []
     for e, step in enumerate(episode_plan(protocol)):
-        skill = SKILLS[step["skill"]]
+        skill = protocol.skill(step["skill"])
         guided = np.isin(groups, list(step["guidance"]))
         states = states_by_episode[e]
         batch = EpisodeBatch.of(skill, states, protocol.lam, protocol.reproduction_duration_s)
