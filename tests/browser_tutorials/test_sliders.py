@@ -30,7 +30,8 @@ def test_moving_a_slider_redraws_the_figure(page, tutorial_server, artifacts, na
     for _ in range(presses):
         handle.press("ArrowLeft")
     page.wait_for_function(
-        f"() => document.querySelectorAll('.widget-interact .widget-readout')[{slider}].innerText.trim() == '{expected}'",
+        f"() => document.querySelectorAll('.widget-interact .widget-readout')[{slider}]"
+        f".innerText.trim() == '{expected}'",
         timeout=30_000)
     page.wait_for_function(
         f"() => {{ const i = document.querySelector('.widget-interact img'); return i && i.src !== {before[0]!r}; }}",
