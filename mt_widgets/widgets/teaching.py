@@ -236,10 +236,15 @@ class TeachingCanvas(VBox):
         if len(self.demonstrations) == confirmed.index:
             self.demonstrations = self.demonstrations + [[float(a) for a in confirmed.action]]
 
-    def show_guidance(self, optimal_action) -> None:
-        """Draw the optimal arrow (R,) beside the confirmed one at the current state."""
+    def show_guidance(self, optimal_action, legend: bool = True) -> None:
+        """Draw the optimal arrow (R,) beside the confirmed one at the current state.
+
+        ``legend``: name it in the canvas legend too (a replication of the paper shows the
+        arrows and no words).
+        """
         self._guidance = np.array(optimal_action, dtype=float)
-        self.view.legend.add("optimal_arrow")
+        if as_bool("legend", legend):
+            self.view.legend.add("optimal_arrow")
         self._draw_arrows()
 
     def advance(self) -> None:

@@ -67,32 +67,85 @@ def test_guidance_never_says_within_0_degrees():
         assert "within" not in text and "Direction: good" in text
 
 
+WORDS_PROTOCOL = """
+format = 1
+name = "words"
+lambda = 0.01
+seed = 3
+[assignment]
+block_size = 2
+seed = 1
+[texts]
+welcome = "Welcome."
+consent = "Consent."
+instructions = "The goal of the robot is {goal}."
+reproduction = "Reproduction."
+thank_you = "Thank you."
+[practice]
+skill = "sim-point"
+duration_s = 0
+text = "Practice."
+[[phases]]
+id = "P1"
+skill = "sim-point"
+episodes = 1
+instructions = "Skill 1: bring the tip of the arm to {goal} and stop there."
+[[phases]]
+id = "P2"
+skill = "sim-line"
+episodes = 1
+instructions = "Skill 2: bring the tip of the arm onto {goal} and stop there."
+"""
+
+
+def test_the_paper_protocols_name_the_goal_through_the_theme_not_a_colour():
+    from mt_widgets.study import load_protocol
+
+    for name in ("paper-sim", "paper-uarm"):
+        protocol = load_protocol(name)
+        for phase in protocol.phases:
+            assert "{goal}" in phase.instructions and not re.search(r"\bred\b", phase.instructions), phase.id
+
+
+def primary_button(app):
+    from ipywidgets import Button
+
+    found, pending = [], list(app.body.children)
+    while pending:
+        widget = pending.pop()
+        if isinstance(widget, Button) and widget.button_style == "primary":
+            found.append(widget)
+        pending += list(getattr(widget, "children", ()))
+    return found[0]
+
+
 @pytest.mark.parametrize("theme, colour", [(None, "red-orange"), ("paper", "red")])
 def test_the_study_pages_words_name_the_goal_as_drawn_in_the_theme_in_use(tmp_path, theme, colour):
-    app = StudyApp(protocol="paper-sim", log_folder=tmp_path / "logs", theme=theme)
+    path = tmp_path / "words.toml"
+    path.write_text(WORDS_PROTOCOL, encoding="utf-8")
+    app = StudyApp(protocol=str(path), log_folder=tmp_path / "logs", theme=theme)
     app.start_lesson("control")
     seen = []
-    for _ in range(400):
+    for _ in range(100):
         step = app.session.current_step()
         seen.append(" ".join(participant_texts(app.participant_view)))
         if step.kind == "phase_intro" and step.phase == "P2":
             break
-        if step.kind in ("welcome", "consent", "instructions", "phase_intro"):
-            next(w for w in app.body.children if hasattr(w, "on_click")).click()
-        elif step.kind == "practice":
-            app._practice_done.disabled = False
-            app._practice_done.click()
-        elif step.kind == "reproduction":
-            app._continue.disabled = False
-            app._continue.click()
-        else:
+        if step.kind in ("demonstration", "episode_end"):
             if app.episode.phase == "guidance":
                 app.episode.next()
             else:
                 app.episode.demonstrate(SKILLS[step.skill].target_actions(step.state[None])[0])
+        elif step.kind == "reproduction":
+            app._continue.disabled = False
+            app._continue.click()
+        else:
+            primary_button(app).click()
     text = " ".join(seen)
-    assert f"the {colour} point marked goal" in text and f"the {colour} vertical line marked goal" in text
-    assert "{goal}" not in text and not re.search(r"\bred (point|line|vertical)", text.replace(f"{colour} ", "@"))
+    assert f"The goal of the robot is the {colour} point marked goal." in text
+    assert f"to the {colour} point marked goal and stop" in text
+    assert f"onto the {colour} vertical line marked goal and stop" in text
+    assert "{goal}" not in text
 
 
 def test_the_teaching_legend_lists_every_mark_the_canvas_draws():
