@@ -11,7 +11,8 @@ from user_plant import park
 
 from mt_widgets import RidgeLearner, teaching_risk
 
-from .helpers import OKABE, drag, ee_pixel, to_canvas, wait_for_color, wait_for_pending, wait_for_status
+from .helpers import (OKABE, drag, draw_arrow_pair_offset, ee_pixel, to_canvas, wait_for_color, wait_for_pending,
+                      wait_for_status)
 
 pytestmark = pytest.mark.browser
 
@@ -53,11 +54,12 @@ def test_tutorial_05s_puck_is_taught_with_real_drags_on_the_demo_page(page, voil
         wait_for_status(page, f"s.phase === 'guidance' && s.demos.length === {index + 1}")
         if index == 0:
             # Guidance on: the optimal arrow's solid head, in the optimal arrow's colour.
+            # Aimed at its tip, the user's arrow is aligned with it: the optimal one is drawn beside.
             tip = view.transform.action_tip(origin, reference.optimal[0])
-            base = view.transform.to_pixel(origin)
-            head = tip - 6 * (tip - base) / np.hypot(*(tip - base))
+            along = (tip - ee) / np.hypot(*(tip - ee))
+            side = np.array([along[1], -along[0]]) * draw_arrow_pair_offset(view.theme)
             page.screenshot(path=artifacts("guidance"))
-            wait_for_color(page, 0, *head, OKABE["orange"], radius=2, tolerance=60)
+            wait_for_color(page, 0, *(tip + side - 5 * along), OKABE["orange"], radius=2, tolerance=40)
         last = index == len(reference.query_states) - 1
         page.get_by_role("button", name="Finish and watch" if last else "Next state").click()
         if not last:
