@@ -14,25 +14,34 @@ Widgets hold no science: they call ``mt_widgets.core`` and draw the result.
 
 from .animation import frame_times, play_frames, sample_at
 from .arm_view import LAYERS, ArmView
-from .arrows import draw_arrow
+from .arrows import draw_arrow, draw_arrow_pair
 from .coords import ViewTransform
 from .demo import DEMO_SKILLS, DemoPage
 from .episode import DemonstrationRecord, EpisodeResult, EpisodeWidget
 from .guidance import GuidancePanel, explain_difference, legend_html
+from .legend import MARKS, CanvasLegend, legend_entries
 from .progress import EffortProgress
 from .redraw import drawing_batch, repaint_on_new_view
 from .reproduction import ReproductionPlayer
 from .robots import RobotPainter, painter_for
 from .teaching import ConfirmedAction, TeachingCanvas, describe_action
-from .legend import MARKS, CanvasLegend, legend_entries
-from .theme import (COLOR_NAMES, DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, ArrowStyle, Theme, fill_words,
-                    get_theme)
+from .theme import (
+                    COLOR_NAMES,
+                    DEFAULT_THEME,
+                    PAPER_THEME,
+                    PAPER_UARM_THEME,
+                    THEMES,
+                    ArrowStyle,
+                    Theme,
+                    fill_words,
+                    get_theme,
+)
 
 __all__ = [
-    "COLOR_NAMES", "CanvasLegend", "MARKS", "fill_words", "legend_entries",
-    "ArmView", "ArrowStyle", "ConfirmedAction", "DEFAULT_THEME", "DEMO_SKILLS", "DemoPage", "DemonstrationRecord", "EffortProgress",
-    "EpisodeResult", "EpisodeWidget", "GuidancePanel", "LAYERS", "PAPER_THEME", "PAPER_UARM_THEME",
-    "ReproductionPlayer", "RobotPainter", "THEMES", "TeachingCanvas", "Theme", "ViewTransform",
-    "describe_action", "draw_arrow", "drawing_batch", "explain_difference", "frame_times", "get_theme",
-    "legend_html", "painter_for", "play_frames", "repaint_on_new_view", "sample_at",
+    "COLOR_NAMES", "MARKS", "ArmView", "ArrowStyle", "CanvasLegend", "ConfirmedAction", "DEFAULT_THEME", "DEMO_SKILLS",
+    "DemoPage", "DemonstrationRecord", "EffortProgress", "EpisodeResult", "EpisodeWidget", "GuidancePanel", "LAYERS",
+    "PAPER_THEME", "PAPER_UARM_THEME", "ReproductionPlayer", "RobotPainter", "THEMES", "TeachingCanvas", "Theme",
+    "ViewTransform", "describe_action", "draw_arrow", "draw_arrow_pair", "drawing_batch", "explain_difference",
+    "fill_words", "frame_times", "get_theme", "legend_entries", "legend_html", "painter_for", "play_frames",
+    "repaint_on_new_view", "sample_at",
 ]

@@ -87,8 +87,9 @@ class DemoPage(VBox):
         self.skill_chooser = ToggleButtons(options=[(labels[key], key) for key in keys], value=skill,
                                            description="Skill:", style={"button_width": "150px"},
                                            tooltips=[self.skills[key].title for key in keys])
-        self.guidance_switch = Checkbox(value=as_bool("guidance", guidance), description="Guidance: show the best arrow after "
-                                        "each of mine", indent=False, layout=Layout(width="auto"))
+        self.guidance_switch = Checkbox(value=as_bool("guidance", guidance),
+                                        description="Guidance: show the best arrow after each of mine", indent=False,
+                                        layout=Layout(width="auto"))
         self.new_states_button = Button(description="Try again with new states", icon="refresh",
                                         layout=Layout(width="auto"))
         self.result_line = HTML(value="")
@@ -110,8 +111,9 @@ class DemoPage(VBox):
         if self.episode is not None:
             # A kiosk page may run for hours: the replaced episode's widgets leave the kernel too.
             _close_tree(self.episode)
-        self.episode = EpisodeWidget(self.skills[self.skill_chooser.value], seed=self.seed, guidance=self.guidance_switch.value,
-                                     on_finished=self._on_finished, **self.episode_options)
+        self.episode = EpisodeWidget(self.skills[self.skill_chooser.value], seed=self.seed,
+                                     guidance=self.guidance_switch.value, on_finished=self._on_finished,
+                                     **self.episode_options)
         self.episode_slot.children = [self.episode]
         self.result_line.value = ""
         return self.episode

@@ -12,8 +12,7 @@ import pytest
 
 from browser_support import local_page
 
-from .helpers import (OKABE, drag, draw_arrow_pair_offset, ee_pixel, reference_episode, wait_for_color,
-                      wait_for_status)
+from .helpers import OKABE, drag, draw_arrow_pair_offset, ee_pixel, reference_episode, wait_for_color, wait_for_status
 
 pytestmark = pytest.mark.browser
 

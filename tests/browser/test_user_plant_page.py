@@ -7,12 +7,20 @@ velocity), taught by dragging arrows, learnt, and its reproduction played to the
 
 import numpy as np
 import pytest
-from user_plant import park
 
 from mt_widgets import RidgeLearner, teaching_risk
+from user_plant import park
 
-from .helpers import (OKABE, drag, draw_arrow_pair_offset, ee_pixel, to_canvas, wait_for_color, wait_for_pending,
-                      wait_for_status)
+from .helpers import (
+    OKABE,
+    drag,
+    draw_arrow_pair_offset,
+    ee_pixel,
+    to_canvas,
+    wait_for_color,
+    wait_for_pending,
+    wait_for_status,
+)
 
 pytestmark = pytest.mark.browser
 

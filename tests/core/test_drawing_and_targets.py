@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 
 from mt_widgets import SKILLS
-from mt_widgets.core import (Box, LineTarget, PlantDrawing, PointTarget, Skill, SkillRegistry, Target,
-                             TargetShape)
+from mt_widgets.core import Box, LineTarget, PlantDrawing, PointTarget, Skill, SkillRegistry, Target, TargetShape
 from mt_widgets.core.drawing import clip_line, framing_box
 
 

@@ -7,8 +7,7 @@ import pytest
 
 from mt_widgets import SKILLS
 from mt_widgets.apps import StudyApp, participant_texts
-from mt_widgets.widgets import (ArmView, EpisodeWidget, ReproductionPlayer, THEMES, Theme, explain_difference,
-                                fill_words)
+from mt_widgets.widgets import THEMES, ArmView, EpisodeWidget, ReproductionPlayer, Theme, explain_difference, fill_words
 
 
 def lab(hex_color: str) -> np.ndarray:

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from user_plant import drift, park
 
 from mt_widgets import SKILLS
 from mt_widgets.widgets import ArmView, DemoPage, EpisodeWidget
+from user_plant import drift, park
 
 from .conftest import path_points, pointer
 
