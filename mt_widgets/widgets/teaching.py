@@ -313,8 +313,10 @@ class TeachingCanvas(VBox):
         if self.current_state is None:
             self.readout.value = f"<b>All {self.n_states} demonstrations given.</b>"
         elif self.pending_action is None:
-            # "the robot's hand (the dot)": novices and visitors do not know "end-effector".
-            self.readout.value = (f"<b>State {n + 1} of {self.n_states}</b>: press on the robot's hand (the dot) "
+            # "the robot's hand (the yellow dot)": novices and visitors do not know "end-effector";
+            # the colour is the one the theme draws the marker in.
+            marker = self.theme.marker_words(self.view.drawing)
+            self.readout.value = (f"<b>State {n + 1} of {self.n_states}</b>: press on the robot's hand ({marker}) "
                                   f"and drag to draw the action.")
         else:
             self.readout.value = (f"<b>State {n + 1} of {self.n_states}</b>: your arrow "
@@ -359,7 +361,8 @@ class TeachingCanvas(VBox):
         near_tip = (self.pending_action is not None and np.hypot(
             *(pointer - view.transform.action_tip(origin, self.pending_action))) <= self.grab_radius)
         if not (near_origin or near_tip):
-            self.hint.value = "<small>Press on the robot's hand (the dot) to start an arrow.</small>"
+            self.hint.value = (f"<small>Press on the robot's hand ({self.theme.marker_words(self.view.drawing)}) "
+                               f"to start an arrow.</small>")
             return
         self.hint.value = ""
         self._dragging = True

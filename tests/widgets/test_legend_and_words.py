@@ -211,3 +211,21 @@ def test_an_optimal_arrow_aligned_with_the_users_is_drawn_beside_it_and_last(rec
             assert (theme.user_arrow.width + theme.optimal_arrow.width) / 2 < shaft < 8
         else:
             assert abs(sideways[0]) < 0.1, "not aligned: both start at the hand"
+
+
+def test_the_readout_and_the_reproduction_name_marks_in_the_theme_colours():
+    arm = EpisodeWidget("sim-point", seed=0, guidance=False, duration=0.5)
+    assert "press on the robot's hand (the yellow dot)" in arm.teaching.readout.value
+    uarm = EpisodeWidget("uarm-point", seed=0, guidance=False, theme="paper-uarm")
+    assert "press on the robot's hand (the black dot)" in uarm.teaching.readout.value
+    for action in arm.optimal:
+        arm.demonstrate(action)
+    status = arm.player.status.value
+    assert "from the red-orange point marked goal" in status
+    assert "path is the sky-blue line" in status and "faint dashed pink line is the skill's own motion" in status
+    paper = ReproductionPlayer(SKILLS["sim-line"], theme="paper")
+    paper.play(SKILLS["sim-line"].reproduce(SKILLS["sim-line"].theta, duration=0.5))
+    assert "from the red vertical line marked goal" in paper.status.value
+    diverging = ReproductionPlayer(SKILLS["sim-point"])
+    diverging.play(SKILLS["sim-point"].reproduce(-5 * SKILLS["sim-point"].theta, duration=5.0))
+    assert "(red-orange cross)" in diverging.status.value
