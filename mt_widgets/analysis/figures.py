@@ -19,8 +19,8 @@ import json
 import textwrap
 from pathlib import Path
 
-import numpy as np
 import matplotlib as mpl
+import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
@@ -257,7 +257,8 @@ def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration
     missing = [p for p in participants if any((p, row.phase, int(row.episode)) not in rolled for row in
                                               frame[(frame.participant == p) & frame.phase.isin(needed)].itertuples())]
     if missing:
-        rolled.update({k: v for k, v in learnt_trajectories(frame, missing, needed, duration).items() if k not in rolled})
+        fresh = learnt_trajectories(frame, missing, needed, duration)
+        rolled.update({k: v for k, v in fresh.items() if k not in rolled})
     groups = frame.groupby("participant")["group"].first()
     figure = Figure(figsize=(3.6 * len(panels), 3.4 * len(participants)), layout="constrained")
     axes = figure.subplots(len(participants), len(panels), squeeze=False)
@@ -420,7 +421,8 @@ def teaching_report(episodes, demonstrations, participant, changes=PAPER_CHANGES
     text.set_axis_off()
     # Wrapped here rather than by matplotlib: wrap=True ignores the page margin under a
     # constrained layout, and a take-home page must not lose the ends of its sentences.
-    lines = [textwrap.fill(line, 100, subsequent_indent="  ") for line in _report_sentences(frame, participant, changes)]
+    sentences = _report_sentences(frame, participant, changes)
+    lines = [textwrap.fill(line, 100, subsequent_indent="  ") for line in sentences]
     text.text(0, 1, "\n".join(lines), va="top", fontsize=9.5)
     return figure
 

@@ -85,8 +85,8 @@ def report_markdown(report: dict) -> str:
              f"- Hash: `{report['hash']}`", f"- Guidance: {report['guidance_modality']}; withdrawal: "
              f"{report['withdrawal']}", "", "## Phases", "", "| phase | skill | episodes | demonstrations | guided |",
              "|---|---|---|---|---|"]
-    lines += [f"| {p['id']} | {p['skill']} | {p['episodes']} | {p['demonstrations']} | {', '.join(p['guidance']) or '-'} |"
-              for p in report["phases"]]
+    lines += [f"| {p['id']} | {p['skill']} | {p['episodes']} | {p['demonstrations']} | "
+              f"{', '.join(p['guidance']) or '-'} |" for p in report["phases"]]
     lines += ["", "## Steps around the task", ""]
     for step in report["steps"]:
         extra = f" (video {step['video']}, sha256 {step['sha256']})" if step["kind"] == "video" else ""

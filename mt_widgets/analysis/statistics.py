@@ -321,7 +321,8 @@ def between_group_tests(changes_table: pd.DataFrame, alternative: str = "less",
         target = part.loc[part["group"] == "target", "delta"].to_numpy()
         control = part.loc[part["group"] == "control", "delta"].to_numpy()
         row = {"change": name, "label": part["label"].iloc[0], "n_target": target.size, "n_control": control.size,
-               "student_t": np.nan, "student_df": np.nan, "student_p": np.nan, "welch_t": np.nan, "welch_df": np.nan, "welch_p": np.nan, "mannwhitney_u": np.nan,
+               "student_t": np.nan, "student_df": np.nan, "student_p": np.nan, "welch_t": np.nan,
+               "welch_df": np.nan, "welch_p": np.nan, "mannwhitney_u": np.nan,
                "mannwhitney_p": np.nan, "hedges_g": np.nan, "g_ci_low": np.nan, "g_ci_high": np.nan,
                "alternative": alternative}
         if target.size >= 2 and control.size >= 2:

@@ -91,7 +91,8 @@ def analyse_study(folder=None, alternative: str | None = None, alpha: float | No
     demonstrations = pd.DataFrame(demonstrations)
     plan = StudyFolder(folder).protocol.analysis
     changes = plan.changes if changes is None else changes
-    statistics = analyse_changes(episodes, changes, alternative=plan.alternative if alternative is None else alternative,
+    statistics = analyse_changes(episodes, changes,
+                                 alternative=plan.alternative if alternative is None else alternative,
                                  alpha=plan.alpha if alpha is None else alpha, test=plan.test if test is None else test)
     figures = {"error_by_episode": plot_error_by_episode(episodes), "changes": plot_changes(episodes, changes)}
     if trajectories_for is None:

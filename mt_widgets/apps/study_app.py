@@ -13,7 +13,8 @@ demographics and questionnaires. Every participant page carries "Withdraw from t
 
 Single-blind: the participant view shows only the protocol's texts (the same for every
 group), the teaching widgets, and the guidance where the protocol gives it to the
-participant's group, in the protocol's modality (the paper's: the arrows only, no words). The group, the teaching error and the target skill's own motion are
+participant's group, in the protocol's modality (the paper's: the arrows only, no words).
+The group, the teaching error and the target skill's own motion are
 never shown (the paper's participants saw the robot's reproduction only).
 
 Every demonstration is handed to ``Session.submit_demonstration`` inside the widget's
@@ -38,8 +39,16 @@ import numpy as np
 from ipywidgets import HTML, Button, Combobox, Dropdown, HBox, Layout, RadioButtons, Text, Textarea, VBox
 
 from mt_widgets.core import running_under_test
-from mt_widgets.study import (BUILTIN_PROTOCOLS, LogError, LogFolderError, ParticipantIdError, ProtocolError,
-                              Session, StudyFolder, load_protocol)
+from mt_widgets.study import (
+    BUILTIN_PROTOCOLS,
+    LogError,
+    LogFolderError,
+    ParticipantIdError,
+    ProtocolError,
+    Session,
+    StudyFolder,
+    load_protocol,
+)
 from mt_widgets.widgets import EpisodeWidget, TeachingCanvas
 
 _log = logging.getLogger(__name__)
@@ -652,5 +661,5 @@ def participant_texts(widget) -> list[str]:
     return texts
 
 
-__all__ = ["ExperimenterPanel", "LOG_FOLDER_VARIABLE", "QuestionForm", "StudyApp", "VideoStep", "default_log_folder", "participant_texts",
-           "running_under_test"]
+__all__ = ["ExperimenterPanel", "LOG_FOLDER_VARIABLE", "QuestionForm", "StudyApp", "VideoStep", "default_log_folder",
+           "participant_texts", "running_under_test"]

@@ -40,7 +40,6 @@ from .plan import (
 from .progress import Progress
 from .teachers import TeacherParameters, TeacherPopulation, along_line_offsets, naive_offsets, position_gain
 
-
 # -- the batched engine ----------------------------------------------------------------------------
 
 @dataclass

@@ -17,6 +17,7 @@ from .plan import default_parameters, episode_plan, imagined_line_target, partic
 from .progress import Progress
 from .teachers import TeacherParameters, TeacherPopulation, along_line_offsets, naive_offsets, position_gain
 
+
 class SessionTeacher:
     """One synthetic teacher driving a ``Session`` exactly as the study app drives it for a person.
 

@@ -14,9 +14,9 @@ from .session import EpisodeResult, Feedback, Session, SessionStateError, Step, 
 from .tidy import DEMONSTRATION_COLUMNS, EPISODE_COLUMNS, export_study, read_study
 
 __all__ = [
-    "AnalysisPlan", "BUILTIN_PROTOCOLS", "Change", "DEMONSTRATION_COLUMNS", "EPISODE_COLUMNS", "EpisodeResult", "Feedback", "LogError",
-    "LogFolderError", "MemoryLog", "PAPER_CHANGES", "ParticipantIdError", "ParticipantLog", "Phase", "Practice", "Protocol",
-    "ProtocolError", "Session", "SessionStateError", "Step", "StudyFolder", "block_assignment",
-    "check_folder_writable", "export_bids", "export_study", "load_protocol", "parse_protocol", "read_events", "read_study",
-    "timeline", "validate_participant_id",
+    "AnalysisPlan", "BUILTIN_PROTOCOLS", "Change", "DEMONSTRATION_COLUMNS", "EPISODE_COLUMNS", "EpisodeResult",
+    "Feedback", "LogError", "LogFolderError", "MemoryLog", "PAPER_CHANGES", "ParticipantIdError", "ParticipantLog",
+    "Phase", "Practice", "Protocol", "ProtocolError", "Session", "SessionStateError", "Step", "StudyFolder",
+    "block_assignment", "check_folder_writable", "export_bids", "export_study", "load_protocol", "parse_protocol",
+    "read_events", "read_study", "timeline", "validate_participant_id",
 ]

@@ -20,7 +20,8 @@ before ``append`` returns, so the interface moves on only once the event is on d
 PsychoPy's experiment handler saves each trial as it completes). A log file is created with
 ``O_EXCL`` (never overwritten) and each event is written under its participant's lock after
 checking that nobody else wrote since, so two processes never interleave events in one log:
-a newer session (a reloaded page) takes over, and the older one is refused. A crash can leave at most the last line torn; loading drops it,
+a newer session (a reloaded page) takes over, and the older one is refused. A crash can leave
+at most the last line torn; loading drops it,
 and reopening for writing first ends it with a newline so the next event starts on a line of
 its own; the ``session_resumed`` event that follows records the repair, and only such
 repaired lines are tolerated in the middle of a log.
@@ -247,7 +248,7 @@ class ParticipantLog:
         return _Lock(path.parent / LOCK_FOLDER / (path.stem + ".lock"), f"participant {path.stem!r}", timeout_s)
 
     @classmethod
-    def create(cls, path, study: str, lock_timeout_s: float = 5.0) -> "ParticipantLog":
+    def create(cls, path, study: str, lock_timeout_s: float = 5.0) -> ParticipantLog:
         """Creates a new log; refuses if the file exists (a log is never overwritten)."""
         path = Path(path)
         with cls._lock(path, lock_timeout_s) as lock:
@@ -262,7 +263,7 @@ class ParticipantLog:
         return log
 
     @classmethod
-    def open(cls, path, lock_timeout_s: float = 5.0) -> "ParticipantLog":
+    def open(cls, path, lock_timeout_s: float = 5.0) -> ParticipantLog:
         """Opens an existing log to continue it, repairing a torn last line."""
         path = Path(path)
         with cls._lock(path, lock_timeout_s) as lock:
@@ -435,7 +436,7 @@ class StudyFolder:
             raise LogError(f"{path}: the stored protocol hash does not match the stored protocol; the file was edited")
 
     @classmethod
-    def create(cls, folder, protocol: Protocol) -> "StudyFolder":
+    def create(cls, folder, protocol: Protocol) -> StudyFolder:
         """Creates the study folder for ``protocol``, or reopens it if it runs the same protocol.
 
         Raises:

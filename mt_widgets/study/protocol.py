@@ -406,7 +406,8 @@ class _Checker:
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
                 self.fail(path, f"expected a finite number, got {type(value).__name__} {value!r}")
             if value < limits.get("minimum", -math.inf) or (limits.get("positive") and value <= 0):
-                self.fail(path, f"expected a number {'> 0' if limits.get('positive') else '>= ' + str(limits['minimum'])}"
+                bound = "> 0" if limits.get("positive") else ">= " + str(limits["minimum"])
+                self.fail(path, f"expected a number {bound}"
                                 f", got {value}")
             return float(value)
         if kind == "table":
@@ -424,7 +425,7 @@ class _Checker:
 _SKILL_REFERENCE = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
 
 
-def resolve_protocol_skills(raw: dict, check: "_Checker", source: str) -> tuple[Mapping[str, Skill], dict | None]:
+def resolve_protocol_skills(raw: dict, check: _Checker, source: str) -> tuple[Mapping[str, Skill], dict | None]:
     """The skills a protocol can name, by the names it uses.
 
     - the paper's four (``SKILLS``: "sim-point", ...) and the neutral practice skills
@@ -638,8 +639,8 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
         entry.setdefault("demonstrations", phase.demonstrations)
         entry.setdefault("guidance", [])
     return Protocol(name, title, tuple(groups), lam, seed, query_states, duration, block_size, assignment_seed,
-                    texts, practice, tuple(phases), data, text, source, skills, guidance_modality=modality, before=before,
-                    after=after, withdrawal=withdrawal, analysis=plan)
+                    texts, practice, tuple(phases), data, text, source, skills, guidance_modality=modality,
+                    before=before, after=after, withdrawal=withdrawal, analysis=plan)
 
 
 def _parse_analysis(check, raw: dict) -> AnalysisPlan:

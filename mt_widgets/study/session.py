@@ -252,7 +252,7 @@ class Session:
 
     # -- construction -----------------------------------------------------------------------------
     @classmethod
-    def start(cls, study: StudyFolder, participant_id: str, group: str | None = None) -> "Session":
+    def start(cls, study: StudyFolder, participant_id: str, group: str | None = None) -> Session:
         """Enrols a new participant (validating the ID, assigning the group) and starts their log.
 
         Args:
@@ -267,7 +267,7 @@ class Session:
         return cls._begin(study, log, enrolment)
 
     @classmethod
-    def resume(cls, study: StudyFolder, participant_id: str, lock_timeout_s: float = 3.0) -> "Session":
+    def resume(cls, study: StudyFolder, participant_id: str, lock_timeout_s: float = 3.0) -> Session:
         """Continues an enrolled participant at the first step their log does not record.
 
         Args:
@@ -309,7 +309,7 @@ class Session:
         return session
 
     @classmethod
-    def _begin(cls, study, log, enrolment) -> "Session":
+    def _begin(cls, study, log, enrolment) -> Session:
         log.append("session_started", software_version=mt_widgets.__version__, protocol_hash=study.protocol.hash,
                    protocol_name=study.protocol.name, group=enrolment["group"], enrolment=enrolment,
                    lam=study.protocol.lam, numpy_version=np.__version__, python_version=platform.python_version())
@@ -318,7 +318,7 @@ class Session:
         return session
 
     @classmethod
-    def lesson(cls, protocol: Protocol, group: str | None = None, participant: str = "lesson") -> "Session":
+    def lesson(cls, protocol: Protocol, group: str | None = None, participant: str = "lesson") -> Session:
         """The same engine, unlogged (events kept in memory): for a guided lesson.
 
         Args:

@@ -26,7 +26,8 @@ def test_the_report_holds_the_hash_every_parameter_the_plan_and_the_papers_sampl
     assert report["analysis_plan"]["test"] == "student" and report["analysis_plan"]["alternative"] == "less"
     # The paper: d = 0.9, alpha 0.05, power 0.8, one-tailed -> 16 per group (32), power 0.8003.
     power = report["power_analysis"]
-    assert (power["n_per_group"], power["n_total"]) == (16, 32) and power["power_reached"] == pytest.approx(0.8003, abs=1e-4)
+    assert (power["n_per_group"], power["n_total"]) == (16, 32)
+    assert power["power_reached"] == pytest.approx(0.8003, abs=1e-4)
     md, js = write_protocol_report("paper-sim", tmp_path)
     text = md.read_text()
     assert protocol.hash in text and "**16 per group**" in text and "Student's t-test" in text
@@ -87,11 +88,11 @@ def test_fig5_draws_the_true_skills_rollout_and_a_zoom_on_the_goal():
     for ax in axes + zooms:
         assert any(str(line.get_gid()).startswith("true/") for line in ax.lines)
     truth = SKILLS["sim-point"].reproduce(SKILLS["sim-point"].theta, record_every=20)
-    line = [l for l in axes[0].lines if l.get_gid() == "true/sim-point"][0]
+    line = [ln for ln in axes[0].lines if ln.get_gid() == "true/sim-point"][0]
     assert np.allclose(line.get_xydata(), truth.positions)
     x0, x1 = zooms[0].get_xlim()
     assert x0 < 0.8 < x1 and (x1 - x0) < 0.25 * 4.4   # around skill 1's point, much smaller than the view
     plain = plot_trajectories(study.episodes, [participant], trajectories=study.reproductions, true_skill=False,
                               zoom=False)
     assert not any(child.get_gid() == "zoom" for ax in plain.axes for child in ax.child_axes)
-    assert not any(str(l.get_gid()).startswith("true/") for ax in plain.axes for l in ax.lines)
+    assert not any(str(ln.get_gid()).startswith("true/") for ax in plain.axes for ln in ax.lines)

@@ -130,6 +130,14 @@ class ClassHub:
     def create_users(self, names) -> None:
         self.api("POST", "/users", json={"usernames": list(names)})
 
+    def ensure_running(self, name: str) -> None:
+        """Creates ``name`` if the hub does not know them and starts their server if it is not running."""
+        users = {user["name"]: user for user in self.api("GET", "/users")}
+        if name not in users:
+            self.create_users([name])
+        if not ((users.get(name) or {}).get("servers") or {}).get(""):
+            self.spawn(name)
+
     def spawn(self, name: str, timeout: float = 180) -> float:
         """Starts ``name``'s server; returns the seconds until the hub reports it ready."""
         started = time.perf_counter()

@@ -155,12 +155,12 @@ def test_the_nbgrader_exchange_works_on_the_hub(hub, tmp_path):
         assert result.returncode == 0, result.stdout + result.stderr
     submitters = {"student02": "solution", "student03": "untouched"}
     for name in submitters:
-        if not (hub.api("GET", f"/users/{name}").get("servers") or {}).get(""):
-            hub.spawn(name)
+        hub.ensure_running(name)
     ids = {"course_id": "mt-widgets", "assignment_id": ASSIGNMENT}
     for name, kind in submitters.items():
         listing = hub.server_api(name, "POST", "/assignments/fetch", data=ids)
-        assert any(a["assignment_id"] == ASSIGNMENT and a["status"] == "fetched" for a in listing), listing
+        assert listing["success"], listing
+        assert any(a["assignment_id"] == ASSIGNMENT and a["status"] == "fetched" for a in listing["value"]), listing
         path = f"/api/contents/{ASSIGNMENT}/{ASSIGNMENT}.ipynb"
         fetched = hub.server_api(name, "GET", path)
         assert fetched["type"] == "notebook"
@@ -169,14 +169,16 @@ def test_the_nbgrader_exchange_works_on_the_hub(hub, tmp_path):
             hub.server_api(name, "PUT", path, json={"type": "notebook", "format": "json",
                                                    "content": fetched["content"]})
         submitted = hub.server_api(name, "POST", "/assignments/submit", data=ids)
-        assert any(a["status"] == "submitted" for a in submitted), submitted
+        assert submitted["success"], submitted
+        assert any(a["status"] == "submitted" for a in submitted["value"]), submitted
     for step in (("collect", ASSIGNMENT), ("autograde", ASSIGNMENT, "--create"), ("generate_feedback", ASSIGNMENT),
                  ("release_feedback", ASSIGNMENT)):
         result = nbgrader(course, *step, env=env)
         assert result.returncode == 0, result.stdout + result.stderr
     assert sorted(p.name for p in (course / "submitted").iterdir()) == sorted(submitters)
     for name, kind in submitters.items():
-        hub.server_api(name, "POST", "/assignments/fetch_feedback", data=ids)
+        fetched = hub.server_api(name, "POST", "/assignments/fetch_feedback", data=ids)
+        assert fetched["success"], fetched
         feedback = list((hub.homes / name / ASSIGNMENT / "feedback").rglob(f"{ASSIGNMENT}.html"))
         assert len(feedback) == 1, f"{name} got no feedback"
         html = feedback[0].read_text()

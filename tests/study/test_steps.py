@@ -7,8 +7,17 @@ import pytest
 
 from mt_widgets.apps import StudyApp, participant_texts
 from mt_widgets.core import SKILLS
-from mt_widgets.study import LogError, ProtocolError, Session, SessionStateError, StudyFolder, load_protocol, \
-    parse_protocol, read_events, read_study
+from mt_widgets.study import (
+    LogError,
+    ProtocolError,
+    Session,
+    SessionStateError,
+    StudyFolder,
+    load_protocol,
+    parse_protocol,
+    read_events,
+    read_study,
+)
 from mt_widgets.study.log import OUTCOME_FILE
 from mt_widgets.study.protocol import PROTOCOL_FOLDER
 from mt_widgets.study.session import timeline
