@@ -8,8 +8,10 @@ Slow (about 2-4 minutes on two cores): a class is a dozen Jupyter servers.
 from __future__ import annotations
 
 import json
+import shutil
 import statistics
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import nbformat
@@ -17,6 +19,7 @@ import pytest
 
 from browser_support import REPO, local_page
 from mt_widgets.classroom import read_class, summarise
+from tests.browser.helpers import drag, ee_pixel, reference_episode
 
 from .course_support import copy_course, course_env, nbgrader, source_notebook
 from .hub_support import EPISODE_CODE, ClassHub, warm_numba_template
@@ -67,15 +70,14 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
     hub.create_users([*STUDENTS, "instructor"])
     for name in DRAWERS:
         _page(hub.homes / name, "draw.ipynb", DRAW_PAGE)
-    _page(hub.homes / "instructor", "class_view.ipynb", "")
-    (hub.homes / "instructor" / "class_view.ipynb").write_text((REPO / "notebooks" / "class_view.ipynb").read_text())
+    (hub.homes / "instructor").mkdir(parents=True, exist_ok=True)
+    shutil.copy(REPO / "notebooks" / "class_view.ipynb", hub.homes / "instructor" / "class_view.ipynb")
 
     started = time.perf_counter()
     spawn = hub.spawn_class(STUDENTS)
     spawn_wall = time.perf_counter() - started
     assert sorted(spawn) == STUDENTS
 
-    from concurrent.futures import ThreadPoolExecutor
     with ThreadPoolExecutor(len(STUDENTS)) as pool:
         runs = dict(zip(STUDENTS, pool.map(
             lambda item: hub.run_in_kernel(item[1], EPISODE_CODE.format(number=item[0])), enumerate(STUDENTS))))
@@ -100,7 +102,6 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
             page.wait_for_url("**/user/**", timeout=120_000)
             page.goto(hub.user_url(name, "/voila/render/draw.ipynb"), timeout=120_000)
             page.locator("canvas").first.wait_for(timeout=120_000)
-            from tests.browser.helpers import drag, ee_pixel, reference_episode
             ee = ee_pixel(reference_episode("episode_sim.ipynb"), 0)
             page.wait_for_timeout(500)
             drag(page, 0, ee, (ee[0] + 60, ee[1] - 40))
