@@ -87,8 +87,8 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
         results[name] = json.loads(run["stdout"].strip().splitlines()[-1])
         # Each student's numba cache is their own, in their home.
         assert results[name]["numba_cache"] == str(hub.homes / name / ".cache" / "numba")
-    assert results["student00"]["error"] < 1e-10  # no slip: taught exactly
-    assert all(results[n]["error"] > 0.01 for n in STUDENTS[1:])
+    assert max(results["student00"]["errors"]) < 1e-10  # no slip: taught exactly
+    assert all(min(results[n]["errors"]) > 1e-3 for n in STUDENTS[1:])
     memory = {name: hub.memory(name) for name in STUDENTS}
 
     # Two students draw an arrow in Chromium, logged in through the hub.
@@ -117,8 +117,9 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
     drawn = [e for s in read_class(hub.class_folder).students.values() for e in s.events
              if e["kind"] == "demonstration" and e.get("method") == "pointer"]
     assert len(drawn) == 2 and {e["lesson"] for e in drawn} == {"hub-draw"}
-    errors = sorted(s.errors[0] for s in progress.students)
-    assert errors == pytest.approx(sorted(r["error"] for r in results.values()))
+    errors = sorted(s.errors for s in progress.students)
+    assert errors == pytest.approx(sorted(r["errors"] for r in results.values()))
+    assert progress.exercise_shares("a1_ridge_learner") and len(progress.exercise_shares("a1_ridge_learner")) == 12
 
     # The instructor opens the class view on the hub: every student is there.
     hub.spawn("instructor")
@@ -141,7 +142,7 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
     assert _files(REPO / "mt_widgets") == hub.installed_before
 
     spawn_times = sorted(spawn.values())
-    latencies = sorted(r["latency_s"] for r in results.values())
+    latencies = sorted(latency for r in results.values() for latency in r["latencies_s"])
     print(f"\nclass of {len(STUDENTS)}: spawned in {spawn_wall:.1f} s; spawn p50 {statistics.median(spawn_times):.1f} s, "
           f"max {spawn_times[-1]:.1f} s; feedback latency p50 {statistics.median(latencies) * 1000:.0f} ms, "
           f"max {latencies[-1] * 1000:.0f} ms; memory per student {statistics.median(memory.values()) / 2**20:.0f} MiB")
