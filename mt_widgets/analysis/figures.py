@@ -19,8 +19,8 @@ import json
 import textwrap
 from pathlib import Path
 
-import numpy as np
 import matplotlib as mpl
+import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
@@ -213,8 +213,20 @@ def _draw_target(ax, skill) -> None:
                 label="target", color=TARGET_STYLE["color"])
 
 
+def _zoom_box(skill, trajectories, fraction: float = 0.12):
+    """(xlim, ylim) of a square around where the rollouts end near the target (Fig. 5's zoom)."""
+    box = skill.workspace
+    half = fraction * max(box.xlim[1] - box.xlim[0], box.ylim[1] - box.ylim[0]) / 2
+    if isinstance(skill.target, LineTarget) or skill.target is None:
+        # A line has no single point to zoom on: centre on where the true skill stops on it.
+        centre = trajectories[0].positions[-1]
+    else:
+        centre = np.asarray(skill.target.point, dtype=float)
+    return (centre[0] - half, centre[0] + half), (centre[1] - half, centre[1] + half)
+
+
 def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration: float | None = None,
-                      trajectories: dict | None = None) -> Figure:
+                      trajectories: dict | None = None, true_skill: bool = True, zoom: bool = True) -> Figure:
     """The skills participants taught, reproduced from the fixed start beside the target (Fig. 5).
 
     Args:
@@ -224,6 +236,10 @@ def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration
         duration: seconds per rollout.
         trajectories: precomputed ``{(participant, phase, episode): Trajectory}`` (e.g. an
             in-silico study's reproductions); missing ones are rolled out.
+        true_skill: draw the true skill's own rollout beside the learnt ones (gid
+            "true/<skill>"), as the paper's Fig. 5 does.
+        zoom: add to each panel a zoomed inset around the goal (gid "zoom"), where learnt and
+            true rollouts part, as the paper's zoomed panel does.
 
     Returns:
         The figure. Each trajectory is a line with ``gid`` "<participant>/<phase>E<episode>"
@@ -241,7 +257,8 @@ def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration
     missing = [p for p in participants if any((p, row.phase, int(row.episode)) not in rolled for row in
                                               frame[(frame.participant == p) & frame.phase.isin(needed)].itertuples())]
     if missing:
-        rolled.update({k: v for k, v in learnt_trajectories(frame, missing, needed, duration).items() if k not in rolled})
+        fresh = learnt_trajectories(frame, missing, needed, duration)
+        rolled.update({k: v for k, v in fresh.items() if k not in rolled})
     groups = frame.groupby("participant")["group"].first()
     figure = Figure(figsize=(3.6 * len(panels), 3.4 * len(participants)), layout="constrained")
     axes = figure.subplots(len(participants), len(panels), squeeze=False)
@@ -254,14 +271,33 @@ def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration
                 ax.set_axis_off()
                 continue
             skill = SKILLS[rows["skill"].iloc[0]]
-            _draw_target(ax, skill)
+            inset = ax.inset_axes([0.58, 0.58, 0.4, 0.4]) if zoom else None
+            drawn = []
+            for target_ax in [ax] + ([inset] if inset is not None else []):
+                _draw_target(target_ax, skill)
+            if true_skill:
+                truth = skill.reproduce(skill.theta, duration=duration, record_every=20)
+                drawn.append(truth)
+                for target_ax in [ax] + ([inset] if inset is not None else []):
+                    target_ax.plot(truth.positions[:, 0], truth.positions[:, 1], color=OPTIMAL_STYLE["color"],
+                                   lw=1.6, linestyle="--", gid=f"true/{skill.key}", label="true skill")
             for k, row in enumerate(rows.itertuples()):
                 trajectory = rolled[(participant, row.phase, int(row.episode))]
+                drawn.append(trajectory)
                 shade = palette(0.15 + 0.7 * k / max(len(rows) - 1, 1))
                 label = f"{row.phase}E{row.episode}" if row.phase == "P3" else row.phase
-                ax.plot(trajectory.positions[:, 0], trajectory.positions[:, 1], color=shade, lw=1.4,
-                        gid=f"{participant}/{row.phase}E{row.episode}",
-                        label=label + (" (diverged)" if trajectory.diverged else ""))
+                for target_ax in [ax] + ([inset] if inset is not None else []):
+                    target_ax.plot(trajectory.positions[:, 0], trajectory.positions[:, 1], color=shade, lw=1.4,
+                                   gid=f"{participant}/{row.phase}E{row.episode}",
+                                   label=label + (" (diverged)" if trajectory.diverged else ""))
+            if inset is not None:
+                xlim, ylim = _zoom_box(skill, drawn)
+                inset.set_xlim(*xlim)
+                inset.set_ylim(*ylim)
+                inset.set_aspect("equal")
+                inset.set_gid("zoom")
+                inset.tick_params(labelsize=5)
+                ax.indicate_inset_zoom(inset, edgecolor="0.4")
             start = skill.end_effector(skill.start)[0]
             ax.plot([start[0]], [start[1]], marker="o", color="black", linestyle="none", gid="start", label="start")
             box = skill.workspace
@@ -385,7 +421,8 @@ def teaching_report(episodes, demonstrations, participant, changes=PAPER_CHANGES
     text.set_axis_off()
     # Wrapped here rather than by matplotlib: wrap=True ignores the page margin under a
     # constrained layout, and a take-home page must not lose the ends of its sentences.
-    lines = [textwrap.fill(line, 100, subsequent_indent="  ") for line in _report_sentences(frame, participant, changes)]
+    sentences = _report_sentences(frame, participant, changes)
+    lines = [textwrap.fill(line, 100, subsequent_indent="  ") for line in sentences]
     text.text(0, 1, "\n".join(lines), va="top", fontsize=9.5)
     return figure
 

@@ -160,8 +160,8 @@ def simulated_power(n_per_group: int = 16, n_studies: int = 1000, alpha: float =
         workers: processes drawing query states (default: up to 2 for 100 studies or more).
 
     Returns:
-        A ``SimulatedPower``: the power of Welch's t-test ("welch") and of the Mann-Whitney U
-        test ("mannwhitney") on each change.
+        A ``SimulatedPower``: the power of Student's t-test ("student"), Welch's t-test ("welch")
+        and the Mann-Whitney U test ("mannwhitney") on each change.
     """
     alpha = _check_level("alpha", alpha)
     alternative = check_alternative(alternative)
@@ -172,9 +172,10 @@ def simulated_power(n_per_group: int = 16, n_studies: int = 1000, alpha: float =
     power, p_values, effect = {}, {}, {}
     for change in changes:
         target, control = deltas[change.name]["target"], deltas[change.name]["control"]
+        student = stats.ttest_ind(target, control, axis=1, equal_var=True, alternative=alternative).pvalue
         welch = stats.ttest_ind(target, control, axis=1, equal_var=False, alternative=alternative).pvalue
         mwu = stats.mannwhitneyu(target, control, axis=1, alternative=alternative).pvalue
-        p_values[change.name] = {"welch": welch, "mannwhitney": mwu}
-        power[change.name] = {"welch": float(np.mean(welch < alpha)), "mannwhitney": float(np.mean(mwu < alpha))}
+        p_values[change.name] = {"student": student, "welch": welch, "mannwhitney": mwu}
+        power[change.name] = {name: float(np.mean(values < alpha)) for name, values in p_values[change.name].items()}
         effect[change.name] = float(np.mean(_hedges_g_columns(target, control)))
     return SimulatedPower(power, n_studies, n_per_group, alpha, alternative, p_values, effect)

@@ -12,8 +12,10 @@ episode rows (``mt_widgets.study.tidy``: one row per completed episode with ``pa
   P1 -> P3E8 (effect of guidance), P1 -> P4 (retention), P2 -> P5 (transfer).
 - ``change_summary``: per change and group, the mean and SD of the change and the percentage
   change of the group's mean error (how the paper prints its results).
-- ``between_group_tests``: Welch's t-test and the Mann-Whitney U test of target against control,
-  one- or two-sided, and Hedges' g with a confidence interval.
+- ``between_group_tests``: Student's t-test (equal variances: the test the paper's power
+  analysis assumes), Welch's t-test and the Mann-Whitney U test of target against control, one-
+  or two-sided, and Hedges' g with a confidence interval. Which of the three is primary is the
+  analysis plan's choice (``AnalysisPlan.test``), recorded in ``StudyStatistics.test``.
 - ``within_group_tests``: paired t-test and Wilcoxon signed-rank test of each group's change.
 - ``posthoc_baseline``: the paper's P1 vs P2 check (no difference between skills or groups at
   baseline).
@@ -31,13 +33,13 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, special, stats
 
-from mt_widgets.study.analysis_plan import PAPER_CHANGES, Change  # noqa: F401  (Change: re-exported)
+from mt_widgets.study.analysis_plan import ALTERNATIVES, PAPER_CHANGES, TESTS, Change  # noqa: F401  (re-exported)
 
 #: The two groups of the between-subjects design, in the order tables and figures use.
 GROUPS = ("target", "control")
 
-#: Accepted values of ``alternative``; one-sided tests are phrased as "target minus control".
-ALTERNATIVES = ("two-sided", "less", "greater")
+#: The tests' names as a reader sees them.
+TEST_NAMES = {"student": "Student's t-test", "welch": "Welch's t-test", "mannwhitney": "Mann-Whitney U"}
 
 
 _REQUIRED = ("participant", "group", "phase", "episode", "teaching_error")
@@ -299,7 +301,7 @@ def hedges_g(x, y, confidence: float = 0.95, method: str = "noncentral-t") -> Ef
 
 def between_group_tests(changes_table: pd.DataFrame, alternative: str = "less",
                         confidence: float = 0.95) -> pd.DataFrame:
-    """Target against control on each change: Welch's t, Mann-Whitney U and Hedges' g.
+    """Target against control on each change: Student's t, Welch's t, Mann-Whitney U and Hedges' g.
 
     Args:
         changes_table: ``participant_changes`` output.
@@ -308,7 +310,8 @@ def between_group_tests(changes_table: pd.DataFrame, alternative: str = "less",
         confidence: coverage of the interval of g.
 
     Returns:
-        One row per change with ``n_target``, ``n_control``, ``welch_t``, ``welch_df``,
+        One row per change with ``n_target``, ``n_control``, ``student_t``, ``student_df``,
+        ``student_p``, ``welch_t``, ``welch_df``,
         ``welch_p``, ``mannwhitney_u``, ``mannwhitney_p``, ``hedges_g``, ``g_ci_low``,
         ``g_ci_high`` and ``alternative``. Tests that cannot run (fewer than 2 per group) are NaN.
     """
@@ -318,13 +321,17 @@ def between_group_tests(changes_table: pd.DataFrame, alternative: str = "less",
         target = part.loc[part["group"] == "target", "delta"].to_numpy()
         control = part.loc[part["group"] == "control", "delta"].to_numpy()
         row = {"change": name, "label": part["label"].iloc[0], "n_target": target.size, "n_control": control.size,
-               "welch_t": np.nan, "welch_df": np.nan, "welch_p": np.nan, "mannwhitney_u": np.nan,
+               "student_t": np.nan, "student_df": np.nan, "student_p": np.nan, "welch_t": np.nan,
+               "welch_df": np.nan, "welch_p": np.nan, "mannwhitney_u": np.nan,
                "mannwhitney_p": np.nan, "hedges_g": np.nan, "g_ci_low": np.nan, "g_ci_high": np.nan,
                "alternative": alternative}
         if target.size >= 2 and control.size >= 2:
+            student = stats.ttest_ind(target, control, equal_var=True, alternative=alternative)
             welch = stats.ttest_ind(target, control, equal_var=False, alternative=alternative)
             mwu = stats.mannwhitneyu(target, control, alternative=alternative)
-            row.update(welch_t=float(welch.statistic), welch_df=float(welch.df), welch_p=float(welch.pvalue),
+            row.update(student_t=float(student.statistic), student_df=float(student.df),
+                       student_p=float(student.pvalue),
+                       welch_t=float(welch.statistic), welch_df=float(welch.df), welch_p=float(welch.pvalue),
                        mannwhitney_u=float(mwu.statistic), mannwhitney_p=float(mwu.pvalue))
             if np.var(target) + np.var(control) > 0:
                 effect = hedges_g(target, control, confidence)
@@ -415,6 +422,12 @@ class StudyStatistics:
     baseline: pd.DataFrame
     alternative: str
     alpha: float
+    test: str = "welch"
+
+    @property
+    def primary_p(self) -> pd.Series:
+        """The primary test's p-value of each change (``test``: the analysis plan's choice)."""
+        return self.between[f"{self.test}_p"]
 
     def results_table(self) -> pd.DataFrame:
         """One tidy row per (change, group): descriptives, the within-group tests, and the
@@ -422,7 +435,9 @@ class StudyStatistics:
         table = self.change_summary.merge(
             self.within[["change", "group", "paired_t", "paired_p", "wilcoxon_w", "wilcoxon_p"]],
             on=["change", "group"], how="left")
-        return table.merge(self.between.drop(columns=["label"]), on="change", how="left")
+        table = table.merge(self.between.drop(columns=["label"]), on="change", how="left")
+        table["primary_test"] = self.test
+        return table
 
     def summary(self) -> str:
         """A short plain-language account of the results."""
@@ -430,7 +445,7 @@ class StudyStatistics:
 
 
 def analyse_changes(episodes, changes=PAPER_CHANGES, alternative: str = "less", alpha: float = 0.05,
-                    confidence: float = 0.95) -> StudyStatistics:
+                    confidence: float = 0.95, test: str = "welch") -> StudyStatistics:
     """Every table of the paper's analysis from the episode rows.
 
     Args:
@@ -440,8 +455,12 @@ def analyse_changes(episodes, changes=PAPER_CHANGES, alternative: str = "less", 
             ``between_group_tests``); the paper's hypotheses are one-sided, "less".
         alpha: the significance level the summary uses.
         confidence: coverage of every confidence interval.
+        test: the primary between-group test the summary's verdict uses ("student", "welch" or
+            "mannwhitney"; a study's analysis plan names it); all three are computed.
     """
     check_alternative(alternative)
+    if test not in TESTS:
+        raise ValueError(f"test: expected one of {list(TESTS)}, got {test!r}")
     if not 0 < alpha < 1:
         raise ValueError(f"alpha: expected a level strictly between 0 and 1, got {alpha!r}")
     frame = episodes_frame(episodes)
@@ -455,6 +474,7 @@ def analyse_changes(episodes, changes=PAPER_CHANGES, alternative: str = "less", 
         baseline=posthoc_baseline(frame),
         alternative=alternative,
         alpha=alpha,
+        test=test,
     )
 
 
@@ -482,13 +502,15 @@ def plain_language_summary(results: StudyStatistics) -> str:
                 s = summary.loc[(row["change"], group)]
                 parts.append(f"the {group} group changed by {s['mean']:+.2f} (SD {s['sd']:.2f}, "
                              f"{s['percent_change']:+.0f}% of its error before)")
-        significant = row["welch_p"] < results.alpha
+        primary = row[f"{results.test}_p"]
+        significant = primary < results.alpha
         verdict = ("a difference unlikely to be chance" if significant else
                    "a difference that could well be chance")
         what = meaning.get(row["change"], "")
         lines.append(f"{row['label']}{' (' + what + ')' if what else ''}: " + "; ".join(parts) +
-                     f". Welch's t-test: {_p(row['welch_p'])}, Mann-Whitney U: {_p(row['mannwhitney_p'])}, "
-                     f"Hedges' g = {row['hedges_g']:.2f} [{row['g_ci_low']:.2f}, {row['g_ci_high']:.2f}]: "
+                     f". {TEST_NAMES[results.test]} (primary): {_p(primary)}; "
+                     + ", ".join(f"{TEST_NAMES[t]}: {_p(row[f'{t}_p'])}" for t in TESTS if t != results.test)
+                     + f"; Hedges' g = {row['hedges_g']:.2f} [{row['g_ci_low']:.2f}, {row['g_ci_high']:.2f}]: "
                      f"{verdict}.")
     baseline = results.baseline.dropna(subset=["p"])
     if not baseline.empty:

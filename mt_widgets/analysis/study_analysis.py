@@ -12,11 +12,12 @@ from pathlib import Path
 
 import pandas as pd
 
+from mt_widgets.study.log import StudyFolder
 from mt_widgets.study.tidy import read_study
 
 from .example_studies import EXAMPLE_STUDY
 from .figures import plot_changes, plot_error_by_episode, plot_trajectories, save_figure
-from .statistics import PAPER_CHANGES, StudyStatistics, analyse_changes
+from .statistics import StudyStatistics, analyse_changes
 
 
 @dataclass
@@ -62,16 +63,19 @@ class StudyAnalysis:
         return written
 
 
-def analyse_study(folder=None, alternative: str = "less", alpha: float = 0.05, changes=PAPER_CHANGES,
-                  trajectories_for=None, trajectory_duration: float | None = None) -> StudyAnalysis:
+def analyse_study(folder=None, alternative: str | None = None, alpha: float | None = None, changes=None,
+                  trajectories_for=None, trajectory_duration: float | None = None,
+                  test: str | None = None) -> StudyAnalysis:
     """Reads a study folder and computes every table and figure of the paper's analysis.
 
     Args:
         folder: a study folder (``study.json`` and participant logs); default ``EXAMPLE_STUDY``.
         alternative: sidedness of the tests, target minus control ("less": the paper's
-            one-sided hypotheses; "two-sided").
+            one-sided hypotheses; "two-sided"). Default: the study's analysis plan (its
+            protocol's ``[analysis]`` table), as are ``alpha``, ``changes`` and ``test``.
         alpha: the significance level of the summary.
         changes: the comparisons (default the paper's three).
+        test: the primary between-group test ("student", "welch", "mannwhitney").
         trajectories_for: participant codes for the trajectory figure (default: the first of
             each group; an empty list skips it).
         trajectory_duration: seconds of each rollout in that figure (default the plant's).
@@ -85,7 +89,11 @@ def analyse_study(folder=None, alternative: str = "less", alpha: float = 0.05, c
         raise ValueError(f"folder: expected completed episodes in {folder}, found none")
     episodes = pd.DataFrame(episodes)
     demonstrations = pd.DataFrame(demonstrations)
-    statistics = analyse_changes(episodes, changes, alternative=alternative, alpha=alpha)
+    plan = StudyFolder(folder).protocol.analysis
+    changes = plan.changes if changes is None else changes
+    statistics = analyse_changes(episodes, changes,
+                                 alternative=plan.alternative if alternative is None else alternative,
+                                 alpha=plan.alpha if alpha is None else alpha, test=plan.test if test is None else test)
     figures = {"error_by_episode": plot_error_by_episode(episodes), "changes": plot_changes(episodes, changes)}
     if trajectories_for is None:
         firsts = episodes.groupby("group")["participant"].first()

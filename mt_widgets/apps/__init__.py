@@ -4,7 +4,8 @@ Nothing in the package imports ``mt_widgets.apps``; notebooks do:
 
 - ``StudyApp``: the participant app (experimenter panel, then the participant view).
 - ``UArmStudyApp``: the same on a uArm Swift Pro (or its simulated arm), with the paper's
-  screen under the arm (``ScreenGeometry``), the arm bridge (``UArmBridge``, re-exported from ``mt_widgets.hardware.bridge``) and audio cues.
+  screen under the arm (``ScreenGeometry``), the arm bridge (``UArmBridge``, re-exported from
+  ``mt_widgets.hardware.bridge``) and audio cues.
 """
 
 from mt_widgets.hardware.bridge import UArmBridge, connect_arm

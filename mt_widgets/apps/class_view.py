@@ -25,8 +25,14 @@ from ipywidgets import HTML, Button, FloatText, HBox, Image, Layout, VBox
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from mt_widgets.classroom import (STUCK_AFTER_S, ClassFolderError, ClassSummary, class_folder_from_env, read_class,
-                                  summarise)
+from mt_widgets.classroom import (
+    STUCK_AFTER_S,
+    ClassFolderError,
+    ClassSummary,
+    class_folder_from_env,
+    read_class,
+    summarise,
+)
 from mt_widgets.widgets.theme import OKABE_ITO
 
 _PALETTE = [OKABE_ITO[k] for k in ("blue", "orange", "bluish_green", "reddish_purple", "vermillion", "sky_blue",

@@ -29,6 +29,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 import numpy as np
 from ipywidgets import HTML, Button, HBox, Label, Layout, VBox
 
+from mt_widgets.core import UArmPlant
 from mt_widgets.core.validation import as_bool
 from mt_widgets.hardware import SwiftPro, SwiftProError, SwiftProStopped, UnsafeMoveError
 from mt_widgets.hardware.bridge import UArmBridge, connect_arm, describe_error, is_simulated
@@ -93,8 +94,6 @@ class UArmTeaching:
             raise ValueError(f"geometry: expected a ScreenGeometry, got {type(geometry).__name__}")
         self.simulated = is_simulated(arm)
         self.show_player = self.simulated if show_player is None else as_bool("show_player", show_player)
-        as_bool("audio", audio)
-        as_bool("buzzer", buzzer)
         where = f"{arm.port_used} (simulated arm)" if self.simulated else f"Swift Pro on {arm.port_used}"
         self.panel = ArmPanel(f"{where}, firmware {'.'.join(map(str, arm.firmware_version or ()))}")
         self.panel.stop_button.on_click(lambda _: self.stop())
@@ -117,8 +116,9 @@ class UArmTeaching:
     # ------------------------------------------------------------------ episodes
     def attach(self, episode: EpisodeWidget) -> EpisodeWidget:
         """Wire an episode: true-scale view, query states on the arm, cues, reproduction on the arm."""
-        if episode.skill.robot != "uarm":
-            raise ValueError(f"episode: expected an episode of a uArm skill, got skill {episode.skill.key!r}")
+        if not isinstance(episode.skill.plant, UArmPlant):
+            raise ValueError(f"episode: expected an episode of a skill on the uArm's plant (UArmPlant), got skill "
+                             f"{episode.skill.key!r} on {type(episode.skill.plant).__name__}")
         self.episode = episode
         fit_episode(episode, self.geometry, show_player=self.show_player)
         total = len(episode.query_states)

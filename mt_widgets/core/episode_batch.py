@@ -3,7 +3,9 @@
 ``TeachingEpisode`` (``mt_widgets.core.episode``) is one teacher's episode, demonstration by
 demonstration; ``EpisodeBatch`` is the same episode for many teachers who have all given their
 demonstrations, with the same names and the same definitions (``theta_hat``, ``error``, ``rho1``,
-``rho2``, ``bound``, ``residual_norm``, ``reproduction`` over ``duration`` seconds). One episode of a study gives every teacher the same skill and (per study) the same query
+``rho2``, ``bound``, ``residual_norm``, ``reproduction`` over ``duration`` seconds).
+
+One episode of a study gives every teacher the same skill and (per study) the same query
 states, so one SVD of each feature matrix serves all the teachers who answer it. An
 ``EpisodeBatch`` holds, for K sets of query states, the learner's map
 ``A = (Phi^T Phi + lam I)^-1 Phi^T``, the optimal actions ``U_bar`` and ``rho1 = ||A||_2``;
@@ -115,7 +117,7 @@ class EpisodeBatch:
 
     @classmethod
     def of(cls, skill: Skill, query_states, lam: float = DEFAULT_LAMBDA,
-           duration: float | None = None) -> "EpisodeBatch":
+           duration: float | None = None) -> EpisodeBatch:
         """Decomposes the learner's map for each of K sets of query states (K, N, state_dim)."""
         if not isinstance(skill, Skill):
             raise TypeError(f"skill: expected a Skill, got {type(skill).__name__}")

@@ -49,10 +49,10 @@ if _HANDLERS not in serial.protocol_handler_packages:
 sys.modules.setdefault(_HANDLERS + ".protocol_uarm-sim", protocol_uarmsim)
 
 __all__ = [
-    "ERROR_CLASSES", "Event", "ExecutionReport", "SafetyEnvelope", "SimulatedSwiftPro", "SwiftPro", "SwiftProBufferFull",
-    "SwiftProCommandError", "SwiftProDisconnected", "SwiftProEncoderError", "SwiftProError",
+    "ERROR_CLASSES", "Event", "ExecutionReport", "SafetyEnvelope", "SimulatedSwiftPro", "StopSwitch", "SwiftPro",
+    "SwiftProBufferFull", "SwiftProCommandError", "SwiftProDisconnected", "SwiftProEncoderError", "SwiftProError",
     "SwiftProMotorsDetached", "SwiftProNotFound", "SwiftProOperationFailed", "SwiftProParameterError",
-    "SwiftProPortBusy", "SwiftProPowerError", "StopSwitch", "SwiftProStopped", "SwiftProTimeout", "SwiftProUnknownCommand",
+    "SwiftProPortBusy", "SwiftProPowerError", "SwiftProStopped", "SwiftProTimeout", "SwiftProUnknownCommand",
     "SwiftProUnreachable", "TEACHING_HEIGHT_MM", "TEACHING_MAX_YAW_DEG", "TEACHING_RADIUS_MM",
     "UArmBridge", "UnsafeMoveError", "connect_arm", "is_reachable",
 ]

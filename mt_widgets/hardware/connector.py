@@ -39,7 +39,7 @@ log = logging.getLogger(__name__)
 
 #: USB id of the Arduino Mega 2560 inside the Swift and the Swift Pro.
 USB_VID, USB_PID = 0x2341, 0x0042
-#: URL of the simulated arm used when asked to fall back on it.
+#: The simulated arm used when no Swift Pro is plugged in: firmware 4.x, real-time moves.
 SIMULATOR_URL = "uarm-sim://?firmware=4"
 
 
@@ -188,7 +188,8 @@ class SwiftPro:
             # 3.x answers "VSwiftPro", 4.x "SwiftPro".
             name = dialect_for(version).device_name(self._request("P2201").payload)
             if name != "SwiftPro":
-                raise SwiftProError(f"P2201 must name a SwiftPro, got {name!r}: this connector drives the Swift Pro only")
+                raise SwiftProError(f"P2201 must name a SwiftPro, got {name!r}: this connector drives the Swift Pro "
+                                    "only")
             self.firmware_version, self.device_name = version, name
             log.info("connected to a %s on %r, firmware %s (dialect %s)", name, port,
                      ".".join(map(str, version)), self.dialect.name)

@@ -84,8 +84,8 @@ class SafetyEnvelope:
             if not is_real(v) or not math.isfinite(v):
                 raise ValueError(f"{name}: expected a finite real number (not a bool), got {v!r} ({type(v).__name__})")
         if not 0 < self.min_radius_mm < self.max_radius_mm:
-            raise ValueError(f"min_radius_mm, max_radius_mm: expected 0 < min_radius_mm < max_radius_mm, got {self.min_radius_mm}, "
-                             f"{self.max_radius_mm}")
+            raise ValueError(f"min_radius_mm, max_radius_mm: expected 0 < min_radius_mm < max_radius_mm, "
+                             f"got {self.min_radius_mm}, {self.max_radius_mm}")
         if not 0 < self.max_yaw_deg < 90:
             raise ValueError(f"max_yaw_deg: expected a number in (0, 90), got {self.max_yaw_deg}")
         if not self.min_z_mm < self.max_z_mm:
@@ -190,7 +190,8 @@ class SafetyEnvelope:
         z_lo, z_hi = min(self.min_z_mm, p0[2]), max(self.max_z_mm, p0[2])
         r_lo, r_hi = min(self.min_radius_mm, r0), max(self.max_radius_mm, r0)
         yaw_hi = max(self.max_yaw_deg, abs(yaw0))
-        for name, value, lo, hi in (("z", p1[2], z_lo, z_hi), ("radius", r1, r_lo, r_hi), ("yaw", yaw1, -yaw_hi, yaw_hi)):
+        bounds = (("z", p1[2], z_lo, z_hi), ("radius", r1, r_lo, r_hi), ("yaw", yaw1, -yaw_hi, yaw_hi))
+        for name, value, lo, hi in bounds:
             if not lo - tol <= value <= hi + tol:
                 raise UnsafeMoveError(
                     f"a move into the envelope from {tuple(round(v, 3) for v in p0)} mm must keep {name} in "

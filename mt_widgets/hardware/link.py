@@ -29,8 +29,14 @@ import serial
 from serial.serialutil import SerialException, SerialTimeoutException
 
 from . import protocol
-from .errors import SwiftProCommandError, SwiftProDisconnected, SwiftProError, SwiftProPortBusy, SwiftProTimeout, \
-    error_for_code
+from .errors import (
+    SwiftProCommandError,
+    SwiftProDisconnected,
+    SwiftProError,
+    SwiftProPortBusy,
+    SwiftProTimeout,
+    error_for_code,
+)
 from .protocol import Event, Reply
 
 log = logging.getLogger(__name__)

@@ -24,7 +24,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from mt_widgets.core import SKILLS
 from mt_widgets.core.episode_batch import EpisodeBatch
 from mt_widgets.study.analysis_plan import PAPER_CHANGES
 from mt_widgets.study.participants import block_assignment
@@ -40,7 +39,6 @@ from .plan import (
 )
 from .progress import Progress
 from .teachers import TeacherParameters, TeacherPopulation, along_line_offsets, naive_offsets, position_gain
-
 
 # -- the batched engine ----------------------------------------------------------------------------
 
@@ -74,7 +72,7 @@ def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study
     """
     results = []
     for e, step in enumerate(episode_plan(protocol)):
-        skill = SKILLS[step["skill"]]
+        skill = protocol.skill(step["skill"])
         guided = np.isin(groups, list(step["guidance"]))
         states = states_by_episode[e]
         batch = EpisodeBatch.of(skill, states, protocol.lam, protocol.reproduction_duration_s)

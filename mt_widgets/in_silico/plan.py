@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mt_widgets.core import SKILLS, LineTarget, SeedSchedule, UArmPlant
+from mt_widgets.core import LineTarget, SeedSchedule, UArmPlant
 from mt_widgets.study.protocol import Protocol, load_protocol
 
 from .teachers import PAPER_FIT, PAPER_FIT_UARM, TeacherParameters
@@ -51,15 +51,16 @@ def query_states_for(protocol, step: dict, participant: int | None = None, study
     schedule = SeedSchedule(protocol.seed if study_seed is None else study_seed)
     who = participant if protocol.query_states == "per-participant" else None
     seed = schedule.seed(step["states_index"], step["episode_index"], who)
-    return SKILLS[step["skill"]].query_states(seed=seed, n=step["demonstrations"])
+    return protocol.skill(step["skill"]).query_states(seed=seed, n=step["demonstrations"])
 
 
 def imagined_line_target(protocol, phase_index: int):
     """The point a novice takes for a line skill's target in phase ``phase_index`` (model item 1b).
 
     It is the point target they last practised or taught on the same robot before this phase
-    (the practice skill counts first): in the paper's protocols skill 1's point, practised for
-    two minutes and taught in P1 just before the line appears in P2.
+    (the practice skill counts first): in the paper's protocols skill 1's point, taught in P1 just
+    before the line appears in P2 (their practice skill is a neutral point elsewhere, which P1
+    comes after).
 
     Args:
         protocol: the ``Protocol``.
@@ -69,14 +70,14 @@ def imagined_line_target(protocol, phase_index: int):
         (2,) the point in the skill's units, or None (a point skill, or no point taught before).
     """
     phase = protocol.phases[phase_index]
-    skill = SKILLS[phase.skill]
+    skill = protocol.skill(phase.skill)
     if not isinstance(skill.target, LineTarget):
         return None
     before = [protocol.practice.skill] if protocol.practice.duration_s > 0 else []
     before += [p.skill for p in protocol.phases[:phase_index]]
     anchor = None
     for key in before:
-        other = SKILLS[key]
+        other = protocol.skill(key)
         if type(other.plant) is type(skill.plant) and other.target is not None \
                 and not isinstance(other.target, LineTarget):
             anchor = np.asarray(other.target.point, dtype=float)
@@ -96,7 +97,7 @@ def teacher_seed(seed: int, participant: int) -> np.random.SeedSequence:
 
 def runs_on_uarm(protocol) -> bool:
     """Whether a ``Protocol`` teaches skills of the uArm (its phases' skills run on the uArm plant)."""
-    return any(isinstance(SKILLS[phase.skill].plant, UArmPlant) for phase in protocol.phases)
+    return any(isinstance(protocol.skill(phase.skill).plant, UArmPlant) for phase in protocol.phases)
 
 
 def paper_fit(protocol=None) -> TeacherParameters:

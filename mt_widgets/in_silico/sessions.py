@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from mt_widgets.core import SKILLS
 from mt_widgets.core.episode import TeachingEpisode
 from mt_widgets.study.log import StudyFolder
 from mt_widgets.study.session import Session
@@ -17,6 +16,7 @@ from mt_widgets.study.session import Session
 from .plan import default_parameters, episode_plan, imagined_line_target, participant_id, resolve_protocol, teacher_seed
 from .progress import Progress
 from .teachers import TeacherParameters, TeacherPopulation, along_line_offsets, naive_offsets, position_gain
+
 
 class SessionTeacher:
     """One synthetic teacher driving a ``Session`` exactly as the study app drives it for a person.
@@ -33,6 +33,11 @@ class SessionTeacher:
 
     def __init__(self, protocol, parameters: TeacherParameters | None, seed):
         self.protocol = protocol
+        # Answers to the steps around the task come from a stream of their own, so adding a
+        # questionnaire to a protocol does not change anyone's arrows.
+        self._answers_rng = np.random.default_rng(np.random.SeedSequence(
+            seed.entropy, spawn_key=tuple(seed.spawn_key) + (7,)) if isinstance(seed, np.random.SeedSequence)
+            else np.random.SeedSequence(int(seed), spawn_key=(7,)))
         self.plan = episode_plan(protocol)
         self._episode_of = {(step["phase_index"], step["episode"]): e for e, step in enumerate(self.plan)}
         parameters = default_parameters(protocol) if parameters is None else parameters
@@ -52,13 +57,35 @@ class SessionTeacher:
                 self.population.see_reproduction()
             elif step.kind == "practice":
                 session.finish_practice(duration_s=float(step.duration_s or 0.0))
+            elif step.kind == "video":
+                session.finish_video(watched_to_end=True, plays=1)
+            elif step.kind in ("eligibility", "demographics", "questionnaire"):
+                session.submit_answers(self.answers(step.study_step))
             else:
                 session.advance()
         return results
 
+    def answers(self, study_step) -> dict:
+        """Answers to an asking step: eligible ones to a screener (synthetic teachers are novices),
+        and seeded draws for the rest (a number inside its bounds, a level or option, no free text)."""
+        answers = {}
+        for item in study_step.items:
+            if item.eligible:
+                answers[item.id] = item.eligible[0]
+            elif item.kind in ("likert", "choice"):
+                answers[item.id] = item.choices[int(self._answers_rng.integers(len(item.choices)))]
+            elif item.kind == "number":
+                low = 18 if item.minimum is None else item.minimum
+                high = max(low, 40 if item.maximum is None else min(item.maximum, low + 22))
+                value = self._answers_rng.uniform(low, high)
+                answers[item.id] = int(round(value)) if item.integer else float(value)
+            elif item.required:
+                answers[item.id] = "synthetic participant"
+        return answers
+
     def demonstrate(self, session, step) -> None:
         """Draws one arrow for the current query state and submits it with its timings."""
-        skill = SKILLS[step.skill]
+        skill = self.protocol.skill(step.skill)
         e = self._episode_of[(step.phase_index, step.episode)]
         if self._episode is None or self._episode[0] != e:
             # What the teacher works from for this episode: where the target is from each tip

@@ -278,7 +278,7 @@ class TeacherPopulation:
         self.understanding = np.full(len(self.traits), float(p.initial_understanding))
         self.guided_skills: dict[str, np.ndarray] = {}
 
-    def with_parameters(self, parameters: TeacherParameters) -> "TeacherPopulation":
+    def with_parameters(self, parameters: TeacherParameters) -> TeacherPopulation:
         """The same people (the same draws) with other parameters, back at the start."""
         return TeacherPopulation(parameters, self.traits, self.demonstration_noise, self.episode_noise)
 

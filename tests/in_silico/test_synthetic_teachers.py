@@ -6,12 +6,11 @@ import sys
 import numpy as np
 import pandas as pd
 import pytest
-
-from mt_widgets.core import SKILLS
 from scipy import stats
 
 from mt_widgets.analysis.paper_comparison import baseline_comparison, compare_with_paper
 from mt_widgets.analysis.power import simulated_power
+from mt_widgets.core import SKILLS
 from mt_widgets.in_silico.engine import run_in_silico, run_many_studies
 from mt_widgets.in_silico.paper_results import implied_baselines, paper_changes, paper_results
 from mt_widgets.in_silico.plan import episode_plan, imagined_line_target, paper_fit, resolve_protocol, teacher_seed

@@ -9,10 +9,18 @@ import time
 import numpy as np
 import pytest
 
-from mt_widgets.hardware.bridge import (MM_PER_CM, UArmBridge, arm_to_plant_cm, connect_arm, describe_error,
-                                         is_simulated, plant_to_arm_mm, polar_waypoints)
 from mt_widgets.core import SKILLS, Trajectory
 from mt_widgets.hardware import TEACHING_HEIGHT_MM, SwiftPro, SwiftProDisconnected, SwiftProStopped, UnsafeMoveError
+from mt_widgets.hardware.bridge import (
+    MM_PER_CM,
+    UArmBridge,
+    arm_to_plant_cm,
+    connect_arm,
+    describe_error,
+    is_simulated,
+    plant_to_arm_mm,
+    polar_waypoints,
+)
 
 from .helpers import arm_is_moving, device_of, is_move, is_stop, moves, received, sim_url, wait_until
 
