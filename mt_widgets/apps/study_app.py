@@ -145,7 +145,7 @@ class StudyApp(VBox):
         self.heading = HTML()
         self.body = VBox(layout=Layout(max_width="1000px"))
         self.withdraw_button = Button(description="Withdraw from the study", icon="sign-out",
-                                      layout=Layout(width="auto", margin="24px 0 0 0"))
+                                      layout=Layout(width="auto", margin="24px 0 0 0", align_self="flex-start"))
         self.withdraw_button.on_click(lambda _: self._safely(self._ask_withdraw))
         self.withdraw_box = VBox([self.withdraw_button])
         self.participant_view = VBox([self.heading, self.body, self.withdraw_box], layout=Layout(padding="4px"))
@@ -234,7 +234,9 @@ class StudyApp(VBox):
 
     # -- the participant view ------------------------------------------------------------------------------
     def _button(self, description: str, on_click, style: str = "primary") -> Button:
-        button = Button(description=description, button_style=style, layout=Layout(width="auto", min_width="160px"))
+        # align_self: a button keeps its own width in the page's column instead of spanning it.
+        button = Button(description=description, button_style=style,
+                        layout=Layout(width="auto", min_width="160px", align_self="flex-start"))
 
         def clicked(_):
             button.disabled = True  # one click, one step: a double click cannot skip a screen
@@ -574,7 +576,8 @@ class VideoStep(VBox):
             f"<div><button class='mt-video-replay' onclick=\"const v=this.closest('.mt-video-step')"
             f".querySelector('video'); v.currentTime=0; v.play();\">Play again from the start</button></div>")
         self.continue_button = Button(description="Continue", button_style="primary",
-                                      disabled=study_step.require_watched, layout=Layout(width="auto"))
+                                      disabled=study_step.require_watched,
+                                      layout=Layout(width="auto", min_width="160px", align_self="flex-start"))
         self.continue_button.on_click(lambda _: self._continue())
         self.note = HTML("<small>Continue becomes available once the video has played to the end.</small>"
                          if study_step.require_watched else "")
@@ -628,7 +631,8 @@ class QuestionForm(VBox):
             self.fields[item.id] = field
             rows.append(VBox([label, field], layout=Layout(margin="6px 0")))
         self.message = HTML()
-        self.continue_button = Button(description="Continue", button_style="primary", layout=Layout(width="auto"))
+        self.continue_button = Button(description="Continue", button_style="primary",
+                                      layout=Layout(width="auto", min_width="160px", align_self="flex-start"))
         self.continue_button.on_click(lambda _: on_submit(self.answers()))
         super().__init__(rows + [self.message, self.continue_button])
 
