@@ -146,9 +146,14 @@ class TeachingCanvas(VBox):
         canvas.on_mouse_out(self._on_mouse_up)
         canvas.on_key_down(self._on_key_down)
 
+        self.view.legend.add("user_arrow")
+        # The legend beside the canvas, where the eyes go from a mark to its meaning, and not
+        # under it, where it would push what follows the canvas below the fold.
+        self.view.legend.layout.max_width = "100%"
         controls = VBox([
             self.readout,
             HBox([self.confirm_button, self.clear_button]),
+            self.view.legend,
             HTML("<small>Or type the arrow:</small>"),
             self.entry_mode,
             HBox([self.first_entry, self.second_entry]),
@@ -158,8 +163,7 @@ class TeachingCanvas(VBox):
             HTML("<small>Keyboard: click the canvas, then arrow keys move the arrow tip "
                  "(Shift: finer), Enter confirms, Escape clears.</small>"),
         ], layout=Layout(min_width="300px", max_width="380px"))
-        self.view.legend.add("user_arrow")
-        super().__init__([HBox([VBox([canvas, self.view.legend]), controls],
+        super().__init__([HBox([canvas, controls],
                                layout=Layout(flex_flow="row wrap", align_items="flex-start"))])
         self._show_current_state()
 
