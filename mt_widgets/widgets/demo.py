@@ -13,6 +13,7 @@ from ipywidgets import HTML, Box, Button, Checkbox, Layout, ToggleButtons, VBox
 from mt_widgets.core import SKILLS
 from mt_widgets.core.validation import as_bool
 
+from .animation import retire
 from .episode import EpisodeResult, EpisodeWidget
 
 #: The four skills of the paper, as a visitor reads them on the chooser.
@@ -29,13 +30,6 @@ WELCOME = (
     "push you would give it there. After your last arrow the robot learns from them and shows what "
     "it learnt. With guidance on, you also see the best arrow after each of yours.</div>"
 )
-
-
-def _close_tree(widget) -> None:
-    """Close ``widget`` and every widget under it (``close()`` alone leaves the children open)."""
-    for child in (*getattr(widget, "children", ()), *getattr(widget, "_canvases", ())):
-        _close_tree(child)
-    widget.close()
 
 
 class DemoPage(VBox):
@@ -79,8 +73,9 @@ class DemoPage(VBox):
         if as_bool("new_states", new_states):
             self.seed += 1
         if self.episode is not None:
-            # A kiosk page may run for hours: the replaced episode's widgets leave the kernel too.
-            _close_tree(self.episode)
+            # A kiosk page may run for hours: the replaced episode's widgets leave the kernel too,
+            # but only once the frames the browser still holds for them have played.
+            retire(self.episode)
         self.episode = EpisodeWidget(self.skill_chooser.value, seed=self.seed, guidance=self.guidance_switch.value,
                                      on_finished=self._on_finished, **self.episode_options)
         self.episode_slot.children = [self.episode]

@@ -277,8 +277,8 @@ class TeachingCanvas(VBox):
             else:
                 self.view.show_state(state)
             self._draw_arrows()
+        self._sync_entries()  # before the readout names the new state: typed numbers never lag behind it
         self._update_readout()
-        self._sync_entries()
         self.confirm_button.disabled = True
 
     def _draw_arrows(self, rubber_band: bool = False) -> None:
