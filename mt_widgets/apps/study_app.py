@@ -33,7 +33,7 @@ from ipywidgets import HTML, Button, Combobox, Dropdown, HBox, Layout, Text, VBo
 from mt_widgets.core import SKILLS, running_under_test
 from mt_widgets.study import (BUILTIN_PROTOCOLS, LogError, LogFolderError, ParticipantIdError, ProtocolError,
                               Session, StudyFolder, load_protocol)
-from mt_widgets.widgets import EpisodeWidget
+from mt_widgets.widgets import EpisodeWidget, stop_animations
 
 _log = logging.getLogger(__name__)
 
@@ -270,6 +270,9 @@ class StudyApp(VBox):
         step = self.session.current_step()
         protocol = self.session.protocol
         self._cancel_timer()
+        if self.episode is not None and step.kind not in ("demonstration", "episode_end", "reproduction"):
+            # The episode leaves the page: a replay still playing must not hold up what comes next.
+            stop_animations(self.episode)
         if step.kind in ("welcome", "consent", "instructions", "phase_intro", "thank_you"):
             self.episode = None
             if step.kind == "phase_intro":
@@ -308,6 +311,8 @@ class StudyApp(VBox):
     def _new_practice_round(self, step) -> None:
         seed = self._practice_seed.spawn(1)[0]
         self._practice_round += 1
+        if self.episode is not None:
+            stop_animations(self.episode)
         episode = self._episode_widget(step.skill, SKILLS[step.skill].query_states(seed=seed), guidance=False,
                                        index=0, total=1)
         episode.on_finished(lambda _: self._practice_round_over())
@@ -370,6 +375,8 @@ class StudyApp(VBox):
     def _show_episode(self, step) -> None:
         key = (step.phase_index, step.episode)
         if self.episode is None or self._episode_key != key:
+            if self.episode is not None:
+                stop_animations(self.episode)
             self._episode_key = key
             self._continue = self._button("Continue", self._advance)
             self._continue.layout.display = "none"

@@ -7,12 +7,12 @@
 - ``DemoPage``: the visitors' one-click page (skill chooser, guidance switch, try again).
 - ``EffortProgress``, ``GuidancePanel``: the progress bars and the guidance in words.
 - ``ViewTransform``: world <-> pixel mapping; ``draw_arrow``: arrow rendering;
-  ``play_frames``: animation; ``THEMES``: colour-blind-safe default and the paper's look.
+  ``play_frames``: animation (``stop_animations`` / ``retire`` when a view is replaced); ``THEMES``: colour-blind-safe default and the paper's look.
 
 Widgets hold no science: they call ``mt_widgets.core`` and draw the result.
 """
 
-from .animation import frame_times, play_frames, sample_at
+from .animation import Animation, frame_times, play_frames, retire, sample_at, stop_animations
 from .arm_view import LAYERS, ArmView
 from .arrows import draw_arrow
 from .coords import ViewTransform
@@ -27,9 +27,10 @@ from .teaching import ConfirmedAction, TeachingCanvas, describe_action
 from .theme import DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, ArrowStyle, Theme, get_theme
 
 __all__ = [
-    "ArmView", "ArrowStyle", "ConfirmedAction", "DEFAULT_THEME", "DEMO_SKILLS", "DemoPage", "DemonstrationRecord", "EffortProgress",
+    "Animation", "ArmView", "ArrowStyle", "ConfirmedAction", "DEFAULT_THEME", "DEMO_SKILLS", "DemoPage", "DemonstrationRecord", "EffortProgress",
     "EpisodeResult", "EpisodeWidget", "GuidancePanel", "LAYERS", "PAPER_THEME", "PAPER_UARM_THEME",
     "ReproductionPlayer", "SimArmPainter", "THEMES", "TeachingCanvas", "Theme", "UArmPainter", "ViewTransform",
     "describe_action", "draw_arrow", "drawing_batch", "explain_difference", "frame_times", "get_theme",
-    "legend_html", "painter_for", "play_frames", "repaint_on_new_view", "sample_at",
+    "legend_html", "painter_for", "play_frames", "repaint_on_new_view", "retire", "sample_at",
+    "stop_animations",
 ]
