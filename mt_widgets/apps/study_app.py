@@ -388,7 +388,9 @@ class StudyApp(VBox):
             self.episode = self._episode_widget(step.skill, step.query_states, step.guidance,
                                                 step.episode - 1, step.n_episodes, self._on_demonstration,
                                                 self._on_episode_finished)
-            self.body.children = [instructions, self.episode, self._reproduction_text, self._continue]
+            self.body.children = [instructions, self.episode]
+            # Beside the canvas the reproduction plays in: what to do next is in view.
+            self.episode.next_actions.children = [self._reproduction_text, self._continue]
             if len(step.actions):
                 # Resuming: the given demonstrations are restored; if all are given the widget
                 # finishes at once, and _on_episode_finished logs the end if it is not logged yet.

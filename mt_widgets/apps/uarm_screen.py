@@ -296,9 +296,10 @@ def fit_episode(episode, geometry: ScreenGeometry, show_player: bool = True) -> 
     episode.player.layout.display = "none"
 
     def swap(_result):
-        if show_player:
-            episode.teaching.view.canvas.layout.display = "none"
-            episode.player.layout.display = None
+        # The episode has put its player in the teaching canvas's place; without the player
+        # the screen keeps showing the teaching canvas.
+        episode.teaching.view.canvas.layout.display = "none" if show_player else None
+        episode.player.layout.display = None if show_player else "none"
 
     episode.on_finished(swap)
     if episode.phase == "finished":

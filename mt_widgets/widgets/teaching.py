@@ -146,7 +146,7 @@ class TeachingCanvas(VBox):
         canvas.on_mouse_out(self._on_mouse_up)
         canvas.on_key_down(self._on_key_down)
 
-        controls = VBox([
+        self.controls = controls = VBox([
             self.readout,
             HBox([self.confirm_button, self.clear_button]),
             HTML("<small>Or type the arrow:</small>"),
