@@ -49,7 +49,7 @@ class DemoPage(VBox):
         self.seed = int(seed)
         self.episode_options = episode_options
         self.errors: list[tuple[str, bool, float]] = []
-        self.skill_chooser = ToggleButtons(options=list(DEMO_SKILLS), value=skill, description="Skill:",
+        self.skill_chooser = ToggleButtons(options=list(DEMO_SKILLS), value=skill,
                                            style={"button_width": "150px"},
                                            tooltips=[SKILLS[key].title for key in keys])
         self.guidance_switch = Checkbox(value=as_bool("guidance", guidance),

@@ -99,9 +99,11 @@ class EpisodeResult:
     episode: TeachingEpisode | None = field(default=None, repr=False, compare=False)
 
 
-#: Vertical room (CSS px) a canvas leaves in the window for the progress line and the buttons
-#: under it; the side column's width; the widest a canvas grows.
-_ROOM_Y_PX, _SIDE_PX, _MAX_CANVAS_PX = 190, 420, 760
+#: Vertical room (CSS px) a canvas leaves in the window: for a page's heading above it (the demo's
+#: welcome and choices, the episode's title and progress) and the replay line under it, so that
+#: at 1400 x 1000 the whole reproduction is on screen without scrolling; the side column's
+#: width; the widest a canvas grows.
+_ROOM_Y_PX, _SIDE_PX, _MAX_CANVAS_PX = 350, 420, 760
 
 
 def _canvas_class(view) -> str:
