@@ -61,8 +61,20 @@ def teach_by_numbers(page, episode, guidance: bool) -> None:
     page.get_by_text("Your teaching error").wait_for(timeout=20_000)
 
 
+def mark_canvases(page) -> None:
+    """Marks the canvas elements on the page now, to tell when a new episode's have replaced them."""
+    page.evaluate("() => document.querySelectorAll('canvas').forEach(c => { c.dataset.old = '1'; })")
+
+
+def wait_for_new_canvases(page) -> None:
+    page.wait_for_function("() => { const all = document.querySelectorAll('canvas');"
+                           " return all.length === 2 && [...all].every(c => !c.dataset.old); }", timeout=10_000)
+
+
 def expect_drawn(page, episode, what: str) -> None:
-    """Both canvases show the episode's first state (teaching) and the start pose (player) soon after settling."""
+    """Both canvases show the episode's first state (teaching) and the start pose (player) soon after
+    the page settles: the marked canvases replaced by the new episode's, its texts shown."""
+    wait_for_new_canvases(page)
     page.get_by_text(f"Teaching effort: 0 of {len(episode.query_states)} demonstrations").wait_for(timeout=10_000)
     page.get_by_text("Your teaching error").wait_for(state="detached", timeout=10_000)
     settled = time.monotonic()
@@ -80,12 +92,15 @@ def test_every_canvas_is_drawn_within_a_second_whatever_is_clicked_during_the_re
         page, voila_server, artifacts, scenario):
     console = []
     open_demo(page, voila_server, console)
+    mark_canvases(page)
     set_guidance(page, False)
+    wait_for_new_canvases(page)  # the episode without guidance has replaced the first one
     episode = reference(guidance=False)
     wait_for_color(page, 0, *ee_pixel(episode), OKABE["yellow"])
     teach_by_numbers(page, episode, guidance=False)
     time.sleep(1.0)  # the reproduction (10 s) is playing
     page.screenshot(path=artifacts("playing"))
+    mark_canvases(page)
     if scenario == "try-again":
         page.get_by_role("button", name="Try again with new states").click()
         expect_drawn(page, reference(guidance=False, seed=1), scenario)
@@ -98,8 +113,9 @@ def test_every_canvas_is_drawn_within_a_second_whatever_is_clicked_during_the_re
         page.get_by_role("button", name="Arm: reach a line", exact=True).click()
         expect_drawn(page, reference("sim-line", guidance=False), scenario)
     else:
-        set_guidance(page, True)   # a fresh episode, guidance on
-        time.sleep(0.3)
+        set_guidance(page, True)   # a fresh episode, guidance on, while the reproduction's frames are queued
+        wait_for_new_canvases(page)
+        mark_canvases(page)
         page.get_by_role("button", name="Try again with new states").click()
         expect_drawn(page, reference(guidance=True, seed=1), scenario)
     page.screenshot(path=artifacts("after"))
