@@ -36,8 +36,8 @@ def best_of(function, repeats: int) -> tuple[float, float, object]:
 
 
 def main() -> None:
-    from mt_widgets.study.in_silico import run_in_silico
-    from mt_widgets.study.power import simulated_power
+    from mt_widgets.analysis.power import simulated_power
+    from mt_widgets.in_silico.engine import run_in_silico
 
     print(f"cores available: {os.cpu_count()}; load average {os.getloadavg()[0]:.1f}")
     run_in_silico(2, reproduce=True)   # warm-up: compiled kernels loaded
@@ -65,15 +65,9 @@ def main() -> None:
 def print_comparisons(simulation=None, large_per_group: int = 2000) -> None:
     """The in-silico runs against the paper, for both experiments: 32 participants on seed 0 and
     a large run (the fit's population moments), then the baselines and the P1 vs P2 check."""
-    from mt_widgets.study.in_silico import (
-        baseline_comparison,
-        compare_with_paper,
-        experiment_of,
-        paper_results,
-        run_in_silico,
-        run_many_studies,
-    )
-    from mt_widgets.study.statistics import posthoc_baseline
+    from mt_widgets.analysis.paper_comparison import baseline_comparison, compare_with_paper
+    from mt_widgets.analysis.statistics import posthoc_baseline
+    from mt_widgets.in_silico import experiment_of, paper_results, run_in_silico, run_many_studies
     for protocol in ("paper-sim", "paper-uarm"):
         experiment = experiment_of(protocol)
         study = simulation if protocol == "paper-sim" and simulation is not None else \

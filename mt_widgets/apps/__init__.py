@@ -4,11 +4,13 @@ Nothing in the package imports ``mt_widgets.apps``; notebooks do:
 
 - ``StudyApp``: the participant app (experimenter panel, then the participant view).
 - ``UArmStudyApp``: the same on a uArm Swift Pro (or its simulated arm), with the paper's
-  screen under the arm (``ScreenGeometry``), the arm bridge (``UArmBridge``) and audio cues.
+  screen under the arm (``ScreenGeometry``), the arm bridge (``UArmBridge``, re-exported from
+  ``mt_widgets.hardware.bridge``) and audio cues.
 """
 
+from mt_widgets.hardware.bridge import UArmBridge, connect_arm
+
 from .study_app import ExperimenterPanel, StudyApp, default_log_folder, participant_texts
-from .uarm_bridge import UArmBridge, connect_arm
 from .uarm_screen import ScreenGeometry
 from .uarm_study import UArmEpisodePage, UArmStudyApp, UArmTeaching
 

@@ -5,9 +5,16 @@ assignment, new / resume / unlogged lesson). Once a participant starts, the pane
 from the page and only the participant view remains: welcome and consent, practice, the
 protocol's phases, the reproduction after every episode, and a thank-you screen.
 
+The steps around the task come from the protocol too (``mt_widgets.study.steps``): an
+instruction video (watched to the end before Continue when the protocol asks, with a replay),
+the information sheet, consent with "I agree" and "I do not agree", an eligibility screener,
+demographics and questionnaires. Every participant page carries "Withdraw from the study"
+(with a confirmation); a withdrawal is logged and the page ends.
+
 Single-blind: the participant view shows only the protocol's texts (the same for every
-group), the teaching widgets, and the guidance arrows where the protocol gives them to the
-participant's group. The group, the teaching error and the target skill's own motion are
+group), the teaching widgets, and the guidance where the protocol gives it to the
+participant's group, in the protocol's modality (the paper's: the arrows only, no words).
+The group, the teaching error and the target skill's own motion are
 never shown (the paper's participants saw the robot's reproduction only).
 
 Every demonstration is handed to ``Session.submit_demonstration`` inside the widget's
@@ -20,6 +27,7 @@ call for the experimenter, and the episode does not count a demonstration the lo
 from __future__ import annotations
 
 import asyncio
+import base64
 import html
 import logging
 import math
@@ -28,12 +36,20 @@ import time
 from pathlib import Path
 
 import numpy as np
-from ipywidgets import HTML, Button, Combobox, Dropdown, HBox, Layout, Text, VBox
+from ipywidgets import HTML, Button, Combobox, Dropdown, HBox, Layout, RadioButtons, Text, Textarea, VBox
 
-from mt_widgets.core import SKILLS, running_under_test
-from mt_widgets.study import (BUILTIN_PROTOCOLS, LogError, LogFolderError, ParticipantIdError, ProtocolError,
-                              Session, StudyFolder, load_protocol)
-from mt_widgets.widgets import EpisodeWidget, stop_animations
+from mt_widgets.core import running_under_test
+from mt_widgets.study import (
+    BUILTIN_PROTOCOLS,
+    LogError,
+    LogFolderError,
+    ParticipantIdError,
+    ProtocolError,
+    Session,
+    StudyFolder,
+    load_protocol,
+)
+from mt_widgets.widgets import EpisodeWidget, TeachingCanvas, stop_animations
 
 _log = logging.getLogger(__name__)
 
@@ -128,7 +144,11 @@ class StudyApp(VBox):
         self._timer = None
         self.heading = HTML()
         self.body = VBox(layout=Layout(max_width="1000px"))
-        self.participant_view = VBox([self.heading, self.body], layout=Layout(padding="4px"))
+        self.withdraw_button = Button(description="Withdraw from the study", icon="sign-out",
+                                      layout=Layout(width="auto", margin="24px 0 0 0"))
+        self.withdraw_button.on_click(lambda _: self._safely(self._ask_withdraw))
+        self.withdraw_box = VBox([self.withdraw_button])
+        self.participant_view = VBox([self.heading, self.body, self.withdraw_box], layout=Layout(padding="4px"))
         groups = [("randomised (block randomisation)", None)]
         self.experimenter = ExperimenterPanel(protocol, log_folder if log_folder is not None
                                               else default_log_folder(protocol if protocol in BUILTIN_PROTOCOLS
@@ -177,11 +197,16 @@ class StudyApp(VBox):
     def _list_participants(self) -> None:
         study = self._study()
         rows = "".join(f"<tr><td>{html.escape(r['participant'])}</td><td>{r['group']}</td><td>{r['method']}</td>"
-                       f"<td>{'finished' if r['finished'] else 'in progress'}</td><td>{r['events']}</td></tr>"
+                       f"<td>{html.escape(r['state'])}</td><td>{r['events']}</td></tr>"
                        for r in study.status())
+        counts = study.group_status()
+        columns = list(next(iter(counts.values())))
+        summary = "".join(f"<tr><td>{html.escape(group)}</td>" + "".join(f"<td>{row[c]}</td>" for c in columns)
+                          + "</tr>" for group, row in counts.items())
         self.experimenter.listing.value = (f"<small>{html.escape(str(study.folder))}</small><table><tr><th>ID</th>"
                                            f"<th>group</th><th>assigned</th><th>state</th><th>events</th></tr>"
-                                           f"{rows}</table>")
+                                           f"{rows}</table><table><tr><th>group</th>"
+                                           + "".join(f"<th>{c}</th>" for c in columns) + f"</tr>{summary}</table>")
 
     def start_participant(self, participant_id: str, group: str | None = None) -> Session:
         """Enrols a new participant (group None: randomised) and shows them the study."""
@@ -270,10 +295,21 @@ class StudyApp(VBox):
         step = self.session.current_step()
         protocol = self.session.protocol
         self._cancel_timer()
-        if self.episode is not None and step.kind not in ("demonstration", "episode_end", "reproduction"):
+        if isinstance(self.episode, EpisodeWidget) and step.kind not in ("demonstration", "episode_end",
+                                                                          "reproduction"):
             # The episode leaves the page: a replay still playing must not hold up what comes next.
             stop_animations(self.episode)
-        if step.kind in ("welcome", "consent", "instructions", "phase_intro", "thank_you"):
+        # Withdrawing is offered on every page of a logged session until it is over.
+        self.withdraw_box.layout.display = "none" if self.session.finished or self.session.folder is None else None
+        self._reset_withdraw()
+        if step.kind == "ended":
+            self.episode = None
+            self.heading.value = ""
+            self.body.children = [HTML(_paragraphs(step.text))]
+        elif step.study_step is not None:
+            self.episode = None
+            self._show_study_step(step)
+        elif step.kind in ("welcome", "consent", "instructions", "phase_intro", "thank_you"):
             self.episode = None
             if step.kind == "phase_intro":
                 self.heading.value = (f"<h3 style='margin:4px 0'>Part {step.phase_index + 1} of "
@@ -285,6 +321,9 @@ class StudyApp(VBox):
             children = [HTML(_paragraphs(step.text))]
             if step.kind in labels:
                 children.append(self._button(labels[step.kind], self._advance))
+            if step.kind == "consent":
+                # Both answers are offered alike, one under the other.
+                children.append(self._button("I do not agree", self._decline, ""))
             self.body.children = children
         elif step.kind == "practice":
             self._show_practice(step)
@@ -293,6 +332,60 @@ class StudyApp(VBox):
 
     def _advance(self) -> None:
         self.session.advance()
+        self.show_step()
+
+    def _decline(self) -> None:
+        self.session.decline_consent()
+        self.show_step()
+
+    # -- withdrawing ------------------------------------------------------------------------------------------
+    def _reset_withdraw(self) -> None:
+        self.withdraw_button.disabled = False
+        self.withdraw_box.children = [self.withdraw_button]
+
+    def _ask_withdraw(self) -> None:
+        """First click: ask to confirm (a withdrawal cannot be undone)."""
+        confirm = self._button("Yes, withdraw", self.withdraw, "danger")
+        back = self._button("No, continue the study", self._reset_withdraw, "")
+        self.withdraw_box.children = [HTML(
+            "<p style='max-width:760px'>Do you want to withdraw from the study? Nothing more will be recorded, and "
+            "what you have given so far will be left out of the results. This cannot be undone.</p>"),
+            HBox([confirm, back])]
+
+    def withdraw(self, reason: str = "") -> None:
+        """The participant withdraws (the session logs it and applies the protocol's data policy)."""
+        self._cancel_timer()
+        self.session.withdraw(reason)
+        self.show_step()
+
+    # -- steps around the task ---------------------------------------------------------------------------------
+    def _show_study_step(self, step) -> None:
+        study_step = step.study_step
+        self.heading.value = (f"<h3 style='margin:4px 0'>{html.escape(study_step.title)}</h3>"
+                              if study_step.title else "")
+        text = HTML(_paragraphs(step.text)) if step.text.strip() else HTML()
+        if study_step.kind in ("text", "information"):
+            self.body.children = [text, self._button("Continue", self._advance)]
+        elif study_step.kind == "consent":
+            self.body.children = [text, self._button(study_step.agree_label, self._advance),
+                                  self._button(study_step.decline_label, self._decline, "")]
+        elif study_step.kind == "video":
+            self.video = VideoStep(study_step, self._finish_video)
+            self.body.children = [text, self.video]
+        else:
+            self.form = QuestionForm(study_step, lambda answers: self._safely(lambda: self._submit(answers)))
+            self.body.children = [text, self.form]
+
+    def _finish_video(self, watched_to_end: bool, plays: int) -> None:
+        self._safely(lambda: (self.session.finish_video(watched_to_end, plays), self.show_step()))
+
+    def _submit(self, answers: dict) -> None:
+        try:
+            checked = self.session.current_step().study_step.check_answers(answers)
+        except ValueError as error:  # the participant's input, not a fault: say what to fix
+            self.form.say(str(error))
+            return
+        self.session.submit_answers(checked)
         self.show_step()
 
     # -- practice --------------------------------------------------------------------------------------------
@@ -313,14 +406,24 @@ class StudyApp(VBox):
         self._practice_round += 1
         if self.episode is not None:
             stop_animations(self.episode)
-        episode = self._episode_widget(step.skill, SKILLS[step.skill].query_states(seed=seed), guidance=False,
-                                       index=0, total=1)
-        episode.on_finished(lambda _: self._practice_round_over())
+        skill = self.session.protocol.skill(step.skill)
+        states = skill.query_states(seed=seed)
+        if step.practice_reproduction:
+            episode = self._episode_widget(step.skill, states, guidance=False, index=0, total=1)
+            episode.on_finished(lambda _: self._practice_round_over())
+        else:
+            # Drawing only: nothing is learnt or played back; after the last state a new round.
+            episode = TeachingCanvas(skill, states, theme=self.theme, auto_advance=True, target_label="goal")
+            episode.observe(lambda change: self._practice_drawn(step, change), names="state_index")
         self.episode = episode
         self._practice_again.layout.display = "none"
         self._practice_again.disabled = False
         self.body.children = [self._practice_text, self._practice_left,
                               HBox([self._practice_done, self._practice_again]), episode]
+
+    def _practice_drawn(self, step, change) -> None:
+        if change["new"] >= len(change["owner"].query_states):
+            self._new_practice_round(step)
 
     def _practice_round_over(self) -> None:
         self._practice_again.layout.display = None
@@ -351,13 +454,14 @@ class StudyApp(VBox):
 
     # -- episodes --------------------------------------------------------------------------------------------
     def _episode_widget(self, skill: str, states, guidance: bool, index: int, total: int,
-                        on_demonstration=None, on_finished=None) -> EpisodeWidget:
+                        on_demonstration=None, on_finished=None, guidance_modality: str = "none") -> EpisodeWidget:
         protocol = self.session.protocol
         # ghost=False: the target skill's own motion would show the participant the answer.
         # Blinding: no group word on the canvas ("target" names a group), and neither the skill's
         # formula (the answer), the target skill's ghost, nor the teaching error and distance to the
         # goal, none of which the paper's participants saw.
-        episode = EpisodeWidget(skill, query_states=states, guidance=guidance, lam=protocol.lam, theme=self.theme,
+        episode = EpisodeWidget(protocol.skill(skill), query_states=states, guidance=guidance,
+                                guidance_modality=guidance_modality, lam=protocol.lam, theme=self.theme,
                                 duration=protocol.reproduction_duration_s, ghost=False, target_label="goal",
                                 show_description=False, show_outcome=False,
                                 episode_index=index, episodes_total=total, on_demonstration=on_demonstration,
@@ -387,7 +491,7 @@ class StudyApp(VBox):
             instructions = HTML(_paragraphs(self.session.protocol.phase(step.phase).instructions))
             self.episode = self._episode_widget(step.skill, step.query_states, step.guidance,
                                                 step.episode - 1, step.n_episodes, self._on_demonstration,
-                                                self._on_episode_finished)
+                                                self._on_episode_finished, step.guidance_modality)
             self.body.children = [instructions, self.episode]
             # Beside the canvas the reproduction plays in: what to do next is in view.
             self.episode.next_actions.children = [self._reproduction_text, self._continue]
@@ -438,6 +542,108 @@ class StudyApp(VBox):
         loop.call_later(seconds + 0.75, lambda: setattr(button, "disabled", False))
 
 
+class VideoStep(VBox):
+    """An instruction video with a replay; Continue once it has played to the end (if required).
+
+    The video plays in the browser; its "ended" event clicks a hidden button, which is how the
+    kernel learns it was watched to the end (ipywidgets' Video widget reports no playback). A
+    local file is sent inline (a data URL), so it plays wherever the page is served from.
+
+    Args:
+        study_step: the protocol's video ``StudyStep``.
+        on_done: ``callback(watched_to_end, plays)`` when the participant continues.
+    """
+
+    def __init__(self, study_step, on_done):
+        self.study_step = study_step
+        self.watched_to_end = False
+        self.plays = 0
+        self._on_done = on_done
+        self.ended_button = Button(description="video ended", layout=Layout(display="none"))
+        self.ended_button.add_class("mt-video-ended")
+        self.ended_button.on_click(lambda _: self.mark_ended())
+        self.played_button = Button(description="video played", layout=Layout(display="none"))
+        self.played_button.add_class("mt-video-played")
+        self.played_button.on_click(lambda _: self.mark_played())
+        source = study_step.video if study_step.video_is_url else _data_url(study_step.video)
+        # The handlers look for the hidden buttons next to the player (in this step's box).
+        find = "this.closest('.mt-video-step').querySelector('.{} button, button.{}').click()"
+        self.player = HTML(
+            f"<video class='mt-video' src='{html.escape(source, quote=True)}' controls preload='auto' "
+            f"style='max-width:720px;width:100%' onplay=\"{find.format('mt-video-played', 'mt-video-played')}\" "
+            f"onended=\"{find.format('mt-video-ended', 'mt-video-ended')}\"></video>"
+            f"<div><button class='mt-video-replay' onclick=\"const v=this.closest('.mt-video-step')"
+            f".querySelector('video'); v.currentTime=0; v.play();\">Play again from the start</button></div>")
+        self.continue_button = Button(description="Continue", button_style="primary",
+                                      disabled=study_step.require_watched, layout=Layout(width="auto"))
+        self.continue_button.on_click(lambda _: self._continue())
+        self.note = HTML("<small>Continue becomes available once the video has played to the end.</small>"
+                         if study_step.require_watched else "")
+        super().__init__([self.player, self.continue_button, self.note, self.ended_button, self.played_button])
+        self.add_class("mt-video-step")
+
+    def mark_played(self) -> None:
+        self.plays += 1
+
+    def mark_ended(self) -> None:
+        self.watched_to_end = True
+        self.plays = max(self.plays, 1)
+        self.continue_button.disabled = False
+        self.note.value = ""
+
+    def _continue(self) -> None:
+        self.continue_button.disabled = True
+        self._on_done(self.watched_to_end, self.plays)
+
+
+def _data_url(path: str) -> str:
+    data = Path(path).read_bytes()
+    kind = {".webm": "video/webm", ".mp4": "video/mp4", ".ogv": "video/ogg", ".ogg": "video/ogg"}.get(
+        Path(path).suffix.lower(), "application/octet-stream")
+    return f"data:{kind};base64," + base64.b64encode(data).decode()
+
+
+class QuestionForm(VBox):
+    """The items of an eligibility, demographics or questionnaire step, and a Continue button.
+
+    Likert and choice items are radio buttons (nothing chosen at first), numbers and short
+    answers text fields. ``answers()`` reads them; ``on_submit(answers)`` runs on Continue, and
+    ``say`` shows what to fix.
+    """
+
+    def __init__(self, study_step, on_submit):
+        self.study_step = study_step
+        self.fields = {}
+        rows = []
+        for item in study_step.items:
+            label = HTML(f"<b>{html.escape(item.prompt)}</b>" + ("" if item.required else " <small>(optional)"
+                                                                                           "</small>"))
+            if item.kind in ("likert", "choice"):
+                field = RadioButtons(options=list(item.choices), value=None, layout=Layout(width="auto"))
+            elif item.kind == "number":
+                field = Text(placeholder="a number" + (f" ({item.units})" if item.units else ""),
+                             layout=Layout(width="200px"))
+            else:
+                field = Textarea(layout=Layout(width="520px", height="80px"))
+            field.add_class(f"mt-item-{item.id}")
+            self.fields[item.id] = field
+            rows.append(VBox([label, field], layout=Layout(margin="6px 0")))
+        self.message = HTML()
+        self.continue_button = Button(description="Continue", button_style="primary", layout=Layout(width="auto"))
+        self.continue_button.on_click(lambda _: on_submit(self.answers()))
+        super().__init__(rows + [self.message, self.continue_button])
+
+    def answers(self) -> dict:
+        found = {}
+        for item in self.study_step.items:
+            value = self.fields[item.id].value
+            found[item.id] = value if value not in ("",) else None
+        return found
+
+    def say(self, text: str) -> None:
+        self.message.value = f"<div style='color:#b00020'>{html.escape(text)}</div>"
+
+
 def participant_texts(widget) -> list[str]:
     """Every piece of text a widget tree can show (values, descriptions, labels, options, tooltips).
 
@@ -465,5 +671,5 @@ def participant_texts(widget) -> list[str]:
     return texts
 
 
-__all__ = ["ExperimenterPanel", "LOG_FOLDER_VARIABLE", "StudyApp", "default_log_folder", "participant_texts",
-           "running_under_test"]
+__all__ = ["ExperimenterPanel", "LOG_FOLDER_VARIABLE", "QuestionForm", "StudyApp", "VideoStep", "default_log_folder",
+           "participant_texts", "running_under_test"]

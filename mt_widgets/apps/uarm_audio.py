@@ -17,7 +17,7 @@ import wave
 import numpy as np
 from ipywidgets import Audio, HBox, Layout
 
-from mt_widgets.core.validation import as_bool
+from mt_widgets.core.validation import as_bool, as_count, as_positive
 
 #: Pitch of the first and of the last demonstration's cue (Hz): an octave, A4 to A5.
 LOW_HZ, HIGH_HZ = 440.0, 880.0
@@ -38,15 +38,16 @@ def tone_wav(frequency_hz: float, duration_s: float, sample_rate: int = 22050, v
         volume: peak amplitude as a fraction of full scale, (0, 1].
         fade_s: linear fade in and out, seconds (a hard start clicks).
     """
-    if not (isinstance(sample_rate, int) and 8000 <= sample_rate <= 192000):
+    # as_count / as_positive refuse booleans (True is an int to Python, never a rate to us).
+    if not 8000 <= as_count("sample_rate", sample_rate) <= 192000:
         raise ValueError(f"sample_rate: expected an int in 8000..192000 Hz, got {sample_rate!r}")
-    if not (isinstance(frequency_hz, (int, float)) and 20 <= frequency_hz <= sample_rate / 2):
+    if not 20 <= as_positive("frequency_hz", frequency_hz) <= sample_rate / 2:
         raise ValueError(f"frequency_hz: expected 20..{sample_rate / 2:g} Hz, got {frequency_hz!r}")
-    if not (isinstance(duration_s, (int, float)) and 0.01 <= duration_s <= 10):
+    if not 0.01 <= as_positive("duration_s", duration_s) <= 10:
         raise ValueError(f"duration_s: expected 0.01..10 s, got {duration_s!r}")
-    if not (isinstance(volume, (int, float)) and 0 < volume <= 1):
+    if not as_positive("volume", volume) <= 1:
         raise ValueError(f"volume: expected a fraction in (0, 1], got {volume!r}")
-    if not (isinstance(fade_s, (int, float)) and 0 <= fade_s <= duration_s / 2):
+    if not as_positive("fade_s", fade_s, allow_zero=True) <= duration_s / 2:
         raise ValueError(f"fade_s: expected 0..duration_s / 2 = {duration_s / 2:g} s, got {fade_s!r}")
     n = int(round(duration_s * sample_rate))
     t = np.arange(n) / sample_rate
@@ -70,9 +71,8 @@ def tone_wav(frequency_hz: float, duration_s: float, sample_rate: int = 22050, v
 def effort_tone_hz(done: int, total: int) -> float:
     """The cue's pitch after ``done`` of ``total`` demonstrations: 440 Hz for the first, rising
     in equal musical steps to 880 Hz for the last."""
-    if not (isinstance(total, int) and total >= 1):
-        raise ValueError(f"total: expected a number of demonstrations >= 1, got {total!r}")
-    if not (isinstance(done, int) and 1 <= done <= total):
+    total = as_count("total", total)
+    if not as_count("done", done) <= total:
         raise ValueError(f"done: expected 1..total = {total}, got {done!r}")
     if total == 1:
         return HIGH_HZ

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from ipywidgets import HTML
 
+from mt_widgets.core import Box
 from mt_widgets.core.validation import as_bool
 from mt_widgets.widgets import ViewTransform
 
@@ -211,31 +212,27 @@ def screen_background(view, geometry: ScreenGeometry):
         t = view.transform
         canvas.fill_style = theme.background
         canvas.fill_rect(0, 0, t.width, t.height)
-        sector = getattr(skill.plant, "workspace", None)
-        if sector is not None and hasattr(sector, "r_min"):
-            yaw = np.deg2rad(np.linspace(-sector.max_yaw_deg, sector.max_yaw_deg, 61))
-            outer = np.stack([sector.r_max * np.cos(yaw), sector.r_max * np.sin(yaw)], axis=-1)
-            inner = np.stack([sector.r_min * np.cos(yaw[::-1]), sector.r_min * np.sin(yaw[::-1])], axis=-1)
-            outline = t.to_pixel(np.vstack([outer, inner, outer[:1]]))
+        drawing = skill.drawing()
+        for line in drawing.outline:
             canvas.stroke_style = theme.axes
             canvas.line_width = 1.5
             canvas.set_line_dash([6.0, 6.0])
-            canvas.stroke_lines(outline.tolist())
+            canvas.stroke_lines(t.to_pixel(line).tolist())
             canvas.set_line_dash([])
-        base = t.to_pixel([0.0, 0.0])
-        canvas.fill_style = theme.arm
-        canvas.fill_circle(float(base[0]), float(base[1]), 10.0)
-        target = skill.target
+        if drawing.base is not None:
+            base = t.to_pixel(drawing.base)
+            canvas.fill_style = theme.arm
+            canvas.fill_circle(float(base[0]), float(base[1]), 10.0)
+        # The screen shows the whole glass, beyond the plant's view: the target's shape is
+        # asked for over the screen's own extent.
+        shape = None if skill.target is None else skill.target.shape(Box(t.xlim, t.ylim))
         canvas.fill_style = theme.target
         canvas.stroke_style = theme.target
-        if target is not None and hasattr(target, "direction"):
-            point, direction = np.asarray(target.point), np.asarray(target.direction)
-            reach = 2.0 * max(t.xlim[1] - t.xlim[0], t.ylim[1] - t.ylim[0]) + np.linalg.norm(point)
-            (a, b), (c, d) = t.to_pixel([point - reach * direction, point + reach * direction])
+        if shape is not None and len(shape.points) >= 2:
             canvas.line_width = 4.0
-            canvas.stroke_line(a, b, c, d)
-        elif target is not None:
-            x, y = t.to_pixel(target.point)
+            canvas.stroke_lines(t.to_pixel(shape.points).tolist())
+        elif shape is not None and shape.is_point:
+            x, y = t.to_pixel(shape.points[0])
             canvas.fill_circle(float(x), float(y), 10.0)
         # A 10 cm ruler, bottom left: hold a ruler to it to check the screen's calibration.
         length = 10.0 * MM_PER_CM * geometry.pixels_per_mm

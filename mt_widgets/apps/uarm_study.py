@@ -29,13 +29,14 @@ from concurrent.futures import Future, ThreadPoolExecutor
 import numpy as np
 from ipywidgets import HTML, Button, HBox, Label, Layout, VBox
 
+from mt_widgets.core import UArmPlant
 from mt_widgets.core.validation import as_bool
 from mt_widgets.hardware import SwiftPro, SwiftProError, SwiftProStopped, UnsafeMoveError
+from mt_widgets.hardware.bridge import UArmBridge, connect_arm, describe_error, is_simulated
 from mt_widgets.widgets import EpisodeWidget
 
 from .study_app import StudyApp
 from .uarm_audio import AudioCues
-from .uarm_bridge import UArmBridge, connect_arm, describe_error, is_simulated
 from .uarm_screen import ScreenGeometry, fit_episode
 
 log = logging.getLogger(__name__)
@@ -115,8 +116,9 @@ class UArmTeaching:
     # ------------------------------------------------------------------ episodes
     def attach(self, episode: EpisodeWidget) -> EpisodeWidget:
         """Wire an episode: true-scale view, query states on the arm, cues, reproduction on the arm."""
-        if episode.skill.robot != "uarm":
-            raise ValueError(f"episode: expected an episode of a uArm skill, got skill {episode.skill.key!r}")
+        if not isinstance(episode.skill.plant, UArmPlant):
+            raise ValueError(f"episode: expected an episode of a skill on the uArm's plant (UArmPlant), got skill "
+                             f"{episode.skill.key!r} on {type(episode.skill.plant).__name__}")
         self.episode = episode
         fit_episode(episode, self.geometry, show_player=self.show_player)
         total = len(episode.query_states)

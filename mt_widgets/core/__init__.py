@@ -6,6 +6,7 @@ query-state selection, rollouts, and the teaching episode that ties them togethe
 
 from .arm import ArmParameters, TwoLinkArm
 from .arm_plant import ArmPlant
+from .drawing import PlantDrawing, PoseSketch, TargetShape
 from .episode import DemonstrationAnalysis, EpisodeStateError, TeachingEpisode
 from .fast_mode import running_under_test
 from .features import EndEffectorFeatures, FeatureMap, FunctionFeatures, PositionFeatures
@@ -22,7 +23,8 @@ from .machine_teaching import (
 )
 from .plants import ContinuousPlant, KinematicPlant, Plant
 from .query_states import SeedSchedule, condition_number, sample_query_states
-from .skills import SKILLS, LineTarget, PointTarget, Skill
+from .skills import SKILLS, Skill, SkillRegistry
+from .targets import LineTarget, PointTarget, Target
 from .trajectory import Trajectory, TrajectoryBatch
 from .uarm_plant import UARM_WORKSPACE_CM, UArmPlant
 from .workspace import AnnulusSector, Box
@@ -30,8 +32,9 @@ from .workspace import AnnulusSector, Box
 __all__ = [
     "ActionDifference", "AnnulusSector", "ArmParameters", "ArmPlant", "Box", "ContinuousPlant", "DEFAULT_LAMBDA",
     "DemonstrationAnalysis", "EndEffectorFeatures", "EpisodeStateError", "FeatureMap", "FunctionFeatures",
-    "KinematicPlant", "LineTarget", "Plant", "PointTarget", "PositionFeatures", "RidgeLearner", "SKILLS",
-    "SeedSchedule", "Skill", "TeachingAnalysis", "TeachingEpisode",
+    "KinematicPlant", "LineTarget", "Plant", "PlantDrawing", "PointTarget", "PoseSketch", "PositionFeatures",
+    "RidgeLearner", "SKILLS", "SeedSchedule", "Skill", "SkillRegistry", "Target", "TargetShape", "TeachingAnalysis",
+    "TeachingEpisode",
     "Trajectory", "TrajectoryBatch", "TwoLinkArm", "UARM_WORKSPACE_CM", "UArmPlant",
     "UnderdeterminedTeachingWarning", "action_difference", "analyse_demonstrations", "condition_number",
     "optimal_actions", "ridge_operator", "running_under_test", "sample_query_states", "teaching_risk",

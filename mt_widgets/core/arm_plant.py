@@ -6,6 +6,7 @@ import numpy as np
 
 from . import arm_rollout
 from .arm import TwoLinkArm
+from .drawing import PlantDrawing, PoseSketch
 from .features import EndEffectorFeatures
 from .plants import ContinuousPlant, _check_rollout
 from .trajectory import TrajectoryBatch
@@ -46,6 +47,17 @@ class ArmPlant(ContinuousPlant):
         states = self.check_states("states", states)
         q, qd = states[..., :2], states[..., 2:]
         return self.arm.forward_kinematics(q), self.arm.end_effector_velocity(q, qd)
+
+    def drawing(self):
+        # Arrows of 0.35 m per newton: a typical action of the paper's skills (1-3 N) is a
+        # clearly visible arrow of 0.35-1 m; the velocity arrow shows 0.3 s of motion.
+        return PlantDrawing(view=self.view, units=self.units, action_units=self.action_units, links="rigid",
+                            marker="hand", base=(0.0, 0.0), action_length=0.35, velocity_length=0.3)
+
+    def sketch(self, states):
+        states = self.check_states("states", states)
+        q, qd = states[..., :2], states[..., 2:]
+        return PoseSketch(self.arm.joint_positions(q), self.arm.end_effector_velocity(q, qd))
 
     def sample_states(self, rng, n):
         q = rng.uniform(-np.pi, np.pi, size=(n, 2))

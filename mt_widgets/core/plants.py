@@ -14,8 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .drawing import PlantDrawing, PoseSketch, framing_box
 from .trajectory import TrajectoryBatch
 from .validation import as_count, as_float_array, as_positive
+from .workspace import Box
 
 
 class Plant:
@@ -27,8 +29,13 @@ class Plant:
         action_dim: R, the number of action components.
         units: length unit of end-effector positions ("m", "cm").
         action_units: unit of an action component ("N", "cm").
-        view: a ``Box`` that frames the plant's workspace for drawing.
+        view: a ``Box`` that frames the plant's workspace for drawing, or None to frame where
+            the query states put the end-effector.
         default_duration: seconds a reproduction lasts by default.
+
+    Drawing: views ask ``drawing()`` (what stays fixed) and ``sketch(states)`` (what moves);
+    the defaults draw a dot at the end-effector with its velocity, so a plant that only
+    implements ``end_effector`` is drawn too. A plant with links overrides both.
     """
 
     robot: str = "custom"
@@ -37,10 +44,30 @@ class Plant:
     units: str = "m"
     action_units: str = "N"
     default_duration: float = 10.0
+    view: Box | None = None
 
     @property
     def state_dim(self) -> int:
         return len(self.state_names)
+
+    # -- how it is drawn ---------------------------------------------------------------------------
+    def drawing(self) -> PlantDrawing:
+        """What stays fixed when this plant is drawn (the generic drawing: an end-effector dot)."""
+        view = self.view
+        if view is None:
+            # Framed around the end-effector positions of states drawn as query states are, so
+            # the states a teacher sees and the paths near them are in view.
+            rng = np.random.default_rng(0)
+            states = self.sample_states(rng, 256)
+            states = states[self.is_valid_state(states)]
+            view = framing_box(self.end_effector(states)[0])
+        return PlantDrawing(view=view, units=self.units, action_units=self.action_units)
+
+    def sketch(self, states) -> PoseSketch:
+        """What to draw at states (..., state_dim): by default the end-effector and its velocity."""
+        positions, velocities = self.end_effector(states)
+        positions = np.asarray(positions, dtype=float)
+        return PoseSketch(positions[..., None, :], np.asarray(velocities, dtype=float))
 
     def check_states(self, name: str, states) -> np.ndarray:
         """Validates a single state (state_dim,) or a batch (..., state_dim)."""

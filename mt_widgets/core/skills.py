@@ -1,51 +1,24 @@
 """Skills: what a teacher teaches. A skill is a target policy Theta on a plant's features.
 
-``SKILLS`` holds the paper's four. A user defines their own with ``Skill(...)``: a plant,
-a feature map, Theta (R x S), and the start state its reproduction runs from.
+``SKILLS`` holds the paper's four, read-only. A user defines their own with ``Skill(...)``: a
+plant, a feature map, Theta (R x S), and the start state its reproduction runs from; then
+passes it to a widget or a session directly, or adds it to a ``SkillRegistry`` they own.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .arm_plant import ArmPlant
+from .drawing import PlantDrawing, PoseSketch, TargetShape
 from .features import EndEffectorFeatures, FeatureMap, PositionFeatures
 from .query_states import sample_query_states
+from .targets import LineTarget, PointTarget, Target
 from .uarm_plant import UArmPlant
 from .validation import as_count, as_float_array, as_positive
-
-
-@dataclass(frozen=True)
-class PointTarget:
-    """The skill drives the end-effector to ``point``."""
-
-    point: tuple[float, float]
-
-    def distance(self, positions) -> np.ndarray:
-        positions = as_float_array("positions", positions, shape=(2,))
-        return np.linalg.norm(positions - np.asarray(self.point), axis=-1)
-
-
-@dataclass(frozen=True)
-class LineTarget:
-    """The skill drives the end-effector onto the line through ``point`` along ``direction``."""
-
-    point: tuple[float, float]
-    direction: tuple[float, float]
-
-    def __post_init__(self):
-        norm = float(np.hypot(*self.direction))
-        if norm == 0:
-            raise ValueError("direction: expected a non-zero vector, got (0, 0)")
-        object.__setattr__(self, "direction", (self.direction[0] / norm, self.direction[1] / norm))
-
-    def distance(self, positions) -> np.ndarray:
-        positions = as_float_array("positions", positions, shape=(2,))
-        offset = positions - np.asarray(self.point)
-        d = np.asarray(self.direction)
-        return np.abs(offset[..., 0] * d[1] - offset[..., 1] * d[0])
 
 
 @dataclass(frozen=True, eq=False)
@@ -59,7 +32,7 @@ class Skill:
         feature_map: phi for that plant.
         theta: (R, S) the target policy u = theta @ phi(x).
         start: the state every reproduction starts from.
-        target: a ``PointTarget`` or ``LineTarget`` (for drawing and for checks), or None.
+        target: a ``Target`` (``PointTarget``, ``LineTarget`` or a user's own), or None.
         description: one or two sentences for a student.
         max_condition: the query-state sampler's condition-number threshold for this skill.
     """
@@ -70,7 +43,7 @@ class Skill:
     feature_map: FeatureMap
     theta: np.ndarray
     start: np.ndarray
-    target: PointTarget | LineTarget | None = None
+    target: Target | None = None
     description: str = ""
     max_condition: float = 20.0
 
@@ -85,6 +58,11 @@ class Skill:
         start.setflags(write=False)
         object.__setattr__(self, "start", start)
         as_positive("max_condition", self.max_condition)
+        if self.target is not None and not isinstance(self.target, Target):
+            raise TypeError(f"target: expected a Target (PointTarget, LineTarget or a subclass) or None, "
+                            f"got {type(self.target).__name__}")
+        if not isinstance(self.key, str) or not self.key:
+            raise ValueError(f"key: expected a non-empty text, got {self.key!r}")
 
     def __repr__(self) -> str:
         return f"Skill({self.key!r}: {self.title})"
@@ -113,7 +91,7 @@ class Skill:
     @property
     def workspace(self):
         """The view extent (a ``Box`` with ``xlim``, ``ylim`` in ``units``)."""
-        return self.plant.view
+        return self.drawing().view
 
     @property
     def default_duration(self) -> float:
@@ -122,6 +100,38 @@ class Skill:
     def end_effector(self, states):
         """(positions (..., 2), velocities (..., 2)) in ``units``."""
         return self.plant.end_effector(states)
+
+    def drawing(self) -> PlantDrawing:
+        """The plant's ``PlantDrawing``, with an arrow scale chosen for this skill if the plant gave none.
+
+        The scale makes the skill's median action (theta @ phi at states drawn as query states
+        are) a fifth of the view's width, so a typical arrow is clearly visible.
+        """
+        cached = self.__dict__.get("_drawing")
+        if cached is not None:
+            return cached
+        drawing = self.plant.drawing()
+        if drawing.action_length is None:
+            drawing = replace(drawing, action_length=self._typical_action_length(drawing))
+        # Cached: a generic plant's drawing samples states, and views ask for it often.
+        object.__setattr__(self, "_drawing", drawing)
+        return drawing
+
+    def _typical_action_length(self, drawing: PlantDrawing) -> float:
+        rng = np.random.default_rng(0)
+        states = self.plant.sample_states(rng, 256)
+        states = states[self.plant.is_valid_state(states)]
+        typical = float(np.median(np.linalg.norm(self.target_actions(states), axis=-1))) if len(states) else 0.0
+        span = drawing.view.xlim[1] - drawing.view.xlim[0]
+        return 0.2 * span / typical if typical > 0 else 0.1 * span
+
+    def sketch(self, states) -> PoseSketch:
+        """What to draw of the plant at states (..., state_dim): its chain and velocity."""
+        return self.plant.sketch(states)
+
+    def target_shape(self) -> TargetShape | None:
+        """The target's shape inside the plant's view, or None for a skill without a target."""
+        return None if self.target is None else self.target.shape(self.drawing().view)
 
     # -- the science -----------------------------------------------------------------------------
     def features(self, states) -> np.ndarray:
@@ -193,5 +203,77 @@ def _paper_skills() -> dict[str, Skill]:
     return {skill.key: skill for skill in skills}
 
 
-#: The paper's four skills, by key: "sim-point", "sim-line", "uarm-point", "uarm-line".
-SKILLS: dict[str, Skill] = _paper_skills()
+class SkillRegistry(Mapping):
+    """Skills by key, owned by whoever needs them: a course, a lab's study, a notebook.
+
+    ``registry[key]`` gives a skill; a missing key raises a ``KeyError`` that names the known
+    ones. ``add`` puts a skill in (a key is taken once unless ``replace=True``). A registry made
+    with ``read_only=True`` (``SKILLS``) refuses changes: make your own, e.g.
+    ``SkillRegistry(SKILLS.values())``, and add to that.
+
+    Args:
+        skills: ``Skill`` objects to start with.
+        read_only: refuse ``add``, item assignment and deletion.
+    """
+
+    def __init__(self, skills: Iterable[Skill] = (), *, read_only: bool = False):
+        if not isinstance(read_only, bool):
+            raise TypeError(f"read_only: expected True or False, got {read_only!r}")
+        self._skills: dict[str, Skill] = {}
+        for skill in skills:
+            self._put(skill, replace=False)
+        self.read_only = read_only
+
+    def _put(self, skill, replace: bool) -> Skill:
+        if not isinstance(skill, Skill):
+            raise TypeError(f"skill: expected a Skill, got {type(skill).__name__}")
+        if not isinstance(replace, bool):
+            raise TypeError(f"replace: expected True or False, got {replace!r}")
+        if skill.key in self._skills and self._skills[skill.key] is not skill and not replace:
+            raise ValueError(f"skill: the key {skill.key!r} is already taken by {self._skills[skill.key]!r}; "
+                             f"pass replace=True to replace it")
+        self._skills[skill.key] = skill
+        return skill
+
+    def _refuse_if_read_only(self) -> None:
+        if self.read_only:
+            raise TypeError("this skill registry is read-only (SKILLS holds the paper's four): make your own, "
+                            "e.g. registry = SkillRegistry(SKILLS.values()); registry.add(skill), "
+                            "or pass the skill itself")
+
+    def add(self, skill: Skill, replace: bool = False) -> Skill:
+        """Register ``skill`` under ``skill.key`` and return it."""
+        self._refuse_if_read_only()
+        return self._put(skill, replace)
+
+    def __setitem__(self, key, skill) -> None:
+        self._refuse_if_read_only()
+        if not isinstance(skill, Skill) or skill.key != key:
+            raise ValueError(f"key: expected the skill's own key {getattr(skill, 'key', None)!r}, got {key!r}")
+        self._put(skill, replace=True)
+
+    def __delitem__(self, key) -> None:
+        self._refuse_if_read_only()
+        self[key]  # the KeyError naming the known skills
+        del self._skills[key]
+
+    def __getitem__(self, key) -> Skill:
+        try:
+            return self._skills[key]
+        except (KeyError, TypeError):
+            raise KeyError(f"skill {key!r} is not registered; known skills: {', '.join(sorted(self._skills))}") \
+                from None
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._skills)
+
+    def __len__(self) -> int:
+        return len(self._skills)
+
+    def __repr__(self) -> str:
+        kind = "read-only " if self.read_only else ""
+        return f"<{kind}SkillRegistry: {', '.join(self._skills)}>"
+
+
+#: The paper's four skills, by key: "sim-point", "sim-line", "uarm-point", "uarm-line" (read-only).
+SKILLS: SkillRegistry = SkillRegistry(_paper_skills().values(), read_only=True)

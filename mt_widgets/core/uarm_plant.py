@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from .drawing import PlantDrawing, PoseSketch
 from .plants import KinematicPlant
 from .validation import as_positive
 from .workspace import AnnulusSector
 
 #: The teaching workspace in centimetres: 14-30 cm from the base axis, within +-60 degrees of
 #: straight ahead. Kept well inside what the arm reaches at the teaching height (about
-#: 10.5-36 cm at z = 5 cm, per the firmware's kinematics in UARM_PROTOCOL.md), so that no
+#: 10.5-36 cm at z = 5 cm, per the firmware's kinematics in docs/uarm-protocol.md), so that no
 #: reproduction or query state asks the real arm for a place it cannot reach.
 UARM_WORKSPACE_CM = AnnulusSector(r_min=14.0, r_max=30.0, max_yaw_deg=60.0)
 
@@ -54,6 +55,19 @@ class UArmPlant(KinematicPlant):
     def end_effector(self, states):
         states = self.check_states("states", states)
         return states.copy(), np.zeros_like(states)
+
+    def drawing(self):
+        # Seen from above, as on the paper's screen: a dot for the state, a faint line from the
+        # base showing which way the arm reaches, the reachable sector outlined. Arrows of 2 cm
+        # per cm of action: the 1-4 cm moves of a step read as 2-8 cm on screen.
+        return PlantDrawing(view=self.view, units=self.units, action_units=self.action_units, links="reach",
+                            marker="dot", base=(0.0, 0.0), outline=(self.workspace.outline(),),
+                            action_length=2.0, velocity_length=1.0)
+
+    def sketch(self, states):
+        positions, velocities = self.end_effector(states)
+        chain = np.stack([np.zeros_like(positions), positions], axis=-2)
+        return PoseSketch(chain, velocities)
 
     def sample_states(self, rng, n):
         return self.workspace.sample(rng, n)

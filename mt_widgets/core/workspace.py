@@ -69,6 +69,13 @@ class AnnulusSector:
                       np.deg2rad(self.max_yaw_deg))
         return np.stack([radius * np.cos(yaw), radius * np.sin(yaw)], axis=-1)
 
+    def outline(self, points_per_arc: int = 61) -> np.ndarray:
+        """The sector's boundary as a closed polyline (K, 2): the outer arc, the inner arc back."""
+        yaw = np.deg2rad(np.linspace(-self.max_yaw_deg, self.max_yaw_deg, int(points_per_arc)))
+        outer = np.stack([self.r_max * np.cos(yaw), self.r_max * np.sin(yaw)], axis=-1)
+        inner = np.stack([self.r_min * np.cos(yaw[::-1]), self.r_min * np.sin(yaw[::-1])], axis=-1)
+        return np.vstack([outer, inner, outer[:1]])
+
     def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """n points uniform over the sector's area."""
         radius = np.sqrt(rng.uniform(self.r_min**2, self.r_max**2, size=n))

@@ -1,4 +1,9 @@
-"""The uArm Swift Pro: a connector over pyserial, its safety envelope, a simulated arm.
+"""The uArm Swift Pro: a connector over pyserial, its safety envelope, a simulated arm, the bridge.
+
+Layers, bottom up: :mod:`.protocol` (the text of the lines), :mod:`.link` (the serial link),
+:mod:`.dialects` (firmware generations), :mod:`.stop` and :mod:`.motion` (the one stop
+mechanism; the motion and safety policy, with :mod:`.envelope`), :mod:`.connector`
+(:class:`SwiftPro`), :mod:`.bridge` (the teaching plant on the arm, no Jupyter).
 
 Importing this package registers the pyserial URL handler ``uarm-sim://`` (also spelled
 ``uarmsim://``), so ``SwiftPro("uarm-sim://?firmware=4&latency=0.003")`` talks to the
@@ -9,6 +14,7 @@ import sys
 
 import serial
 
+from .bridge import ExecutionReport, UArmBridge, connect_arm
 from .connector import SwiftPro
 from .envelope import TEACHING_HEIGHT_MM, TEACHING_MAX_YAW_DEG, TEACHING_RADIUS_MM, SafetyEnvelope
 from .errors import (
@@ -32,6 +38,7 @@ from .errors import (
 )
 from .protocol import Event
 from .simdevice import SimulatedSwiftPro, is_reachable
+from .stop import StopSwitch
 from .urlhandler import protocol_uarmsim
 
 _HANDLERS = __name__ + ".urlhandler"
@@ -42,10 +49,10 @@ if _HANDLERS not in serial.protocol_handler_packages:
 sys.modules.setdefault(_HANDLERS + ".protocol_uarm-sim", protocol_uarmsim)
 
 __all__ = [
-    "ERROR_CLASSES", "Event", "SafetyEnvelope", "SimulatedSwiftPro", "SwiftPro", "SwiftProBufferFull",
-    "SwiftProCommandError", "SwiftProDisconnected", "SwiftProEncoderError", "SwiftProError",
+    "ERROR_CLASSES", "Event", "ExecutionReport", "SafetyEnvelope", "SimulatedSwiftPro", "StopSwitch", "SwiftPro",
+    "SwiftProBufferFull", "SwiftProCommandError", "SwiftProDisconnected", "SwiftProEncoderError", "SwiftProError",
     "SwiftProMotorsDetached", "SwiftProNotFound", "SwiftProOperationFailed", "SwiftProParameterError",
     "SwiftProPortBusy", "SwiftProPowerError", "SwiftProStopped", "SwiftProTimeout", "SwiftProUnknownCommand",
     "SwiftProUnreachable", "TEACHING_HEIGHT_MM", "TEACHING_MAX_YAW_DEG", "TEACHING_RADIUS_MM",
-    "UnsafeMoveError", "is_reachable",
+    "UArmBridge", "UnsafeMoveError", "connect_arm", "is_reachable",
 ]

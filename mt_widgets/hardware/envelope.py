@@ -3,7 +3,7 @@
 Frame: the arm's own, in millimetres: X forward, Y left, Z up, origin on the base axis.
 Yaw is ``atan2(y, x)``; radius (stretch) is ``hypot(x, y)``.
 
-Why the defaults (``UARM_PROTOCOL.md``, "Frame and workspace"): recomputed from the 4.x
+Why the defaults (``docs/uarm-protocol.md``, "Frame and workspace"): recomputed from the 4.x
 kinematics (suction mode), the arm reaches at least 101..347 mm of stretch for every
 height in 40..120 mm (z = 40: 100.5..361, z = 80: 118.5..357, z = 120: 127..347.5); the
 paper claims 50..320 mm, which does not match. We keep a margin of at least 8 mm inside the
@@ -43,11 +43,11 @@ def is_real(value) -> bool:
 
 def _finite(name: str, value, expected: str) -> float:
     if not is_real(value):
-        raise UnsafeMoveError(f"{name} must be {expected}, got {value!r} ({type(value).__name__})",
+        raise UnsafeMoveError(f"{name}: expected {expected}, got {value!r} ({type(value).__name__})",
                               coordinate=name, value=math.nan, limit=None)
     v = float(value)
     if not math.isfinite(v):
-        raise UnsafeMoveError(f"{name} must be {expected}, got {value!r}", coordinate=name, value=v, limit=None)
+        raise UnsafeMoveError(f"{name}: expected {expected}, got {value!r}", coordinate=name, value=v, limit=None)
     return v
 
 
@@ -82,19 +82,20 @@ class SafetyEnvelope:
         for name in self.__dataclass_fields__:
             v = getattr(self, name)
             if not is_real(v) or not math.isfinite(v):
-                raise ValueError(f"{name} must be a finite real number (not a bool), got {v!r} ({type(v).__name__})")
+                raise ValueError(f"{name}: expected a finite real number (not a bool), got {v!r} ({type(v).__name__})")
         if not 0 < self.min_radius_mm < self.max_radius_mm:
-            raise ValueError(f"need 0 < min_radius_mm < max_radius_mm, got {self.min_radius_mm}, {self.max_radius_mm}")
+            raise ValueError(f"min_radius_mm, max_radius_mm: expected 0 < min_radius_mm < max_radius_mm, "
+                             f"got {self.min_radius_mm}, {self.max_radius_mm}")
         if not 0 < self.max_yaw_deg < 90:
-            raise ValueError(f"max_yaw_deg must be in (0, 90), got {self.max_yaw_deg}")
+            raise ValueError(f"max_yaw_deg: expected a number in (0, 90), got {self.max_yaw_deg}")
         if not self.min_z_mm < self.max_z_mm:
-            raise ValueError(f"need min_z_mm < max_z_mm, got {self.min_z_mm}, {self.max_z_mm}")
+            raise ValueError(f"min_z_mm, max_z_mm: expected min_z_mm < max_z_mm, got {self.min_z_mm}, {self.max_z_mm}")
         for name in ("max_step_mm", "max_speed_mm_s", "entry_speed_mm_s", "min_speed_mm_s"):
             if getattr(self, name) <= 0:
-                raise ValueError(f"{name} must be positive, got {getattr(self, name)}")
+                raise ValueError(f"{name}: expected a positive number, got {getattr(self, name)}")
         if not self.min_speed_mm_s <= min(self.entry_speed_mm_s, self.max_speed_mm_s):
-            raise ValueError(f"min_speed_mm_s = {self.min_speed_mm_s} must not exceed entry_speed_mm_s "
-                             f"= {self.entry_speed_mm_s} nor max_speed_mm_s = {self.max_speed_mm_s}")
+            raise ValueError(f"min_speed_mm_s: expected at most entry_speed_mm_s = {self.entry_speed_mm_s} and "
+                             f"max_speed_mm_s = {self.max_speed_mm_s}, got {self.min_speed_mm_s}")
 
     def contains(self, x: float, y: float, z: float) -> bool:
         """Whether the point (mm) is inside; False for non-finite input."""
@@ -189,7 +190,8 @@ class SafetyEnvelope:
         z_lo, z_hi = min(self.min_z_mm, p0[2]), max(self.max_z_mm, p0[2])
         r_lo, r_hi = min(self.min_radius_mm, r0), max(self.max_radius_mm, r0)
         yaw_hi = max(self.max_yaw_deg, abs(yaw0))
-        for name, value, lo, hi in (("z", p1[2], z_lo, z_hi), ("radius", r1, r_lo, r_hi), ("yaw", yaw1, -yaw_hi, yaw_hi)):
+        bounds = (("z", p1[2], z_lo, z_hi), ("radius", r1, r_lo, r_hi), ("yaw", yaw1, -yaw_hi, yaw_hi))
+        for name, value, lo, hi in bounds:
             if not lo - tol <= value <= hi + tol:
                 raise UnsafeMoveError(
                     f"a move into the envelope from {tuple(round(v, 3) for v in p0)} mm must keep {name} in "
@@ -222,7 +224,7 @@ class SafetyEnvelope:
         (once inside); the connector checks each again before sending it.
         """
         if not (is_real(max_segment_mm) and math.isfinite(max_segment_mm) and max_segment_mm > 0):
-            raise ValueError(f"max_segment_mm must be a positive number of mm, got {max_segment_mm!r}")
+            raise ValueError(f"max_segment_mm: expected a positive number of mm, got {max_segment_mm!r}")
         mm = "a finite real number of mm (arm frame)"
         x0, y0, z0 = (_finite(f"start {n}", v, mm) for n, v in zip("xyz", start))
         target = self.check_point(*target)

@@ -1,7 +1,7 @@
 """Errors raised by the uArm Swift Pro connector.
 
 Every failure of the arm or of the link is a :class:`SwiftProError`; each firmware error
-code E20..E27 (``UARM_PROTOCOL.md``, "Errors and events") has its own subclass so that
+code E20..E27 (``docs/uarm-protocol.md``, "Errors and events") has its own subclass so that
 callers can catch, say, an unreachable target without parsing messages. A move refused by
 the software safety envelope is an :class:`UnsafeMoveError`, a ``ValueError``: nothing was
 sent, the arguments were wrong.

@@ -1,6 +1,6 @@
 """Text of the uArm Swift Pro serial protocol: building request lines, sorting received lines.
 
-Pure functions, no I/O; the facts come from ``UARM_PROTOCOL.md`` (sections "Link",
+Pure functions, no I/O; the facts come from ``docs/uarm-protocol.md`` (sections "Link",
 "Framing", "Errors and events").
 """
 
@@ -46,9 +46,9 @@ def format_number(value: float, *, name: str = "value", decimals: int = 4) -> st
     try:
         v = float(value)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a real number, got {value!r}") from exc
+        raise ValueError(f"{name}: expected a real number, got {value!r}") from exc
     if not math.isfinite(v) or abs(v) >= 1e6:
-        raise ValueError(f"{name} must be finite and below 1e6 in magnitude, got {value!r}")
+        raise ValueError(f"{name}: expected a finite number below 1e6 in magnitude, got {value!r}")
     text = f"{v:.{decimals}f}"
     if "." in text:
         text = text.rstrip("0").rstrip(".")
@@ -76,11 +76,11 @@ def check_line(line: str) -> str:
             real-time character (``? ! ~ @`` or 0x18), or is longer than 80 characters.
     """
     if len(line) > MAX_LINE_CHARS:
-        raise ValueError(f"line must be at most {MAX_LINE_CHARS} characters, got {len(line)}: {line!r}")
+        raise ValueError(f"line: expected at most {MAX_LINE_CHARS} characters, got {len(line)}: {line!r}")
     bad = sorted({c for c in line if c in FORBIDDEN_CHARS or not (" " <= c <= "~")})
     if bad:
         raise ValueError(
-            f"line must hold printable ASCII without the real-time characters ? ! ~ @, got {bad!r} in {line!r}"
+            f"line: expected printable ASCII without the real-time characters ? ! ~ @, got {bad!r} in {line!r}"
         )
     return line
 
@@ -98,12 +98,12 @@ def build_request(number: int | None, command: str, *params: tuple[str, float | 
         e.g. ``"#7 G1 X200 Y0 Z80 F50"``.
     """
     if not re.fullmatch(r"[GMPS]\d{1,4}", command):
-        raise ValueError(f"command must be a letter G/M/P/S and 1-4 digits, got {command!r}")
+        raise ValueError(f"command: expected a letter G/M/P/S and 1-4 digits, got {command!r}")
     parts = [] if number is None else [f"#{int(number)}"]
     parts.append(command)
     for letter, value in params:
         if not re.fullmatch(r"[A-Z]", letter):
-            raise ValueError(f"parameter letter must be one capital letter, got {letter!r}")
+            raise ValueError(f"parameter letter: expected one capital letter, got {letter!r}")
         parts.append(letter + format_number(value, name=f"{command} {letter}"))
     return check_line(" ".join(parts))
 

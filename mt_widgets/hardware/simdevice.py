@@ -1,6 +1,6 @@
 """A simulated uArm Swift Pro: the device model, pure Python, no serial port.
 
-It behaves as ``UARM_PROTOCOL.md`` ("What a simulated device should do") describes, for the
+It behaves as ``docs/uarm-protocol.md`` ("What the simulated device does") describes, for the
 firmware 4.x profile (default) and the 3.x profile. Time is passed in explicitly (``now``,
 seconds on any monotonic clock), so the model is deterministic; the pyserial adapter
 (:mod:`mt_widgets.hardware.urlhandler.protocol_uarmsim`) and the pseudo-terminal test server
@@ -26,7 +26,9 @@ import threading
 from collections import deque
 from dataclasses import dataclass, field
 
-# 4.x firmware geometry, UARM_PROTOCOL.md "Frame and workspace" (mm, degrees).
+from .protocol import is_fixed_decimal
+
+# 4.x firmware geometry, docs/uarm-protocol.md "Frame and workspace" (mm, degrees).
 LOWER_ARM_MM = 142.07
 UPPER_ARM_MM = 158.81
 SHOULDER_OFFSET_MM = 13.2
@@ -42,7 +44,6 @@ BASE_LIMIT_DEG = 90.0
 #: 4.x queues this many G/M commands; the next one gets a bare ``E23``.
 QUEUE_SIZE = 20
 
-_FIXED_DECIMAL = re.compile(r"^[-+]?(\d+(\.\d*)?|\.\d+)$")
 _REALTIME = frozenset(b"?!~@\x18")
 
 
@@ -55,7 +56,7 @@ def joint_angles(x: float, y: float, z: float) -> tuple[float, float, float, flo
     Returns:
         ``(base, lower, upper, between)`` in degrees: base yaw; lower arm above the
         horizontal; upper arm below the horizontal; angle between the two arms. This
-        convention reproduces the doc's reach table (z = 0: 87..359 mm, z = 100: 124..353,
+        convention reproduces the reach table of docs/uarm-protocol.md (z = 0: 87..359 mm, z = 100: 124..353,
         nothing from z = 190).
     """
     if x <= 0:
@@ -129,7 +130,7 @@ _PROFILES = {
 }
 
 # Parameters each command takes; the 4.x parser wants all of them, in order, for the
-# fixed-pattern commands (UARM_PROTOCOL.md "Framing").
+# fixed-pattern commands (docs/uarm-protocol.md "Framing").
 _FIXED_4X = {"G2201": "SRHF", "G2204": "XYZF", "G2205": "SRHF", "M2222": "XYZP", "M2210": "FT"}
 _ALLOWED = {
     "G0": "XYZF", "G1": "XYZF", "G2201": "SRHF", "G2204": "XYZF", "G2205": "SRHF",
@@ -182,19 +183,19 @@ class SimulatedSwiftPro:
 
     def __post_init__(self):
         if self.firmware not in _PROFILES:
-            raise ValueError(f"firmware must be 3 or 4, got {self.firmware!r}")
+            raise ValueError(f"firmware: expected 3 or 4, got {self.firmware!r}")
         for name in ("boot_delay", "latency", "motion_scale"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be a finite number >= 0 (seconds), got {v!r}")
+                raise ValueError(f"{name}: expected a finite number >= 0 (seconds), got {v!r}")
         if self.chatter is not None and not self.chatter > 0:
-            raise ValueError(f"chatter must be None or > 0 seconds, got {self.chatter!r}")
+            raise ValueError(f"chatter: expected None or a number > 0 of seconds, got {self.chatter!r}")
         self.lock = threading.RLock()
         self._profile = _PROFILES[self.firmware]
         if self.version is not None:
             parts = str(self.version).lstrip("vV").split(".")
             if not (1 <= len(parts) <= 3 and all(p.isdigit() for p in parts) and int(parts[0]) == self.firmware):
-                raise ValueError(f"version must look like {self.firmware}.2 or {self.firmware}.2.0 (major = firmware "
+                raise ValueError(f"version: expected {self.firmware}.2 or {self.firmware}.2.0 (major = firmware "
                                  f"= {self.firmware}), got {self.version!r}")
             numbers = tuple(int(p) for p in parts) + (0,) * (3 - len(parts))
             self._profile = dataclasses.replace(self._profile, firmware="V" + ".".join(map(str, numbers)))
@@ -242,7 +243,7 @@ class SimulatedSwiftPro:
             if self.disconnected:
                 return
             if self.firmware == 4:
-                # grbl's serial interrupt takes these as real-time commands (UARM_PROTOCOL.md "Link").
+                # grbl's serial interrupt takes these as real-time commands (docs/uarm-protocol.md "Link").
                 self.realtime_received.extend(b for b in data if b in _REALTIME)
                 data = bytes(b for b in data if b not in _REALTIME)
             if now < self._boot_end:
@@ -295,11 +296,6 @@ class SimulatedSwiftPro:
         with self.lock:
             self._disconnect_after = int(nth)
 
-    def inject_line(self, line: str, now: float) -> None:
-        """Send an arbitrary line at ``now`` (an unsolicited event, say)."""
-        with self.lock:
-            self._emit(line, now)
-
     def moving_at(self, t: float) -> bool:
         """Whether the tool is moving at ``t`` (for tests that wait for a move to be under way)."""
         with self.lock:
@@ -322,7 +318,7 @@ class SimulatedSwiftPro:
         self._seq += 1
         heapq.heappush(self._out, (due, self._seq, data))
         if self.firmware == 3 and reply and self._seq % 3 == 0:
-            # 3.x sometimes adds a blank line (UARM_PROTOCOL.md "Link").
+            # 3.x sometimes adds a blank line (docs/uarm-protocol.md "Link").
             self._seq += 1
             heapq.heappush(self._out, (due, self._seq, b"\r\n"))
 
@@ -409,7 +405,7 @@ class SimulatedSwiftPro:
                 self.disconnected = True
                 return
         if self.firmware == 4:
-            # 4.x drops white space, upper-cases, keeps 80 characters (UARM_PROTOCOL.md "Link").
+            # 4.x drops white space, upper-cases, keeps 80 characters (docs/uarm-protocol.md "Link").
             text = re.sub(r"\s", "", raw).upper()[:80]
         else:
             text = raw.strip()
@@ -442,7 +438,7 @@ class SimulatedSwiftPro:
         allowed = _ALLOWED.get(word, _ONLY_3X.get(word, ""))
         letters = "".join(tok[0] for tok in tokens)
         for tok in tokens:
-            if tok[0] not in allowed or not _FIXED_DECIMAL.match(tok[1:]) or tok[0] in cmd.params:
+            if tok[0] not in allowed or not is_fixed_decimal(tok[1:]) or tok[0] in cmd.params:
                 self._error(cmd, 21, now)
                 return
             cmd.params[tok[0]] = float(tok[1:])
@@ -457,7 +453,7 @@ class SimulatedSwiftPro:
             self._immediate(cmd, now)
         elif self.firmware == 4:
             if len(self._queue) >= QUEUE_SIZE:
-                self._emit("E23 buffer full", now)  # bare: no number (UARM_PROTOCOL.md)
+                self._emit("E23 buffer full", now)  # bare: no number (docs/uarm-protocol.md)
                 return
             self._queue.append(cmd)
             self._advance(now)
@@ -543,7 +539,7 @@ class SimulatedSwiftPro:
             return None
         if self.firmware == 3:
             return f / 60.0  # mm/min per the 3.x guide
-        # 4.x: F taken as mm/s, linear moves capped at 100, others at 200 (UARM_PROTOCOL.md).
+        # 4.x: F taken as mm/s, linear moves capped at 100, others at 200 (docs/uarm-protocol.md).
         return min(f, 100.0 if cmd.word in ("G1", "G2204") else 200.0)
 
     def _queue_move_3x(self, cmd: _Command, t: float) -> None:

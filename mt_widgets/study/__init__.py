@@ -1,9 +1,12 @@
 """The study runner: protocols as data, participants, the session engine, the crash-safe log
 and the tidy export. No widgets here (``mt_widgets.apps`` composes them with this package).
 
-The analysis modules (``mt_widgets.study.analysis`` and friends) are imported explicitly.
+Depends on ``mt_widgets.core`` only. The simulation of teachers (``mt_widgets.in_silico``) and the
+analysis (``mt_widgets.analysis``) are packages of their own above this one.
 """
 
+from .analysis_plan import PAPER_CHANGES, AnalysisPlan, Change
+from .bids import export_bids
 from .log import LogError, LogFolderError, MemoryLog, ParticipantLog, StudyFolder, check_folder_writable, read_events
 from .participants import ParticipantIdError, block_assignment, validate_participant_id
 from .protocol import BUILTIN_PROTOCOLS, Phase, Practice, Protocol, ProtocolError, load_protocol, parse_protocol
@@ -11,9 +14,9 @@ from .session import EpisodeResult, Feedback, Session, SessionStateError, Step, 
 from .tidy import DEMONSTRATION_COLUMNS, EPISODE_COLUMNS, export_study, read_study
 
 __all__ = [
-    "BUILTIN_PROTOCOLS", "DEMONSTRATION_COLUMNS", "EPISODE_COLUMNS", "EpisodeResult", "Feedback", "LogError",
-    "LogFolderError", "MemoryLog", "ParticipantIdError", "ParticipantLog", "Phase", "Practice", "Protocol",
-    "ProtocolError", "Session", "SessionStateError", "Step", "StudyFolder", "block_assignment",
-    "check_folder_writable", "export_study", "load_protocol", "parse_protocol", "read_events", "read_study",
-    "timeline", "validate_participant_id",
+    "AnalysisPlan", "BUILTIN_PROTOCOLS", "Change", "DEMONSTRATION_COLUMNS", "EPISODE_COLUMNS", "EpisodeResult",
+    "Feedback", "LogError", "LogFolderError", "MemoryLog", "PAPER_CHANGES", "ParticipantIdError", "ParticipantLog",
+    "Phase", "Practice", "Protocol", "ProtocolError", "Session", "SessionStateError", "Step", "StudyFolder",
+    "block_assignment", "check_folder_writable", "export_bids", "export_study", "load_protocol", "parse_protocol",
+    "read_events", "read_study", "timeline", "validate_participant_id",
 ]

@@ -20,7 +20,8 @@ before ``append`` returns, so the interface moves on only once the event is on d
 PsychoPy's experiment handler saves each trial as it completes). A log file is created with
 ``O_EXCL`` (never overwritten) and each event is written under its participant's lock after
 checking that nobody else wrote since, so two processes never interleave events in one log:
-a newer session (a reloaded page) takes over, and the older one is refused. A crash can leave at most the last line torn; loading drops it,
+a newer session (a reloaded page) takes over, and the older one is refused. A crash can leave
+at most the last line torn; loading drops it,
 and reopening for writing first ends it with a newline so the next event starts on a line of
 its own; the ``session_resumed`` event that follows records the repair, and only such
 repaired lines are tolerated in the middle of a log.
@@ -51,6 +52,12 @@ from .protocol import Protocol, protocol_from_data
 
 STUDY_FILE = "study.json"
 ENROLMENT_FILE = "_enrolment.jsonl"
+#: Append-only records of how a participant's participation ended early: withdrawn, declined
+#: consent, screened out as ineligible, or dropped out (marked by the experimenter).
+OUTCOME_FILE = "_outcomes.jsonl"
+#: Outcomes that take a participant out of the analysis and free their place in the
+#: randomisation (see ``StudyFolder.enrol``).
+LOST_OUTCOMES = ("withdrawn", "declined", "ineligible", "dropped_out")
 LOCK_FOLDER = ".locks"
 #: Refuse to start a participant with less free space than this in the log folder (bytes): a
 #: participant's log is about 50 kB, so this leaves room for hundreds.
@@ -241,7 +248,7 @@ class ParticipantLog:
         return _Lock(path.parent / LOCK_FOLDER / (path.stem + ".lock"), f"participant {path.stem!r}", timeout_s)
 
     @classmethod
-    def create(cls, path, study: str, lock_timeout_s: float = 5.0) -> "ParticipantLog":
+    def create(cls, path, study: str, lock_timeout_s: float = 5.0) -> ParticipantLog:
         """Creates a new log; refuses if the file exists (a log is never overwritten)."""
         path = Path(path)
         with cls._lock(path, lock_timeout_s) as lock:
@@ -256,7 +263,7 @@ class ParticipantLog:
         return log
 
     @classmethod
-    def open(cls, path, lock_timeout_s: float = 5.0) -> "ParticipantLog":
+    def open(cls, path, lock_timeout_s: float = 5.0) -> ParticipantLog:
         """Opens an existing log to continue it, repairing a torn last line."""
         path = Path(path)
         with cls._lock(path, lock_timeout_s) as lock:
@@ -386,6 +393,30 @@ def check_folder_writable(folder) -> Path:
     return folder
 
 
+def _open_place(records: list[dict], outcomes: dict) -> dict | None:
+    """The earliest randomised participant who left the study and whose place no replacement
+    has taken yet (their enrolment record), or None.
+
+    The rule (why: the study's comparisons are among completers): a randomised participant who
+    withdraws, declines consent, is screened out or drops out frees their place, and the next
+    randomised enrolment takes it, in the same group, before the block sequence goes on. So
+    the participants still in the study are always the ones a block design without losses
+    would hold, balanced within every block, whoever leaves. Places freed by experimenter-
+    assigned participants are not refilled (they were never drawn from the sequence).
+    """
+    lost = [r for r in records if r["participant"] in outcomes and r["method"] in ("block", "replacement")]
+    taken: dict[str, int] = {}
+    for r in records:
+        if r["method"] == "replacement":
+            taken[r["group"]] = taken.get(r["group"], 0) + 1
+    for r in lost:
+        if taken.get(r["group"], 0) > 0:
+            taken[r["group"]] -= 1
+            continue
+        return r
+    return None
+
+
 class StudyFolder:
     """A folder of participant logs for one study and one protocol.
 
@@ -405,7 +436,7 @@ class StudyFolder:
             raise LogError(f"{path}: the stored protocol hash does not match the stored protocol; the file was edited")
 
     @classmethod
-    def create(cls, folder, protocol: Protocol) -> "StudyFolder":
+    def create(cls, folder, protocol: Protocol) -> StudyFolder:
         """Creates the study folder for ``protocol``, or reopens it if it runs the same protocol.
 
         Raises:
@@ -516,14 +547,21 @@ class StudyFolder:
             # Block randomisation counts only randomised enrolments, so an experimenter's
             # manual choice does not shift the sequence everyone else gets.
             slot = sum(1 for r in records if r["method"] == "block")
+            replaces = None
             if group is None:
-                group, method = block_assignment(slot, self.protocol.groups, self.protocol.block_size,
-                                                 self.protocol.assignment_seed), "block"
+                replaces = _open_place(records, self.outcomes())
+                if replaces is not None:
+                    group, method = replaces["group"], "replacement"
+                else:
+                    group, method = block_assignment(slot, self.protocol.groups, self.protocol.block_size,
+                                                     self.protocol.assignment_seed), "block"
             else:
                 method = "experimenter"
             record = {"participant": participant_id, "index": index, "group": group, "method": method,
                       "block_slot": slot if method == "block" else None, "enrolled_at": utc_now(),
                       "protocol_hash": self.protocol.hash}
+            if replaces is not None:
+                record["replaces"] = replaces["participant"]
             if damaged:
                 # The last enrolment was killed mid-write: its bytes stay (append-only), and this
                 # record says it repairs them, so only such lines are tolerated mid-file.
@@ -544,8 +582,10 @@ class StudyFolder:
         return record
 
     def status(self) -> list[dict]:
-        """For the experimenter: each participant with group and whether their log is complete."""
+        """For the experimenter: each participant with group, whether their log is complete, and
+        their outcome ("completed", "in progress", or one of ``LOST_OUTCOMES``)."""
         rows = []
+        outcomes = self.outcomes()
         for record in self.enrolments():
             path = self.log_path(record["participant"])
             finished, n_events = False, 0
@@ -556,5 +596,75 @@ class StudyFolder:
                     finished = any(e["type"] == "session_finished" for e in events)
                 except LogError:
                     n_events = -1
-            rows.append({**record, "events": n_events, "finished": finished})
+            outcome = outcomes.get(record["participant"], {}).get("outcome")
+            state = outcome or ("completed" if finished else "in progress")
+            rows.append({**record, "events": n_events, "finished": finished, "state": state})
         return rows
+
+    # -- how participation ended --------------------------------------------------------------------
+    def outcomes(self) -> dict[str, dict]:
+        """{participant: their outcome record} for those whose participation ended early."""
+        path = self.folder / OUTCOME_FILE
+        if not path.exists():
+            return {}
+        found = {}
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+            if not line.strip():
+                continue
+            try:
+                record = json.loads(line)
+            except ValueError:
+                raise LogError(f"{path}, line {number}: not an outcome record; the file is damaged") from None
+            found[record["participant"]] = record
+        return found
+
+    def record_outcome(self, participant_id: str, outcome: str, **fields) -> dict:
+        """Records, under the study lock, that a participant withdrew, declined, was screened out
+        or dropped out; the record is fsynced before this returns.
+
+        Args:
+            participant_id: an enrolled participant.
+            outcome: one of ``LOST_OUTCOMES``.
+            **fields: what else to keep (reason, the data policy, the step reached).
+        """
+        if outcome not in LOST_OUTCOMES:
+            raise ValueError(f"outcome: expected one of {list(LOST_OUTCOMES)}, got {outcome!r}")
+        enrolment = self.enrolment(participant_id)
+        record = {"participant": participant_id, "group": enrolment["group"], "method": enrolment["method"],
+                  "outcome": outcome, "at": utc_now(), **to_jsonable(fields)}
+        with _Lock(self.folder / LOCK_FOLDER / "_study.lock", f"study folder {self.folder}", timeout_s=10.0):
+            if participant_id in self.outcomes():
+                raise LogError(f"participant_id: {participant_id!r} already left the study "
+                               f"({self.outcomes()[participant_id]['outcome']})")
+            fd = os.open(self.folder / OUTCOME_FILE, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+            try:
+                _write_all(fd, (json.dumps(record, separators=(",", ":")) + "\n").encode())
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+        return record
+
+    def mark_dropped_out(self, participant_id: str, reason: str = "") -> dict:
+        """The experimenter's record that an in-progress participant will not come back."""
+        for row in self.status():
+            if row["participant"] == participant_id and row["state"] != "in progress":
+                raise LogError(f"participant_id: {participant_id!r} is {row['state']}, not in progress")
+        return self.record_outcome(participant_id, "dropped_out", reason=reason)
+
+    def group_status(self) -> dict[str, dict[str, int]]:
+        """Per group: enrolled, completed, in progress, and each way of leaving (withdrawn, ...)."""
+        counts = {group: {"enrolled": 0, "completed": 0, "in progress": 0, **{o: 0 for o in LOST_OUTCOMES}}
+                  for group in self.protocol.groups}
+        for row in self.status():
+            counts[row["group"]]["enrolled"] += 1
+            counts[row["group"]][row["state"]] += 1
+        return counts
+
+    def status_report(self) -> str:
+        """The per-group status as a small text table (for the experimenter and the notes)."""
+        counts = self.group_status()
+        columns = ["enrolled", "completed", "in progress", *LOST_OUTCOMES]
+        lines = ["group    " + "  ".join(f"{c:>11}" for c in columns)]
+        for group, row in counts.items():
+            lines.append(f"{group:<9}" + "  ".join(f"{row[c]:>11}" for c in columns))
+        return "\n".join(lines)

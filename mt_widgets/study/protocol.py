@@ -33,9 +33,12 @@ File format (TOML, or the same structure in JSON; ``format = 1``)::
     duration_s = 120                    # 0 skips practice
     text = "..."
 
+    [skills]                            # optional: a user's own skills
+    module = "my_skills.py"             # a Python file (relative to this file); its Skills by key
+
     [[phases]]                          # in order; one table per phase
     id = "P1"
-    skill = "sim-point"                 # a key of mt_widgets.SKILLS
+    skill = "sim-point"                 # a key of mt_widgets.SKILLS, of [skills], or "module:name"
     episodes = 1
     demonstrations = 5                  # optional, default: the skill's number of features
     guidance = []                       # groups that see guidance after each demonstration
@@ -56,12 +59,19 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import importlib
+import importlib.util
 import json
 import math
 import re
+import sys
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
+
+from mt_widgets.core import SKILLS, Skill, SkillRegistry
 
 try:  # Python >= 3.11
     import tomllib as _toml
@@ -71,6 +81,12 @@ except ModuleNotFoundError:  # pragma: no cover - exercised only on Python 3.10
     except ModuleNotFoundError:
         _toml = None
 
+from mt_widgets.core.guidance import GUIDANCE_MODALITIES
+
+from .analysis_plan import ALTERNATIVES, PAPER_CHANGES, TESTS, AnalysisPlan, Change
+from .practice import PRACTICE_SKILLS
+from .steps import WITHDRAWAL_POLICIES, StudyStep, parse_steps
+
 FORMAT_VERSION = 1
 PROTOCOL_FOLDER = Path(__file__).parent / "protocols"
 #: The protocols shipped with the package, by short name.
@@ -78,6 +94,14 @@ BUILTIN_PROTOCOLS = {"paper-sim": "paper_sim.toml", "paper-uarm": "paper_uarm.to
 
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 _TEXT_KEYS = ("welcome", "consent", "instructions", "reproduction", "thank_you")
+#: Texts a protocol may set for a session that ends early; these say it when it does not.
+OPTIONAL_TEXTS = {
+    "declined": "You chose not to take part. Thank you for your time; please let the experimenter know.",
+    "ineligible": "Thank you for your interest. This study is looking for participants with a different "
+                  "background, so it ends here. Please let the experimenter know.",
+    "withdrawn": "You have withdrawn from the study. Nothing more is recorded. Thank you for your time; please "
+                 "let the experimenter know.",
+}
 
 
 class ProtocolError(ValueError):
@@ -102,7 +126,7 @@ class Phase:
     Attributes:
         id: short name shown in logs and CSVs ("P3").
         index: 0-based position in the protocol.
-        skill: key of ``mt_widgets.SKILLS``.
+        skill: the skill's name in the protocol (``Protocol.skills[skill]`` is the ``Skill``).
         episodes: number of episodes (>= 1).
         demonstrations: demonstrations per episode (>= 1).
         guidance: groups that see guidance after each demonstration.
@@ -126,11 +150,21 @@ class Phase:
 
 @dataclass(frozen=True)
 class Practice:
-    """Free drawing before the study: ``duration_s`` seconds on ``skill`` (0: no practice)."""
+    """Free drawing before the study: ``duration_s`` seconds on ``skill`` (0: no practice).
+
+    Attributes:
+        skill: the practice skill's key; the shipped protocols use a neutral one that no phase
+            uses (``mt_widgets.study.practice``).
+        duration_s: seconds of practice.
+        text: shown above the practice.
+        reproduction: whether each practice round ends with the robot reproducing what it
+            learnt (False: arrows are drawn and confirmed, nothing is learnt or played back).
+    """
 
     skill: str
     duration_s: float
     text: str
+    reproduction: bool = True
 
 
 @dataclass(frozen=True)
@@ -156,6 +190,32 @@ class Protocol:
     data: dict = field(repr=False, compare=False)
     source_text: str = field(default="", repr=False, compare=False)
     source: str = field(default="<string>", compare=False)
+    #: The skills its phases name, by name (see ``resolve_protocol_skills``).
+    skills: Mapping[str, Skill] = field(default_factory=lambda: MappingProxyType({**SKILLS, **PRACTICE_SKILLS}),
+                                        repr=False, compare=False)
+    guidance_modality: str = "arrows+words"
+    before: tuple[StudyStep, ...] = ()
+    after: tuple[StudyStep, ...] = ()
+    withdrawal: str = "exclude"
+    analysis: AnalysisPlan = AnalysisPlan()
+
+    @property
+    def steps(self) -> tuple[StudyStep, ...]:
+        """Every step around the task, those before it first."""
+        return self.before + self.after
+
+    def step(self, step_id: str) -> StudyStep:
+        for step in self.steps:
+            if step.id == step_id:
+                return step
+        raise KeyError(f"step_id: expected one of {[s.id for s in self.steps]}, got {step_id!r}")
+
+    def skill(self, key: str) -> Skill:
+        """The ``Skill`` a phase or the practice names (``skills``: the paper's, the neutral
+        practice skills and any the protocol brings)."""
+        if key not in self.skills:
+            raise KeyError(f"key: expected one of {sorted(self.skills)}, got {key!r}")
+        return self.skills[key]
 
     @property
     def hash(self) -> str:
@@ -232,8 +292,36 @@ class _Locator:
                         return spans
         return spans
 
+    def _step_line(self, path: tuple) -> int | None:
+        """Line of a field of a ``[[before]]`` / ``[[after]]`` step or of one of its ``items``."""
+        table, index = path[0], path[1]
+        header = re.compile(r"^\s*\[")
+        own = re.compile(r"^\s*\[\[\s*" + table + r"\s*\]\]")
+        nested = re.compile(r"^\s*\[\[\s*" + table + r"\.items\s*\]\]")
+        starts = [i for i, line in enumerate(self.lines) if own.match(line)]
+        if index >= len(starts):
+            return None
+        start = starts[index]
+        end = next((i for i in range(start + 1, len(self.lines))
+                    if header.match(self.lines[i]) and not nested.match(self.lines[i])), len(self.lines))
+        key = path[2] if len(path) > 2 else None
+        if key == "items" and len(path) > 3 and isinstance(path[3], int):
+            items = [i for i in range(start, end) if nested.match(self.lines[i])]
+            if path[3] < len(items):
+                item_end = next((i for i in range(items[path[3]] + 1, end) if header.match(self.lines[i])), end)
+                start, end = items[path[3]], item_end
+                key = path[4] if len(path) > 4 else None
+        if isinstance(key, str):
+            pattern = re.compile(r'^\s*"?' + re.escape(key) + r'"?\s*=')
+            for i in range(start, end):
+                if pattern.match(self.lines[i]):
+                    return i + 1
+        return start + 1
+
     def line(self, path: tuple) -> int | None:
         """Line of ``path`` (e.g. ("phases", 2, "episodes")); falls back to its table."""
+        if self.kind == "toml" and len(path) > 1 and path[0] in ("before", "after") and isinstance(path[1], int):
+            return self._step_line(path)
         if self.kind == "json":
             span = (0, len(self.lines))
             if path and path[0] == "phases" and len(path) > 1 and isinstance(path[1], int):
@@ -318,7 +406,8 @@ class _Checker:
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
                 self.fail(path, f"expected a finite number, got {type(value).__name__} {value!r}")
             if value < limits.get("minimum", -math.inf) or (limits.get("positive") and value <= 0):
-                self.fail(path, f"expected a number {'> 0' if limits.get('positive') else '>= ' + str(limits['minimum'])}"
+                bound = "> 0" if limits.get("positive") else ">= " + str(limits["minimum"])
+                self.fail(path, f"expected a number {bound}"
                                 f", got {value}")
             return float(value)
         if kind == "table":
@@ -333,18 +422,80 @@ class _Checker:
                 self.fail(path + (key,), f"unknown field (expected one of {sorted(allowed)}); check its spelling")
 
 
-def _skill_keys():
-    from mt_widgets.core import SKILLS  # imported here: the protocol module stays light to import
-    return SKILLS
+_SKILL_REFERENCE = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
 
 
-def parse_protocol(text: str, source: str = "<string>", kind: str | None = None) -> Protocol:
+def resolve_protocol_skills(raw: dict, check: _Checker, source: str) -> tuple[Mapping[str, Skill], dict | None]:
+    """The skills a protocol can name, by the names it uses.
+
+    - the paper's four (``SKILLS``: "sim-point", ...) and the neutral practice skills
+      (``mt_widgets.study.practice``: "sim-practice", "uarm-practice");
+    - every ``Skill`` (and every skill of a ``SkillRegistry``) defined at the top of the Python
+      file named by ``[skills] module = "path/to/skills.py"``, by its key; the path is relative
+      to the protocol file;
+    - a reference "package.module:name" to an importable module's ``Skill``, by that text.
+
+    Returns:
+        (name -> Skill, the ``[skills]`` table with the module's absolute path, or None). The
+        stored protocol (``study.json``) keeps the absolute path, so a study folder reopened
+        from anywhere finds the same file.
+    """
+    skills: dict[str, Skill] = {**SKILLS, **PRACTICE_SKILLS}
+    table = raw.get("skills")
+    if table is not None:
+        table = check.get(raw, ("skills",), "table")
+        check.unknown(table, ("skills",), ("module",))
+        given = check.get(table, ("skills", "module"), "text", nonempty=True)
+        base = Path(source).parent if source not in ("<string>", "") else Path.cwd()
+        path = (base / given).resolve()
+        if not path.is_file():
+            check.fail(("skills", "module"), f"expected a Python file of skills (relative to {base}), got {given!r}: "
+                                             f"no file at {path}")
+        name = "mt_widgets_protocol_skills_" + hashlib.sha256(str(path).encode()).hexdigest()[:16]
+        module = sys.modules.get(name)  # loaded once per process: its skills keep their identity
+        if module is None:
+            spec = importlib.util.spec_from_file_location(name, path)
+            module = importlib.util.module_from_spec(spec)
+            try:
+                spec.loader.exec_module(module)
+            except Exception as error:  # the user's code: whatever it raises is reported with its file
+                check.fail(("skills", "module"), f"{path} failed to load: {type(error).__name__}: {error}")
+            sys.modules[name] = module
+        found = [value for value in vars(module).values() if isinstance(value, Skill)]
+        for registry in (value for value in vars(module).values() if isinstance(value, SkillRegistry)):
+            found.extend(registry.values())
+        for skill in found:
+            if skills.get(skill.key, skill) is not skill:
+                check.fail(("skills", "module"), f"expected skills with keys of their own, got a second skill "
+                                                 f"{skill.key!r} in {path}")
+            skills[skill.key] = skill
+        table = {"module": str(path)}
+    names = [raw.get("practice", {}).get("skill")] + [entry.get("skill") for entry in raw.get("phases", [])
+                                                      if isinstance(entry, dict)]
+    for i, reference in enumerate(names):
+        if not isinstance(reference, str) or reference in skills or not _SKILL_REFERENCE.match(reference):
+            continue
+        path = ("practice", "skill") if i == 0 else ("phases", i - 1, "skill")
+        module_name, attribute = reference.split(":")
+        try:
+            value = getattr(importlib.import_module(module_name), attribute)
+        except (ImportError, AttributeError) as error:
+            check.fail(path, f"expected a Skill at {reference!r} (module:name), got {type(error).__name__}: {error}")
+        if not isinstance(value, Skill):
+            check.fail(path, f"expected a Skill at {reference!r}, got {type(value).__name__}")
+        skills[reference] = value
+    return MappingProxyType(skills), table
+
+
+def parse_protocol(text: str, source: str = "<string>", kind: str | None = None, check_files: bool = True) -> Protocol:
     """Parses and validates protocol text.
 
     Args:
         text: TOML or JSON.
-        source: a file name for error messages.
+        source: a file name for error messages (and the folder a relative video file is in).
         kind: "toml" or "json" (default: from ``source``'s suffix, else TOML).
+        check_files: refuse a video file that does not exist (False when a stored protocol is
+            rebuilt for analysis, where the study's media need not be present).
 
     Raises:
         ProtocolError: naming the line and field of the first problem.
@@ -371,10 +522,11 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None)
         if not isinstance(raw, dict):
             raise ProtocolError(f"expected a JSON object at the top, got {type(raw).__name__}", source, 1)
     check = _Checker(_Locator(text, kind), source)
-    skills = _skill_keys()
+    skills, skills_table = resolve_protocol_skills(raw, check, source)
 
     top_keys = ("format", "name", "title", "groups", "lambda", "seed", "query_states", "reproduction_duration_s",
-                "assignment", "texts", "practice", "phases")
+                "assignment", "texts", "practice", "phases", "skills", "guidance_modality", "withdrawal", "before",
+                "after", "analysis")
     check.unknown(raw, (), top_keys)
     version = check.get(raw, ("format",), "integer")
     if version != FORMAT_VERSION:
@@ -403,16 +555,33 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None)
     assignment_seed = check.get(assignment, ("assignment", "seed"), "integer", minimum=0)
 
     texts_raw = check.get(raw, ("texts",), "table")
-    check.unknown(texts_raw, ("texts",), _TEXT_KEYS)
-    texts = {key: check.get(texts_raw, ("texts", key), "text", nonempty=True) for key in _TEXT_KEYS}
+    check.unknown(texts_raw, ("texts",), _TEXT_KEYS + tuple(OPTIONAL_TEXTS))
+    # A protocol with its own consent step says it there; texts.consent is the default consent's.
+    own_consent = any(isinstance(e, dict) and e.get("kind") == "consent" for e in raw.get("before", []) or [])
+    texts = {key: check.get(texts_raw, ("texts", key), "text", nonempty=True, default="" if own_consent and
+                            key == "consent" else ...) for key in _TEXT_KEYS}
+    texts.update({key: check.get(texts_raw, ("texts", key), "text", nonempty=True, default=default)
+                  for key, default in OPTIONAL_TEXTS.items()})
 
     practice_raw = check.get(raw, ("practice",), "table")
-    check.unknown(practice_raw, ("practice",), ("skill", "duration_s", "text"))
+    check.unknown(practice_raw, ("practice",), ("skill", "duration_s", "text", "reproduction"))
     practice_skill = check.get(practice_raw, ("practice", "skill"), "text")
     if practice_skill not in skills:
         check.fail(("practice", "skill"), f"unknown skill {practice_skill!r}; expected one of {sorted(skills)}")
+    practice_reproduction = practice_raw.get("reproduction", True)
+    if not isinstance(practice_reproduction, bool):
+        check.fail(("practice", "reproduction"), f"expected true or false, got {practice_reproduction!r}")
     practice = Practice(practice_skill, check.get(practice_raw, ("practice", "duration_s"), "number", minimum=0.0),
-                        check.get(practice_raw, ("practice", "text"), "text", nonempty=True))
+                        check.get(practice_raw, ("practice", "text"), "text", nonempty=True), practice_reproduction)
+
+    modality = check.get(raw, ("guidance_modality",), "text", default="arrows+words",
+                         choices=tuple(GUIDANCE_MODALITIES))
+    withdrawal = check.get(raw, ("withdrawal",), "text", default="exclude", choices=WITHDRAWAL_POLICIES)
+    folder = Path(source).parent if source not in ("<string>", "") else None
+    step_ids: set = set()
+    before = parse_steps(check, raw, "before", folder, step_ids, check_files)
+    after = parse_steps(check, raw, "after", folder, step_ids, check_files)
+    plan = _parse_analysis(check, raw)
 
     phases_raw = raw.get("phases")
     if not isinstance(phases_raw, list) or not phases_raw:
@@ -455,6 +624,14 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None)
         phases.append(Phase(phase_id, i, skill, episodes, demonstrations, tuple(guidance), instructions, states_index))
 
     data = copy.deepcopy(raw)
+    if skills_table is not None:
+        data["skills"] = skills_table
+    for position, steps in (("before", before), ("after", after)):
+        # A video's content is part of the protocol (and so of its hash); its file name stays as
+        # written, so the hash does not depend on where the study runs.
+        for entry, step in zip(data.get(position, []), steps):
+            if step.kind == "video" and step.video_sha256 is not None:
+                entry["sha256"] = step.video_sha256
     data.setdefault("groups", list(groups))
     data.setdefault("query_states", query_states)
     data["assignment"].setdefault("method", "block")
@@ -462,7 +639,45 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None)
         entry.setdefault("demonstrations", phase.demonstrations)
         entry.setdefault("guidance", [])
     return Protocol(name, title, tuple(groups), lam, seed, query_states, duration, block_size, assignment_seed,
-                    texts, practice, tuple(phases), data, text, source)
+                    texts, practice, tuple(phases), data, text, source, skills, guidance_modality=modality,
+                    before=before, after=after, withdrawal=withdrawal, analysis=plan)
+
+
+def _parse_analysis(check, raw: dict) -> AnalysisPlan:
+    """The ``[analysis]`` table: the pre-registered test, sidedness, alpha and planned power."""
+    table = raw.get("analysis")
+    if table is None:
+        return AnalysisPlan()
+    table = check.get(raw, ("analysis",), "table")
+    check.unknown(table, ("analysis",), ("test", "alternative", "alpha", "effect_size", "power", "changes"))
+    values = {"test": check.get(table, ("analysis", "test"), "text", default="student", choices=TESTS),
+              "alternative": check.get(table, ("analysis", "alternative"), "text", default="less",
+                                       choices=ALTERNATIVES)}
+    for key, default in (("alpha", 0.05), ("power", 0.8)):
+        value = check.get(table, ("analysis", key), "number", default=default, positive=True)
+        if not value < 1:
+            check.fail(("analysis", key), f"expected a number strictly between 0 and 1, got {value}")
+        values[key] = value
+    values["effect_size"] = check.get(table, ("analysis", "effect_size"), "number", default=0.9, minimum=-math.inf)
+    if values["effect_size"] == 0:
+        check.fail(("analysis", "effect_size"), "expected a non-zero Cohen's d, got 0")
+    changes = table.get("changes")
+    if changes is not None:
+        if not isinstance(changes, list) or not changes:
+            check.fail(("analysis", "changes"), f"expected a list of changes, got {changes!r}")
+        parsed = []
+        for i, change in enumerate(changes):
+            try:
+                parsed.append(Change(change["name"], (change["before"][0], change["before"][1]),
+                                     (change["after"][0], change["after"][1]), change.get("label", change["name"]),
+                                     change.get("meaning", "")))
+            except (KeyError, IndexError, TypeError):
+                check.fail(("analysis", "changes"), f"expected changes[{i}] as {{name, before = [phase, episode], "
+                                                    f"after = [phase, episode]}}, got {change!r}")
+        values["changes"] = tuple(parsed)
+    else:
+        values["changes"] = PAPER_CHANGES
+    return AnalysisPlan(**values)
 
 
 def load_protocol(path_or_name) -> Protocol:
@@ -487,4 +702,4 @@ def load_protocol(path_or_name) -> Protocol:
 
 def protocol_from_data(data: dict, source: str = "study.json") -> Protocol:
     """Rebuilds a protocol from its stored plain-data form (as ``study.json`` keeps it)."""
-    return parse_protocol(json.dumps(data, indent=1), source, kind="json")
+    return parse_protocol(json.dumps(data, indent=1), source, kind="json", check_files=False)

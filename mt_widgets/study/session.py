@@ -3,10 +3,16 @@
 The engine knows nothing of the paper beyond the protocol file. A protocol unrolls into a
 fixed timeline of steps::
 
-    welcome -> consent -> instructions -> practice (if duration_s > 0)
+    welcome -> the protocol's [[before]] steps (consent right after the welcome when they
+    have none) -> instructions -> practice (if duration_s > 0)
     -> for each phase: phase_intro
          -> for each episode: demonstration x N -> episode_end -> reproduction
-    -> thank_you
+    -> the protocol's [[after]] steps -> thank_you
+
+A session can also end early: consent declined, screened out by an eligibility step, or
+withdrawn (``withdraw``, at any step). Then ``finished`` is True, ``ended`` names why, the
+study folder records the outcome (``StudyFolder.record_outcome``), the participant's data are
+left out of the analysis and the export, and ``resume`` refuses the participant.
 
 Each step is completed by exactly one logged event, and the position in the timeline is a
 pure function of the log (the events are replayed on resume and checked against the
@@ -44,12 +50,17 @@ Event types (besides ``seq``, ``type``, ``time``, ``participant``, ``study``):
   repaired_torn_line (bytes of a torn last line ended by this resume; 0 if none).
 - ``screen_done``: screen (welcome, instructions, phase_intro, reproduction), phase_index,
   phase, episode (where they apply).
-- ``consent_given``.
+- ``consent_given``: step (the consent step's id, absent for the default consent);
+  ``consent_declined``: step.
+- ``step_done``: step (id), kind, and by kind: answers {item: value} (eligibility adds
+  eligible (bool)); watched_to_end (bool) and plays (int) for a video.
+- ``screened_out``: step, answers (the eligibility answers that ended the session).
+- ``withdrawn``: reason, data ("exclude" or "delete", the protocol's policy), at (the step).
 - ``practice_started``: skill, duration_s; ``practice_finished``: duration_s (as measured
   by the caller, seconds).
 - ``episode_started``: phase, phase_index, episode (1-based), skill, guidance (bool),
   n_demonstrations, query_states (N x state_dim), features (N x S), theta (R x S), lam,
-  optimal (N x R), exact (bool), seed {study_seed, spawn_key}.
+  optimal (N x R), exact (bool), guidance_modality, seed {study_seed, spawn_key}.
 - ``demonstration``: phase, phase_index, episode, index (0-based), state, action, optimal,
   guidance_shown (bool), time_to_first_input_s, drawing_duration_s, response_time_s (from
   the state's appearance to the submission, measured by the engine), input (method, redraws,
@@ -73,10 +84,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import mt_widgets
-from mt_widgets.core import SKILLS, SeedSchedule, TeachingEpisode
+from mt_widgets.core import SeedSchedule, TeachingEpisode
 
 from .log import LogError, MemoryLog, ParticipantLog, StudyFolder, to_jsonable
 from .protocol import Phase, Protocol
+from .steps import StudyStep
 
 TEXT_STEPS = ("welcome", "consent", "instructions", "phase_intro", "reproduction", "thank_you")
 #: Timing keys ``submit_demonstration`` reads (seconds, None when unknown).
@@ -95,9 +107,21 @@ class _Slot:
     index: int | None = None     # 0-based demonstration within the episode
 
 
+#: Events that end a session before the thank-you, and the text key each ends with.
+ENDING_EVENTS = {"consent_declined": "declined", "screened_out": "ineligible", "withdrawn": "withdrawn"}
+
+
 def timeline(protocol: Protocol) -> list[_Slot]:
-    """The protocol unrolled into the steps a participant goes through, in order."""
-    slots = [_Slot("welcome"), _Slot("consent"), _Slot("instructions")]
+    """The protocol unrolled into the steps a participant goes through, in order.
+
+    A step of the protocol's ``before`` / ``after`` lists is ``_Slot("step", index=i)`` with i
+    its index in ``protocol.steps``.
+    """
+    slots = [_Slot("welcome")]
+    if not any(step.kind == "consent" for step in protocol.before):
+        slots.append(_Slot("consent"))
+    slots += [_Slot("step", index=i) for i in range(len(protocol.before))]
+    slots.append(_Slot("instructions"))
     if protocol.practice.duration_s > 0:
         slots.append(_Slot("practice"))
     for phase in protocol.phases:
@@ -105,6 +129,7 @@ def timeline(protocol: Protocol) -> list[_Slot]:
         for episode in range(1, phase.episodes + 1):
             slots += [_Slot("demonstration", phase.index, episode, i) for i in range(phase.demonstrations)]
             slots += [_Slot("episode_end", phase.index, episode), _Slot("reproduction", phase.index, episode)]
+    slots += [_Slot("step", index=len(protocol.before) + j) for j in range(len(protocol.after))]
     slots.append(_Slot("thank_you"))
     return slots
 
@@ -147,6 +172,7 @@ class Feedback:
     guidance: bool
     optimal: np.ndarray | None
     action: np.ndarray
+    guidance_modality: str = "arrows+words"
 
 
 @dataclass(frozen=True)
@@ -155,7 +181,9 @@ class Step:
 
     Attributes:
         kind: welcome, consent, instructions, practice, phase_intro, demonstration,
-            episode_end, reproduction or thank_you.
+            episode_end, reproduction, thank_you; a protocol step's kind (text, video,
+            information, consent, eligibility, demographics, questionnaire); or "ended" when
+            the session ended early (``ended`` says why).
         text: the protocol's text for this step (empty for demonstrations).
         phase, phase_index: the phase id ("P3") and its 0-based index, or None.
         episode, n_episodes: 1-based episode within the phase, and the phase's episodes.
@@ -167,6 +195,10 @@ class Step:
         guidance: whether guidance follows each demonstration in this episode.
         duration_s: the practice time.
         result: the ``EpisodeResult`` a reproduction step shows.
+        study_step: the protocol's ``StudyStep`` for a step around the task.
+        guidance_modality: how guidance is shown ("arrows", "arrows+words", "words", "none").
+        practice_reproduction: whether practice rounds end with a reproduction.
+        ended: why the session ended early ("declined", "ineligible", "withdrawn"), else None.
     """
 
     kind: str
@@ -184,6 +216,10 @@ class Step:
     guidance: bool = False
     duration_s: float | None = None
     result: EpisodeResult | None = None
+    study_step: StudyStep | None = None
+    guidance_modality: str = "arrows+words"
+    practice_reproduction: bool = True
+    ended: str | None = None
 
 
 def _parse_time(stamp: str) -> float:
@@ -210,12 +246,13 @@ class Session:
         self._actions: dict[tuple[int, int], list[np.ndarray]] = {}
         self._finished_episodes: dict[tuple[int, int], dict] = {}
         self._teaching_episodes: dict[tuple[int, int], TeachingEpisode] = {}
+        self._ended: str | None = None
         self._entered_at = time.monotonic()
         self._replay(log.events)
 
     # -- construction -----------------------------------------------------------------------------
     @classmethod
-    def start(cls, study: StudyFolder, participant_id: str, group: str | None = None) -> "Session":
+    def start(cls, study: StudyFolder, participant_id: str, group: str | None = None) -> Session:
         """Enrols a new participant (validating the ID, assigning the group) and starts their log.
 
         Args:
@@ -230,7 +267,7 @@ class Session:
         return cls._begin(study, log, enrolment)
 
     @classmethod
-    def resume(cls, study: StudyFolder, participant_id: str, lock_timeout_s: float = 3.0) -> "Session":
+    def resume(cls, study: StudyFolder, participant_id: str, lock_timeout_s: float = 3.0) -> Session:
         """Continues an enrolled participant at the first step their log does not record.
 
         Args:
@@ -243,6 +280,12 @@ class Session:
         if not isinstance(study, StudyFolder):
             raise ValueError(f"study: expected a StudyFolder, got {type(study).__name__}")
         enrolment = study.enrolment(participant_id)
+        left = study.outcomes().get(participant_id)
+        if left is not None:
+            what = {"withdrawn": "withdrew from the study", "declined": "declined consent",
+                    "ineligible": "was screened out as ineligible", "dropped_out": "was marked as dropped out"}
+            raise LogError(f"participant_id: {participant_id!r} {what[left['outcome']]} ({left['at']}); their "
+                           f"session cannot be resumed. Enrol a new participant ID for a new person.")
         path = study.log_path(participant_id)
         try:
             log = ParticipantLog.open(path, lock_timeout_s=lock_timeout_s)
@@ -266,7 +309,7 @@ class Session:
         return session
 
     @classmethod
-    def _begin(cls, study, log, enrolment) -> "Session":
+    def _begin(cls, study, log, enrolment) -> Session:
         log.append("session_started", software_version=mt_widgets.__version__, protocol_hash=study.protocol.hash,
                    protocol_name=study.protocol.name, group=enrolment["group"], enrolment=enrolment,
                    lam=study.protocol.lam, numpy_version=np.__version__, python_version=platform.python_version())
@@ -275,7 +318,7 @@ class Session:
         return session
 
     @classmethod
-    def lesson(cls, protocol: Protocol, group: str | None = None, participant: str = "lesson") -> "Session":
+    def lesson(cls, protocol: Protocol, group: str | None = None, participant: str = "lesson") -> Session:
         """The same engine, unlogged (events kept in memory): for a guided lesson.
 
         Args:
@@ -303,7 +346,9 @@ class Session:
         if kind == "screen_done":
             return _Slot(event["screen"], event.get("phase_index"), event.get("episode"))
         if kind == "consent_given":
-            return _Slot("consent")
+            return self._step_slot(event["step"]) if event.get("step") else _Slot("consent")
+        if kind == "step_done":
+            return self._step_slot(event["step"])
         if kind == "practice_finished":
             return _Slot("practice")
         if kind == "demonstration":
@@ -312,8 +357,17 @@ class Session:
             return _Slot("episode_end", event["phase_index"], event["episode"])
         return None
 
+    def _step_slot(self, step_id: str) -> _Slot:
+        ids = [step.id for step in self.protocol.steps]
+        if step_id not in ids:
+            raise LogError(f"step {step_id!r} in the log is not a step of this protocol ({ids})")
+        return _Slot("step", index=ids.index(step_id))
+
     def _replay(self, events: list[dict]) -> None:
         for event in events:
+            if event["type"] in ENDING_EVENTS:
+                self._ended = ENDING_EVENTS[event["type"]]
+                continue
             slot = self._completes(event)
             if event["type"] == "episode_started":
                 self._episodes[(event["phase_index"], event["episode"])] = event
@@ -334,6 +388,9 @@ class Session:
     def _describe(self, slot: _Slot | None) -> str:
         if slot is None:
             return "the end of the protocol"
+        if slot.kind == "step":
+            step = self.protocol.steps[slot.index]
+            return f"{step.kind} step {step.id!r}"
         where = []
         if slot.phase_index is not None:
             where.append(self.protocol.phases[slot.phase_index].id)
@@ -365,14 +422,15 @@ class Session:
 
     def _start_episode(self, slot: _Slot) -> None:
         phase = self._phase(slot)
-        skill = SKILLS[phase.skill]
+        skill = self.protocol.skills[phase.skill]
         participant = self.enrolment["index"] if self.protocol.query_states == "per-participant" else None
         seed = SeedSchedule(self.protocol.seed).seed(phase.states_index, slot.episode - 1, participant)
         states = skill.query_states(seed=seed, n=phase.demonstrations)
         teaching = self._new_teaching_episode(skill, states)
         event = self.log.append(
             "episode_started", phase=phase.id, phase_index=phase.index, episode=slot.episode, skill=phase.skill,
-            guidance=phase.guidance_for(self.group), n_demonstrations=phase.demonstrations, query_states=states,
+            guidance=phase.guidance_for(self.group), guidance_modality=self.protocol.guidance_modality,
+            n_demonstrations=phase.demonstrations, query_states=states,
             features=teaching.features, theta=skill.theta, lam=self.protocol.lam, optimal=teaching.optimal_actions,
             exact=teaching.exact,
             seed={"study_seed": self.protocol.seed, "spawn_key": list(seed.spawn_key)})
@@ -385,8 +443,19 @@ class Session:
 
     @property
     def finished(self) -> bool:
-        """True at the thank-you step: every step of the protocol is logged."""
-        return self._slot.kind == "thank_you"
+        """True when nothing is left to do: at the thank-you step (every step of the protocol is
+        logged), or once the session ended early (``ended``)."""
+        return self._ended is not None or self._slot.kind == "thank_you"
+
+    @property
+    def completed(self) -> bool:
+        """True at the thank-you step of a session that did not end early."""
+        return self._ended is None and self._slot.kind == "thank_you"
+
+    @property
+    def ended(self) -> str | None:
+        """Why the session ended early: "declined", "ineligible" or "withdrawn"; None otherwise."""
+        return self._ended
 
     @property
     def events(self) -> list[dict]:
@@ -404,11 +473,17 @@ class Session:
         """The step to show now (see ``Step``)."""
         slot = self._slot
         texts = self.protocol.texts
+        if self._ended is not None:
+            return Step("ended", texts[self._ended], ended=self._ended)
         if slot.kind in ("welcome", "consent", "instructions", "thank_you"):
-            return Step(slot.kind, texts[slot.kind if slot.kind != "thank_you" else "thank_you"])
+            return Step(slot.kind, texts[slot.kind])
+        if slot.kind == "step":
+            step = self.protocol.steps[slot.index]
+            return Step(step.kind, step.text, study_step=step)
         if slot.kind == "practice":
             practice = self.protocol.practice
-            return Step("practice", practice.text, skill=practice.skill, duration_s=practice.duration_s)
+            return Step("practice", practice.text, skill=practice.skill, duration_s=practice.duration_s,
+                        practice_reproduction=practice.reproduction)
         phase = self._phase(slot)
         common = dict(phase=phase.id, phase_index=phase.index, n_episodes=phase.episodes,
                       n_demonstrations=phase.demonstrations, skill=phase.skill)
@@ -418,7 +493,8 @@ class Session:
         started = self._episodes[key]
         states = np.asarray(started["query_states"], dtype=float)
         actions = tuple(self._actions.get(key, []))
-        common.update(episode=slot.episode, query_states=states, actions=actions, guidance=started["guidance"])
+        common.update(episode=slot.episode, query_states=states, actions=actions, guidance=started["guidance"],
+                      guidance_modality=started.get("guidance_modality", "arrows+words"))
         if slot.kind == "demonstration":
             return Step("demonstration", **common, index=slot.index, state=states[slot.index])
         if slot.kind == "episode_end":
@@ -435,7 +511,7 @@ class Session:
         if key not in self._teaching_episodes:
             started = self._episodes[key]
             self._teaching_episodes[key] = self._new_teaching_episode(
-                SKILLS[started["skill"]], np.asarray(started["query_states"], dtype=float),
+                self.protocol.skills[started["skill"]], np.asarray(started["query_states"], dtype=float),
                 np.asarray(self._actions[key], dtype=float))
         return self._teaching_episodes[key]
 
@@ -448,7 +524,10 @@ class Session:
     # -- driving --------------------------------------------------------------------------------------
     def _expect(self, call: str, *kinds: str) -> _Slot:
         slot = self._slot
-        if slot.kind not in kinds:
+        if self._ended is not None:
+            raise SessionStateError(f"{call}: the session ended ({self._ended}); nothing more is recorded")
+        kind = self.protocol.steps[slot.index].kind if slot.kind == "step" else slot.kind
+        if kind not in kinds:
             raise SessionStateError(f"{call}: expected the current step to be {' or '.join(kinds)}, it is "
                                     f"{self._describe(slot)}")
         return slot
@@ -463,8 +542,15 @@ class Session:
         Returns:
             The next step.
         """
-        slot = self._expect("advance", "welcome", "consent", "instructions", "phase_intro", "reproduction")
-        if slot.kind == "consent":
+        slot = self._expect("advance", "welcome", "consent", "instructions", "phase_intro", "reproduction", "text",
+                            "information")
+        if slot.kind == "step":
+            step = self.protocol.steps[slot.index]
+            if step.kind == "consent":
+                self.log.append("consent_given", step=step.id)
+            else:
+                self.log.append("step_done", step=step.id, kind=step.kind)
+        elif slot.kind == "consent":
             self.log.append("consent_given")
         else:
             fields = {}
@@ -475,6 +561,84 @@ class Session:
             self.log.append("screen_done", screen=slot.kind, **fields)
         self._complete()
         return self.current_step()
+
+    def decline_consent(self) -> Step:
+        """"I do not agree": ends the session (logged; the participant is kept out of the analysis)."""
+        slot = self._expect("decline_consent", "consent")
+        step_id = self.protocol.steps[slot.index].id if slot.kind == "step" else None
+        self.log.append("consent_declined", step=step_id)
+        self._end("declined", step=step_id)
+        return self.current_step()
+
+    def submit_answers(self, answers) -> Step:
+        """Completes an eligibility, demographics or questionnaire step with its answers.
+
+        Args:
+            answers: {item id: answer}; validated against the step's items (``Item.check``).
+
+        Returns:
+            The next step; an "ended" step when an eligibility answer screens the participant out.
+        """
+        slot = self._expect("submit_answers", "eligibility", "demographics", "questionnaire")
+        step = self.protocol.steps[slot.index]
+        answers = step.check_answers(answers)
+        if step.kind == "eligibility":
+            eligible = all(item.is_eligible(answers[item.id]) for item in step.items)
+            self.log.append("step_done", step=step.id, kind=step.kind, answers=answers, eligible=eligible)
+            if not eligible:
+                self.log.append("screened_out", step=step.id, answers=answers)
+                self._end("ineligible", step=step.id)
+                return self.current_step()
+        else:
+            self.log.append("step_done", step=step.id, kind=step.kind, answers=answers)
+        self._complete()
+        return self.current_step()
+
+    def finish_video(self, watched_to_end: bool, plays: int = 1) -> Step:
+        """Completes a video step.
+
+        Args:
+            watched_to_end: whether the video played to its end at least once.
+            plays: how many times it was started (replays included).
+        """
+        slot = self._expect("finish_video", "video")
+        step = self.protocol.steps[slot.index]
+        if not isinstance(watched_to_end, bool):
+            raise TypeError(f"watched_to_end: expected a bool, got {type(watched_to_end).__name__}")
+        if isinstance(plays, bool) or not isinstance(plays, (int, np.integer)) or plays < 0:
+            raise ValueError(f"plays: expected a whole number >= 0, got {plays!r}")
+        if step.require_watched and not watched_to_end:
+            raise SessionStateError(f"finish_video: step {step.id!r} requires the video to be watched to the end")
+        self.log.append("step_done", step=step.id, kind=step.kind, watched_to_end=watched_to_end, plays=int(plays))
+        self._complete()
+        return self.current_step()
+
+    def withdraw(self, reason: str = "") -> Step:
+        """The participant withdraws, at any step: logged, then the protocol's data policy.
+
+        With ``withdrawal = "exclude"`` (the default) the log is kept and left out of the
+        analysis and the export; with ``"delete"`` the participant's log is deleted after the
+        study folder records the withdrawal. Either way the session cannot be resumed.
+        """
+        if self._ended is not None:
+            raise SessionStateError(f"withdraw: the session already ended ({self._ended})")
+        if not isinstance(reason, str):
+            raise TypeError(f"reason: expected text, got {type(reason).__name__}")
+        policy = self.protocol.withdrawal
+        at = self._describe(self._slot)
+        self.log.append("withdrawn", reason=reason, data=policy, at=at)
+        self._end("withdrawn", reason=reason, data=policy, step_reached=at)
+        if policy == "delete" and self.folder is not None:
+            path = self.folder.log_path(self.participant)
+            self.log.close()
+            path.unlink(missing_ok=True)
+        return self.current_step()
+
+    def _end(self, ending: str, **fields) -> None:
+        self._ended = ending
+        if self.folder is not None:
+            outcome = {"declined": "declined", "ineligible": "ineligible", "withdrawn": "withdrawn"}[ending]
+            self.folder.record_outcome(self.participant, outcome, **fields)
 
     def finish_practice(self, duration_s: float | None = None) -> Step:
         """Completes the practice step.
@@ -509,7 +673,7 @@ class Session:
                                     f"it was already recorded or is not reached yet")
         key = (slot.phase_index, slot.episode)
         started = self._episodes[key]
-        skill = SKILLS[started["skill"]]
+        skill = self.protocol.skills[started["skill"]]
         try:
             action = np.asarray(action, dtype=float).reshape(-1)
         except (TypeError, ValueError):
@@ -536,7 +700,8 @@ class Session:
                         response_time_s=time.monotonic() - self._entered_at, input=timings)
         self._actions.setdefault(key, []).append(action)
         self._complete()
-        return Feedback(slot.index, started["guidance"], optimal.copy() if started["guidance"] else None, action)
+        return Feedback(slot.index, started["guidance"], optimal.copy() if started["guidance"] else None, action,
+                        started.get("guidance_modality", "arrows+words"))
 
     def finish_episode(self, episode: TeachingEpisode | None = None) -> EpisodeResult:
         """Records the finished episode (what was learnt, its error and its reproduction) in the log.
@@ -577,7 +742,7 @@ class Session:
             raise ValueError(f"episode: expected a TeachingEpisode or None, got {type(episode).__name__}")
         logged = np.asarray(self._actions[key], dtype=float)
         duration = self.protocol.reproduction_duration_s
-        duration = SKILLS[started["skill"]].default_duration if duration is None else duration
+        duration = self.protocol.skills[started["skill"]].default_duration if duration is None else duration
         checks = (
             ("skill", episode.skill.key == started["skill"]
              and np.array_equal(episode.skill.theta, np.asarray(started["theta"], dtype=float)),

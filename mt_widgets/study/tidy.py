@@ -14,7 +14,10 @@ optimal_1, optimal_2, guidance_shown (0/1), time_to_first_input_s, drawing_durat
 (empty when unknown).
 
 Only completed episodes are exported; demonstrations of an episode still in progress are
-exported (they are data), marked by the absence of their episode's row.
+exported (they are data), marked by the absence of their episode's row. A participant who
+withdrew is left out (their withdrawal is in the study folder's ``_outcomes.jsonl``, and in
+their log when the protocol keeps it); so are those who declined consent or were screened out,
+who have no task data.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ import csv
 import json
 from pathlib import Path
 
-from .log import STUDY_FILE, read_events
+from .log import OUTCOME_FILE, STUDY_FILE, read_events
 
 EPISODE_COLUMNS = ("study", "participant", "group", "phase", "phase_index", "episode", "skill", "guidance",
                    "n_demonstrations", "teaching_error", "rho1", "rho2", "theta_hat", "reproduction_diverged",
@@ -37,6 +40,16 @@ def participant_logs(study_folder) -> list[Path]:
     """The participant log files of a study folder, sorted by name."""
     folder = Path(study_folder)
     return sorted(p for p in folder.glob("*.jsonl") if not p.name.startswith("_"))
+
+
+def excluded_participants(study_folder) -> set[str]:
+    """Participants the analysis leaves out: those who withdrew, declined consent or were screened
+    out (read from ``_outcomes.jsonl``; those who dropped out keep the data they gave)."""
+    path = Path(study_folder) / OUTCOME_FILE
+    if not path.exists():
+        return set()
+    records = [json.loads(line) for line in path.read_text(encoding="utf-8").splitlines() if line.strip()]
+    return {r["participant"] for r in records if r["outcome"] in ("withdrawn", "declined", "ineligible")}
 
 
 def read_study(study_folder) -> tuple[list[dict], list[dict]]:
@@ -59,9 +72,12 @@ def read_study(study_folder) -> tuple[list[dict], list[dict]]:
     study = json.loads((folder / STUDY_FILE).read_text(encoding="utf-8"))["study"]
     episodes: list[dict] = []
     demonstrations: list[dict] = []
+    excluded = excluded_participants(folder)
     for path in participant_logs(folder):
         events, _ = read_events(path)
-        if not events or events[0]["type"] != "session_started":
+        if not events or events[0]["type"] != "session_started" or events[0]["participant"] in excluded:
+            continue
+        if any(event["type"] in ("withdrawn", "consent_declined", "screened_out") for event in events):
             continue
         participant, group = events[0]["participant"], events[0]["group"]
         started = {}

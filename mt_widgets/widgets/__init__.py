@@ -22,14 +22,14 @@ from .guidance import GuidancePanel, explain_difference, legend_html
 from .progress import EffortProgress
 from .redraw import drawing_batch, repaint_on_new_view
 from .reproduction import ReproductionPlayer
-from .robots import SimArmPainter, UArmPainter, painter_for
+from .robots import RobotPainter, painter_for
 from .teaching import ConfirmedAction, TeachingCanvas, describe_action
 from .theme import DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, ArrowStyle, Theme, get_theme
 
 __all__ = [
     "Animation", "ArmView", "ArrowStyle", "ConfirmedAction", "DEFAULT_THEME", "DEMO_SKILLS", "DemoPage", "DemonstrationRecord", "EffortProgress",
     "EpisodeResult", "EpisodeWidget", "GuidancePanel", "LAYERS", "PAPER_THEME", "PAPER_UARM_THEME",
-    "ReproductionPlayer", "SimArmPainter", "THEMES", "TeachingCanvas", "Theme", "UArmPainter", "ViewTransform",
+    "ReproductionPlayer", "RobotPainter", "THEMES", "TeachingCanvas", "Theme", "ViewTransform",
     "describe_action", "draw_arrow", "drawing_batch", "explain_difference", "frame_times", "get_theme",
     "legend_html", "painter_for", "play_frames", "repaint_on_new_view", "retire", "sample_at",
     "stop_animations",

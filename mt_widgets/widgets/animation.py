@@ -2,7 +2,7 @@
 
 A Python loop with ``time.sleep`` would send one message per frame, block the kernel and
 drop frames; ipycanvas can instead queue frames in a ``hold_canvas`` batch, and the front
-end's canvas manager plays them, awaiting each ``sleep`` (DESIGN.md section 7).
+end's canvas manager plays them, awaiting each ``sleep`` (docs/design.md, "Widgets").
 
 That manager has ONE queue for every canvas of the page, and it cannot be told to skip
 what it holds: a 10 s reproduction sent as one message delays every other canvas's drawing

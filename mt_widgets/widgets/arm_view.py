@@ -35,11 +35,6 @@ LAYERS = ("background", "ghost", "robot", "arrows")
 TICK_FONT_PX = 12.0
 LABEL_FONT_PX = 13.0
 
-# Default arrow lengths, in world units per action unit: chosen so that a typical action
-# of each robot is a clearly visible arrow (sim: about 1-3 N -> 0.35-1 m; uArm: about
-# 1-4 cm of displacement per step -> 2-8 cm on screen). The scale bar shows the value.
-DEFAULT_ACTION_LENGTH = {"sim": 0.35, "uarm": 2.0}
-
 
 def default_canvas_size(xlim, ylim, max_width: int = 480, max_height: int = 480, margin: float = 34.0):
     """Canvas (width, height) in pixels that fits the world rectangle's aspect ratio."""
@@ -69,12 +64,12 @@ class ArmView:
     """A skill's workspace on a layered canvas, with a robot drawn in any state.
 
     Args:
-        skill: A ``mt_widgets.core.Skill`` (its ``workspace``, ``target``, ``units``,
-            ``action_units`` and ``robot`` are read).
+        skill: A ``mt_widgets.core.Skill``: what is drawn comes from ``skill.drawing()`` (view,
+            units, base, outline, arrow scale), ``skill.sketch(state)`` and ``skill.target_shape()``.
         width: Canvas width in pixels (default: fitted to the workspace's aspect ratio).
         height: Canvas height in pixels (default: fitted to the workspace's aspect ratio).
         theme: A ``Theme`` or a theme name (default Okabe-Ito).
-        action_length: World units of arrow per action unit (default per robot).
+        action_length: World units of arrow per action unit (default: the plant's drawing's).
         css_width: CSS width of the canvas element (e.g. "100%"); the canvas is then
             stretched by the browser and pointer events are still mapped to canvas pixels.
         target_label: the word written beside the skill's target, or None for none. "goal" by
@@ -88,12 +83,13 @@ class ArmView:
         self.target_label = target_label
         self.skill = skill
         self.theme = get_theme(theme)
-        box = skill.workspace
+        self.drawing = skill.drawing()
+        box = self.drawing.view
         auto_w, auto_h = default_canvas_size(box.xlim, box.ylim)
         width = auto_w if width is None else int(width)
         height = auto_h if height is None else int(height)
         if action_length is None:
-            action_length = DEFAULT_ACTION_LENGTH.get(skill.robot, 1.0)
+            action_length = self.drawing.action_length
         self.transform = ViewTransform(tuple(box.xlim), tuple(box.ylim), width, height, 34.0,
                                        float(action_length))
         layout = Layout(width=css_width, height="auto") if css_width else Layout()
@@ -176,7 +172,7 @@ class ArmView:
             canvas.fill_text(f"{y:g}", px - 5, py)
         canvas.text_align = "left"
         canvas.text_baseline = "top"
-        canvas.fill_text(f"positions in {self.skill.units}", 4, 4)
+        canvas.fill_text(f"positions in {self.drawing.units}", 4, 4)
         self._draw_workspace_outline(canvas)
         self._draw_target(canvas)
         self._draw_scale_bar(canvas)
@@ -185,49 +181,43 @@ class ArmView:
         return f"{round(css_px * self.text_scale)}px sans-serif"
 
     def _draw_workspace_outline(self, canvas) -> None:
-        sector = getattr(getattr(self.skill, "plant", None), "workspace", None)
-        if sector is None or not hasattr(sector, "r_min"):
-            return
-        # The uArm's reachable sector, so the user sees where states and motions can be.
+        outline = self.drawing.outline
         t = self.transform
-        centre = t.to_pixel([0.0, 0.0])
-        yaw = np.deg2rad(sector.max_yaw_deg)
-        canvas.stroke_style = self.theme.axes
-        canvas.line_width = 1.0
-        canvas.set_line_dash([3.0, 3.0])
-        canvas.begin_path()
-        # Canvas angles run clockwise (y down), so the bearing +yaw is the angle -yaw.
-        canvas.arc(float(centre[0]), float(centre[1]), sector.r_max * t.pixels_per_unit, -yaw, yaw, False)
-        canvas.arc(float(centre[0]), float(centre[1]), sector.r_min * t.pixels_per_unit, yaw, -yaw, True)
-        canvas.close_path()
-        canvas.stroke()
-        canvas.set_line_dash([])
-        canvas.fill_style = self.theme.arm
-        canvas.fill_circle(float(centre[0]), float(centre[1]), 4.0)
+        if outline:
+            # Where the plant can be (the uArm's reachable sector), so the user sees where states
+            # and motions can be.
+            canvas.stroke_style = self.theme.axes
+            canvas.line_width = 1.0
+            canvas.set_line_dash([3.0, 3.0])
+            for line in outline:
+                pixels = np.round(t.to_pixel(line), 1).tolist()
+                canvas.begin_path()
+                canvas.move_to(*pixels[0])
+                for point in pixels[1:]:
+                    canvas.line_to(*point)
+                canvas.stroke()
+            canvas.set_line_dash([])
+        self.painter.draw_base(canvas, t, self.theme)
 
     def _draw_target(self, canvas) -> None:
-        target = self.skill.target
-        if target is None:
+        shape = self.skill.target_shape()
+        if shape is None:
             return
         t, theme = self.transform, self.theme
         canvas.stroke_style = theme.target
         canvas.fill_style = theme.target
         canvas.line_width = 2.5
-        if hasattr(target, "direction"):
-            point, direction = np.asarray(target.point), np.asarray(target.direction)
-            reach = 4 * max(t.xlim[1] - t.xlim[0], t.ylim[1] - t.ylim[0])
-            (a, b), (c, d) = t.to_pixel([point - reach * direction, point + reach * direction])
-            canvas.save()
-            (l, bot), (r, top) = t.to_pixel([[t.xlim[0], t.ylim[0]], [t.xlim[1], t.ylim[1]]])
-            canvas.begin_path()
-            canvas.rect(l, top, r - l, bot - top)
-            canvas.clip()
-            canvas.stroke_line(a, b, c, d)
-            canvas.restore()
-            label_at = t.to_pixel(point + 0.0 * direction)
-        else:
-            label_at = t.to_pixel(target.point)
-            canvas.fill_circle(float(label_at[0]), float(label_at[1]), 7.0)
+        label_at = t.to_pixel(shape.label_at)
+        if shape.is_point:
+            x, y = t.to_pixel(shape.points[0])
+            canvas.fill_circle(float(x), float(y), 7.0)
+        elif len(shape.points) >= 2:
+            pixels = t.to_pixel(shape.points)
+            if len(pixels) == 2:
+                (a, b), (c, d) = pixels
+                canvas.stroke_line(float(a), float(b), float(c), float(d))
+            else:
+                canvas.stroke_lines(np.round(pixels, 1).tolist())
         if self.target_label:
             canvas.font = self._font(LABEL_FONT_PX)
             canvas.text_align = "left"
@@ -249,13 +239,13 @@ class ArmView:
         canvas.font = self._font(TICK_FONT_PX)
         canvas.text_align = "right"
         canvas.text_baseline = "bottom"
-        canvas.fill_text(f"arrows: {step:g} {self.skill.action_units}", t.width - 12, y - 5)
+        canvas.fill_text(f"arrows: {step:g} {self.drawing.action_units}", t.width - 12, y - 5)
 
     @property
     def scale_text(self) -> str:
         """The arrow scale in words, e.g. "1 N = 42 px (0.0238 N per pixel)"."""
         per_pixel = 1.0 / self.transform.pixels_per_action
-        units = self.skill.action_units
+        units = self.drawing.action_units
         return f"1 {units} = {self.transform.pixels_per_action:.0f} px ({per_pixel:.3g} {units} per pixel)"
 
     # -- the robot -----------------------------------------------------------------------------------

@@ -37,23 +37,45 @@ def draw_arrow(canvas, start, end, style: ArrowStyle) -> bool:
     head = min(style.head, 0.6 * length)
     # The shaft stops at the base of the head so a thick line does not poke through the tip.
     bx, by = x1 - ux * head * 0.9, y1 - uy * head * 0.9
-    canvas.line_width = style.width
-    canvas.line_cap = "round"
-    canvas.set_line_dash(list(style.dash))
-    canvas.begin_path()
-    canvas.move_to(round(x0, 1), round(y0, 1))
-    canvas.line_to(round(bx, 1), round(by, 1))
-    canvas.stroke()
-    canvas.set_line_dash([])
     half = head * 0.45
     # Head: tip plus two corners perpendicular to the shaft.
     left = (x1 - ux * head - uy * half, y1 - uy * head + ux * half)
     right = (x1 - ux * head + uy * half, y1 - uy * head - ux * half)
-    canvas.begin_path()
-    canvas.move_to(round(x1, 1), round(y1, 1))
-    canvas.line_to(round(left[0], 1), round(left[1], 1))
-    canvas.line_to(round(right[0], 1), round(right[1], 1))
-    canvas.close_path()
+    canvas.line_cap = "round"
+    if style.outline:
+        # The outline first, a little wider, dashed like the shaft: the arrow over it keeps a
+        # light edge, while an arrow beneath still shows through the dash gaps.
+        canvas.stroke_style = style.outline
+        canvas.line_width = style.width + 2 * style.outline_width
+        canvas.set_line_dash(list(style.dash))
+        _shaft(canvas, x0, y0, bx, by)
+        canvas.set_line_dash([])
+        canvas.line_width = 2 * style.outline_width
+        canvas.line_join = "round"
+        _head(canvas, (x1, y1), left, right)
+        canvas.stroke()
+        canvas.stroke_style = style.color
+    canvas.line_width = style.width
+    canvas.set_line_dash(list(style.dash))
+    _shaft(canvas, x0, y0, bx, by)
+    canvas.set_line_dash([])
+    _head(canvas, (x1, y1), left, right)
     canvas.fill()
     canvas.global_alpha = 1.0
     return True
+
+
+def _shaft(canvas, x0, y0, x1, y1) -> None:
+    canvas.begin_path()
+    canvas.move_to(round(x0, 1), round(y0, 1))
+    canvas.line_to(round(x1, 1), round(y1, 1))
+    canvas.stroke()
+
+
+def _head(canvas, tip, left, right) -> None:
+    """Outline the head's triangle as the current path (the caller fills or strokes it)."""
+    canvas.begin_path()
+    canvas.move_to(round(tip[0], 1), round(tip[1], 1))
+    canvas.line_to(round(left[0], 1), round(left[1], 1))
+    canvas.line_to(round(right[0], 1), round(right[1], 1))
+    canvas.close_path()

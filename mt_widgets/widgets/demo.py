@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from ipywidgets import HTML, Box, Button, Checkbox, HBox, Layout, ToggleButtons, VBox
 
-from mt_widgets.core import SKILLS
+from mt_widgets.core import SKILLS, Skill
 from mt_widgets.core.validation import as_bool
 
 from .animation import retire
@@ -32,26 +32,55 @@ WELCOME = (
 )
 
 
+def _key_of(skill) -> str:
+    return skill if isinstance(skill, str) else skill.key
+
+
+def _chooser_skills(skills) -> dict[str, Skill]:
+    """{key: Skill} from (label, Skill or key of SKILLS) pairs, checked."""
+    chosen: dict[str, Skill] = {}
+    for entry in skills:
+        if not (isinstance(entry, tuple) and len(entry) == 2 and isinstance(entry[0], str)):
+            raise ValueError(f"skills: expected (label, skill) pairs, got {entry!r}")
+        skill = entry[1]
+        if isinstance(skill, str):
+            skill = SKILLS[skill]  # a KeyError naming the known skills
+        if not isinstance(skill, Skill):
+            raise TypeError(f"skills: expected a Skill or a key of SKILLS in {entry!r}, got {type(skill).__name__}")
+        if skill.key in chosen:
+            raise ValueError(f"skills: expected distinct skill keys, got {skill.key!r} twice")
+        chosen[skill.key] = skill
+    if not chosen:
+        raise ValueError("skills: expected at least one (label, skill) pair, got none")
+    return chosen
+
+
 class DemoPage(VBox):
     """A welcome line, a skill chooser, a guidance switch, an episode and a "try again" button.
 
     Args:
-        skill: Key of the first skill shown (one of ``DEMO_SKILLS``).
+        skill: Key of the first skill shown (one of ``skills``; default the first).
         guidance: Whether guidance starts on.
         seed: Seed of the first query states; "Try again with new states" adds one.
+        skills: (label, skill) pairs for the chooser, a skill being a ``Skill`` (a user's own,
+            on any plant) or a key of ``SKILLS``; default the paper's four (``DEMO_SKILLS``).
         episode_options: Further keyword arguments for every ``EpisodeWidget`` (e.g. ``duration``).
     """
 
-    def __init__(self, skill: str = "sim-point", guidance: bool = True, seed: int = 0, **episode_options):
-        keys = [key for _, key in DEMO_SKILLS]
+    def __init__(self, skill: str | None = None, guidance: bool = True, seed: int = 0, skills=DEMO_SKILLS,
+                 **episode_options):
+        self.skills = _chooser_skills(skills)
+        keys = list(self.skills)
+        skill = keys[0] if skill is None else skill
         if skill not in keys:
             raise ValueError(f"skill: expected one of {keys}, got {skill!r}")
+        labels = {_key_of(value): label for label, value in skills}
         self.seed = int(seed)
         self.episode_options = episode_options
         self.errors: list[tuple[str, bool, float]] = []
-        self.skill_chooser = ToggleButtons(options=list(DEMO_SKILLS), value=skill,
+        self.skill_chooser = ToggleButtons(options=[(labels[key], key) for key in keys], value=skill,
                                            style={"button_width": "150px"},
-                                           tooltips=[SKILLS[key].title for key in keys])
+                                           tooltips=[self.skills[key].title for key in keys])
         self.guidance_switch = Checkbox(value=as_bool("guidance", guidance),
                                         description="Guidance: show the best arrow after each of mine", indent=False,
                                         layout=Layout(width="auto"))
@@ -80,7 +109,8 @@ class DemoPage(VBox):
             # kiosk page may run for hours), once the browser has played what it holds for them.
             self.episode.next_actions.children = []
             retire(self.episode)
-        self.episode = EpisodeWidget(self.skill_chooser.value, seed=self.seed, guidance=self.guidance_switch.value,
+        self.episode = EpisodeWidget(self.skills[self.skill_chooser.value], seed=self.seed,
+                                     guidance=self.guidance_switch.value,
                                      on_finished=self._on_finished, **self.episode_options)
         self.episode.next_actions.children = [self.result_line, self.new_states_button]
         self.episode_slot.children = [self.episode]

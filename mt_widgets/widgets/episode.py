@@ -26,6 +26,7 @@ from ipywidgets import HTML, Button, HBox, Layout, VBox
 from traitlets import Float, Int, List, Unicode
 
 from mt_widgets.core import DEFAULT_LAMBDA, SKILLS, Skill, TeachingEpisode
+from mt_widgets.core.guidance import guidance_parts
 from mt_widgets.core.validation import as_bool, as_float_array, as_positive
 
 from .callbacks import Callbacks
@@ -151,7 +152,10 @@ class EpisodeWidget(VBox):
         query_states: (N, state_dim) states to demonstrate at; default
             ``skill.query_states(seed=seed)`` (N = S, the teaching dimension).
         seed: Seed for the default query states.
-        guidance: Show the optimal arrow and its explanation after each demonstration.
+        guidance: Show guidance after each demonstration (how: ``guidance_modality``).
+        guidance_modality: what guidance shows: "arrows+words" (the optimal arrow beside the
+            user's, and words on how they differ), "arrows" (the arrows only, as in the paper's
+            study), "words" (the words only) or "none" (``mt_widgets.core.guidance``).
         lam: The learner's ridge parameter (also used for the optimal actions).
         theme: A ``Theme`` or theme name ("okabe-ito", "paper", "paper-uarm").
         duration: Reproduction length in seconds (default ``skill.default_duration``).
@@ -182,7 +186,9 @@ class EpisodeWidget(VBox):
                  on_demonstration: Callable | None = None, on_finished: Callable | None = None,
                  title: str | None = None, fps: float = 60.0, width=None, height=None, css_width=None,
                  action_length=None, target_label: str | None = "goal", show_description: bool = True,
-                 show_outcome: bool = True):
+                 show_outcome: bool = True, guidance_modality: str = "arrows+words"):
+        self.guidance_arrows, self.guidance_words = guidance_parts(guidance_modality)
+        self.guidance_modality = guidance_modality
         if isinstance(skill, TeachingEpisode):
             for name, value in (("query_states", query_states), ("duration", duration)):
                 if value is not None:
@@ -197,7 +203,8 @@ class EpisodeWidget(VBox):
                                       seed=None if query_states is not None else seed, lam=lam, duration=duration)
         #: The ``TeachingEpisode`` shown: the science of this episode lives there.
         self.episode = episode
-        self.guidance = as_bool("guidance", guidance)
+        # Guidance that shows nothing is no guidance: the episode does not stop after each arrow.
+        self.guidance = as_bool("guidance", guidance) and (self.guidance_arrows or self.guidance_words)
         self.show_ghost = as_bool("ghost", ghost)
         show_description = as_bool("show_description", show_description)
         self.episode_index = int(episode_index)
@@ -404,8 +411,11 @@ class EpisodeWidget(VBox):
         last = index + 1 >= len(self.query_states)
         if self.guidance:
             self.teaching._set_locked(True)
-            self.teaching.show_guidance(self.optimal[index])
-            self.guidance_panel.show(confirmed.action, self.optimal[index], exact=self.exact)
+            if self.guidance_arrows:
+                self.teaching.show_guidance(self.optimal[index])
+            if self.guidance_words:
+                self.guidance_panel.show(confirmed.action, self.optimal[index], exact=self.exact,
+                                         legend=self.guidance_arrows)
             self.next_button.description = "Finish and watch" if last else "Next state"
             self.next_button.layout.display = None
             self.phase = "guidance"

@@ -65,11 +65,13 @@ class GuidancePanel(HTML):
         self.units = units
         super().__init__(value="")
 
-    def show(self, action, optimal, exact: bool = True) -> None:
-        """Explain the difference between ``action`` and ``optimal`` (both (2,))."""
-        note = "" if as_bool("exact", exact) else ("<br><small>With fewer query states than features no demonstration teaches the "
+    def show(self, action, optimal, exact: bool = True, legend: bool = True) -> None:
+        """Explain the difference between ``action`` and ``optimal`` (both (2,)); ``legend``: with the
+        two arrows' legend (when the arrows are drawn too)."""
+        note = "" if as_bool("exact", exact) else ("<br><small>With fewer query states than features no "
+                                                   "demonstration teaches the "
                                  "skill exactly; the optimal arrow is the least-error one.</small>")
-        self.value = (f"<div>{legend_html(self.theme)}</div>"
+        self.value = (f"<div>{legend_html(self.theme) if legend else ''}</div>"
                       f"<div style='margin-top:4px'>{explain_difference(action, optimal, self.units)}</div>{note}")
 
     def hide(self) -> None:

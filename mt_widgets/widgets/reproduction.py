@@ -121,7 +121,7 @@ class ReproductionPlayer(VBox):
             painter.begin_frames(canvas, theme)
 
         ghost_fill = _with_alpha(theme.ghost, 0.45)
-        robot_fill = theme.end_effector if self.skill.robot == "sim" else theme.uarm_state
+        robot_fill = painter.marker_fill(theme)
 
         def draw_frame(canvas, index):
             if ghost_pixels is not None:

@@ -294,10 +294,12 @@ class TeachingCanvas(VBox):
         style = theme.rubber_band if rubber_band else theme.user_arrow
 
         def paint(canvas):
-            if optimal is not None:
-                draw_arrow(canvas, start, optimal, theme.optimal_arrow)
+            # The optimal arrow last: dashed and outlined, it stays visible on the user's arrow
+            # when the two are aligned and it is the shorter, and the user's shows in its gaps.
             if user is not None:
                 draw_arrow(canvas, start, user, style)
+            if optimal is not None:
+                draw_arrow(canvas, start, optimal, theme.optimal_arrow)
 
         view.show(paint, "arrows")
 

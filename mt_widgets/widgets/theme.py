@@ -34,6 +34,9 @@ class ArrowStyle:
         dash: Canvas line-dash pattern in pixels; empty for a solid line.
         head: Length of the arrow head in pixels.
         alpha: Opacity in [0, 1].
+        outline: CSS colour of a thin outline around shaft and head, or None: it keeps an
+            arrow drawn over another one of a similar colour readable.
+        outline_width: Outline width in pixels on each side.
     """
 
     color: str
@@ -41,6 +44,8 @@ class ArrowStyle:
     dash: tuple[float, ...] = ()
     head: float = 12.0
     alpha: float = 1.0
+    outline: str | None = None
+    outline_width: float = 1.5
 
 
 @dataclass(frozen=True)
@@ -53,10 +58,9 @@ class Theme:
     axes: str = "#7F7F7F"
     text: str = "#222222"
     arm: str = "#4D4D4D"
-    joint: str = "#FFFFFF"
     end_effector: str = OKABE_ITO["yellow"]
     end_effector_outline: str = "#000000"
-    uarm_state: str = "#000000"
+    state_dot: str = "#000000"
     target: str = OKABE_ITO["vermillion"]
     ghost: str = OKABE_ITO["reddish_purple"]
     ghost_alpha: float = 0.35
@@ -64,7 +68,7 @@ class Theme:
     diverged: str = OKABE_ITO["vermillion"]
     user_arrow: ArrowStyle = field(default_factory=lambda: ArrowStyle(OKABE_ITO["blue"], 3.5))
     optimal_arrow: ArrowStyle = field(
-        default_factory=lambda: ArrowStyle(OKABE_ITO["orange"], 3.5, dash=(9.0, 5.0)))
+        default_factory=lambda: ArrowStyle(OKABE_ITO["orange"], 3.5, dash=(9.0, 5.0), outline="#FFFFFF"))
     rubber_band: ArrowStyle = field(
         default_factory=lambda: ArrowStyle(OKABE_ITO["blue"], 2.5, alpha=0.6))
     velocity_arrow: ArrowStyle = field(

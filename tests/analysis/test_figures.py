@@ -5,16 +5,16 @@ import json
 import numpy as np
 import pytest
 
-from mt_widgets.core import SKILLS
-from mt_widgets.study.figures import (
+from mt_widgets.analysis.figures import (
     plot_changes,
     plot_error_by_episode,
     plot_trajectories,
     save_figure,
     teaching_report,
 )
-from mt_widgets.study.in_silico import run_in_silico
-from mt_widgets.study.statistics import participant_changes
+from mt_widgets.analysis.statistics import participant_changes
+from mt_widgets.core import SKILLS
+from mt_widgets.in_silico.engine import run_in_silico
 
 
 @pytest.fixture(scope="module")
@@ -96,7 +96,8 @@ def test_the_report_shows_the_participants_own_errors_and_arrows(study, tmp_path
     figure = teaching_report(study.episodes, study.demonstrations, participant)
     mine = study.episodes[study.episodes.participant == participant]
     assert _line(figure, "participant-error").get_ydata() == pytest.approx(mine.teaching_error.to_numpy())
-    demos = study.demonstrations[(study.demonstrations.participant == participant) & (study.demonstrations.phase == "P1")]
+    demos = study.demonstrations
+    demos = demos[(demos.participant == participant) & (demos.phase == "P1")]
     u = demos[["action_1", "action_2"]].to_numpy()
     o = demos[["optimal_1", "optimal_2"]].to_numpy()
     ratio = np.mean(np.linalg.norm(u, axis=1) / np.linalg.norm(o, axis=1))

@@ -6,7 +6,7 @@ and the ``browser`` fixture of ``tests/conftest.py``.
 Each server runs in its own process group with its own JUPYTER_* directories in a
 temporary folder and is ended (the whole group) at teardown. Pages may only talk to
 127.0.0.1: everything else is aborted (Voila asks a CDN for a font). A missing Chromium or
-Playwright fails the tests, never skips them (BROWSER_TESTING.md).
+Playwright fails the tests, never skips them (docs/browser-testing.md).
 """
 
 from __future__ import annotations
@@ -20,12 +20,13 @@ from browser_support import BIN, Server, free_port, local_page, voila
 
 PAGES = Path(__file__).parent / "pages"
 DEMO = Path(__file__).resolve().parents[2] / "notebooks" / "demo.ipynb"      # the visitors' page, served as is
+USER_PLANT = Path(__file__).resolve().parents[1] / "user_plant.py"             # tutorial 05's plant, for a page
 
 
 def _copy_pages(root: Path) -> None:
     notebooks = root / "notebooks"
     notebooks.mkdir(parents=True, exist_ok=True)
-    for page in [*PAGES.glob("*.ipynb"), DEMO]:
+    for page in [*PAGES.glob("*.ipynb"), DEMO, USER_PLANT]:
         shutil.copy(page, notebooks / page.name)
 
 

@@ -24,7 +24,7 @@ def sim_url(**options) -> str:
 
 def device_of(arm: SwiftPro) -> SimulatedSwiftPro:
     """The simulated arm behind a connected SwiftPro on a uarm-sim:// port."""
-    return arm._ser.device
+    return arm._link.serial.device
 
 
 def sent_lines(arm: SwiftPro) -> list[str]:

@@ -122,9 +122,9 @@ def test_unknown_command_on_3x_times_out_then_the_link_recovers():
 
 def test_the_21st_queued_command_raises_buffer_full():
     with SwiftPro(sim_url(motion_scale=1), max_in_flight=20 + 1, timeout=0.5) as arm:
-        pendings = [arm._submit("G1", ("X", 201 + n), ("Y", 0), ("Z", 100), ("F", 1)) for n in range(21)]
+        pendings = [arm._link.submit("G1", ("X", 201 + n), ("Y", 0), ("Z", 100), ("F", 1)) for n in range(21)]
         with pytest.raises(SwiftProBufferFull):
-            arm._wait(pendings[-1], 0.5)
+            arm._link.wait(pendings[-1], 0.5)
         arm._request("S1100")  # clear the planner
         assert arm.position()[2] == pytest.approx(100.0)
 
@@ -402,7 +402,7 @@ def test_stop_does_not_wait_for_a_request_slot():
     with SwiftPro(sim_url(motion_scale=1), timeout=1.0) as arm:
         worker, errors = _move_in_thread(arm, 300.0, 0.0, 100.0, speed=50.0)  # 2 s
         device_of(arm).drop_next_reply()
-        arm._submit("P2220")
+        arm._link.submit("P2220")
         arm.stop()  # must neither wait for a slot nor raise
         worker.join(timeout=5.0)
         assert not worker.is_alive() and isinstance(errors[0], SwiftProStopped)
@@ -428,7 +428,7 @@ def test_a_move_begun_before_a_stop_is_refused_even_if_its_checks_start_after_it
 
 def test_on_firmware_4_2_stop_pauses_and_resume_ends_the_cut_move_before_any_new_one():
     # 4.0-4.4 has no S1100: stop is S1000 V0, a pause; the cut move waits at the head of the
-    # firmware's queue and every G/M command queues behind it (UARM_PROTOCOL.md, "Commands").
+    # firmware's queue and every G/M command queues behind it (docs/uarm-protocol.md, "Commands").
     with SwiftPro(sim_url(version="4.2", motion_scale=1), timeout=1.0) as arm:
         assert arm.firmware_version == (4, 2, 0)
         worker, errors = _move_in_thread(arm, 300.0, 0.0, 100.0, speed=50.0)  # 2 s
@@ -455,17 +455,17 @@ def test_a_stop_just_as_resume_un_pauses_the_arm_wins():
         worker, errors = _move_in_thread(arm, 300.0, 0.0, 100.0, speed=50.0)
         arm.stop()
         worker.join(timeout=5.0)
-        submit = arm._submit
+        submit = arm._link.submit
 
         def stop_first(command, *params, **options):
             if command == "S1000" and params == (("V", 1),):
                 arm.stop()  # Stop pressed just before the un-pause goes out
             return submit(command, *params, **options)
 
-        arm._submit = stop_first
+        arm._link.submit = stop_first
         with pytest.raises(SwiftProStopped):
             arm.resume()
-        arm._submit = submit
+        arm._link.submit = submit
         lines = sent_lines(arm)
         last_pause = max(i for i, line in enumerate(lines) if line.endswith("S1000 V0"))
         assert not any(line.endswith("S1000 V1") for line in lines[last_pause:])
@@ -486,32 +486,32 @@ def test_reconnecting_after_a_link_failure_closes_the_old_port_first():
     arm = SwiftPro(sim_url(name="reconnect"), timeout=1.0)  # an exclusive port, as a real one
     arm.connect()
     try:
-        old_port, old_reader = arm._ser, arm._reader
+        old_port, old_reader = arm._link.serial, arm._link.reader
         device_of(arm).disconnect_on_command()
         with pytest.raises(SwiftProDisconnected):
             arm.position()
         assert not arm.connected
         arm.connect()  # the old port, still open, would make this SwiftProPortBusy
         assert arm.connected and arm.position() == (200.0, 0.0, 100.0)
-        assert not old_port.is_open and not old_reader.is_alive() and arm._ser is not old_port
+        assert not old_port.is_open and not old_reader.is_alive() and arm._link.serial is not old_port
     finally:
         arm.close()
 
 
 # ----------------------------------------------------------------------------- argument checks
 def test_arguments_take_any_real_number_but_not_a_bool():
-    with pytest.raises(ValueError, match=r"timeout must be a positive.*seconds, got True"):
+    with pytest.raises(ValueError, match=r"timeout: expected a real number, got bool True"):
         SwiftPro(sim_url(), timeout=True)
-    with pytest.raises(ValueError, match=r"max_in_flight must be an integer in 1\.\.32, got True"):
+    with pytest.raises(ValueError, match=r"max_in_flight: expected a whole number, got bool True"):
         SwiftPro(sim_url(), max_in_flight=True)
     with SwiftPro(sim_url(), timeout=np.float32(1.0), max_in_flight=np.int64(2)) as arm:
         arm.move_to(np.float32(210.0), np.float64(5.0), np.int32(80), speed=np.float32(50.0))
         assert arm.position() == pytest.approx((210.0, 5.0, 80.0))
         arm.beep(np.float32(440.0), np.int64(50))
         arm.set_position_reports(np.float32(0.5))
-        with pytest.raises(UnsafeMoveError, match=r"x must be a finite real number of mm.*got True \(bool\)"):
+        with pytest.raises(UnsafeMoveError, match=r"x: expected a finite real number of mm.*got True \(bool\)"):
             arm.move_to(True, 0.0)
-        with pytest.raises(UnsafeMoveError, match=r"speed must be .* in \[1\.0, 100\.0\], got False"):
+        with pytest.raises(UnsafeMoveError, match=r"speed: expected .* in \[1\.0, 100\.0\], got False"):
             arm.move_to(210.0, 0.0, speed=False)
         with pytest.raises(ValueError, match="frequency_hz"):
             arm.beep(True, 100)

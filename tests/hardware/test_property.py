@@ -54,7 +54,7 @@ def check_sent(lines: list[str]) -> int:
 
 
 def rollout_cm(theta: list[float], r1: float, r2: float, steps: int = 15) -> list[tuple[float, float]]:
-    """A uArm-style learnt skill r <- r + Theta @ (r1, r2, 1), in cm (DESIGN.md section 3)."""
+    """A uArm-style learnt skill r <- r + Theta @ (r1, r2, 1), in cm (docs/design.md, "The uArm skills")."""
     th = np.asarray(theta).reshape(2, 3)
     r = np.array([r1, r2])
     out = []

@@ -98,16 +98,16 @@ def test_envelope_checks_take_numpy_numbers_and_refuse_bools_naming_argument_ran
     env = SafetyEnvelope()
     assert env.check_point(np.float32(200.0), np.int64(0), np.float32(80.0)) == (200.0, 0.0, 80.0)
     assert env.check_speed(np.float32(50.0)) == 50.0
-    with pytest.raises(UnsafeMoveError, match=r"x must be a finite real number of mm.*got True \(bool\)") as info:
+    with pytest.raises(UnsafeMoveError, match=r"x: expected a finite real number of mm.*got True \(bool\)") as info:
         env.check_point(True, 0.0, 80.0)
     assert info.value.coordinate == "x"
-    with pytest.raises(UnsafeMoveError, match=r"z must be .*got '80'"):
+    with pytest.raises(UnsafeMoveError, match=r"z: expected .*got '80'"):
         env.check_point(200.0, 0.0, "80")
-    with pytest.raises(UnsafeMoveError, match=r"speed must be .*\[1\.0, 20\.0\], got True"):
+    with pytest.raises(UnsafeMoveError, match=r"speed: expected .*\[1\.0, 20\.0\], got True"):
         env.check_speed(True, entering=True)
     with pytest.raises(UnsafeMoveError, match=r"z = 20\.000 mm .*z must be in \[40\.0, 120\.0\] mm"):
         env.check_point(200.0, 0.0, 20.0)
-    with pytest.raises(ValueError, match=r"max_step_mm must be a finite real number .*got True"):
+    with pytest.raises(ValueError, match=r"max_step_mm: expected a finite real number .*got True"):
         SafetyEnvelope(max_step_mm=True)
     assert SafetyEnvelope(max_step_mm=np.float32(150.0)).max_step_mm == 150.0
 

@@ -1,4 +1,4 @@
-"""The simulated arm (device model, no serial) behaves as UARM_PROTOCOL.md's last section says."""
+"""The simulated arm (device model, no serial) behaves as docs/uarm-protocol.md's last section says."""
 
 from __future__ import annotations
 

@@ -23,9 +23,15 @@ def protocol_file(tmp_path):
 
 
 def click_primary(app):
-    buttons = [w for w in app.body.children if hasattr(w, "on_click")]
-    assert len(buttons) == 1, buttons
-    buttons[0].click()
+    """Clicks the page's one primary button (a consent page also offers "I do not agree")."""
+    found, pending = [], list(app.body.children)
+    while pending:
+        widget = pending.pop()
+        if isinstance(widget, Button) and widget.button_style == "primary":
+            found.append(widget)
+        pending += list(getattr(widget, "children", ()))
+    assert len(found) == 1, found
+    found[0].click()
 
 
 def act(app):

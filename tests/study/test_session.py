@@ -7,8 +7,15 @@ import numpy as np
 import pytest
 
 from mt_widgets import SKILLS, analyse_demonstrations
-from mt_widgets.study import (DEMONSTRATION_COLUMNS, EPISODE_COLUMNS, Session, SessionStateError, StudyFolder,
-                              export_study, read_study)
+from mt_widgets.study import (
+    DEMONSTRATION_COLUMNS,
+    EPISODE_COLUMNS,
+    Session,
+    SessionStateError,
+    StudyFolder,
+    export_study,
+    read_study,
+)
 
 from .scripted import run, scripted_action, short_protocol
 
@@ -75,7 +82,8 @@ def test_the_optimal_action_shown_is_the_one_that_teaches_theta(study):
 
 def test_calls_out_of_turn_are_refused(study):
     session = Session.start(study, "P01")
-    with pytest.raises(SessionStateError, match="submit_demonstration: expected the current step to be demonstration, it is welcome"):
+    expected = "submit_demonstration: expected the current step to be demonstration, it is welcome"
+    with pytest.raises(SessionStateError, match=expected):
         session.submit_demonstration([1.0, 0.0])
     with pytest.raises(SessionStateError, match="finish_episode"):
         session.finish_episode()

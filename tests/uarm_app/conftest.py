@@ -2,10 +2,18 @@
 
 from __future__ import annotations
 
+import shutil
+from pathlib import Path
+
 import pytest
 
-from mt_widgets.apps.uarm_bridge import UArmBridge
+# Chromium (``browser``) and ``artifacts`` are the shared fixtures of tests/conftest.py.
+from browser_support import local_page, voila
 from mt_widgets.hardware import SwiftPro
+from mt_widgets.hardware.bridge import UArmBridge
+
+# The canvas recorder of the kernel-free widget tests, reused rather than copied.
+from widgets.conftest import recorder  # noqa: F401
 
 from .helpers import sim_url
 
@@ -20,15 +28,6 @@ def arm():
 def bridge(arm):
     return UArmBridge(arm)
 
-
-# The canvas recorder of the kernel-free widget tests, reused rather than copied.
-from widgets.conftest import recorder  # noqa: E402,F401
-
-# Chromium (``browser``) and ``artifacts`` are the shared fixtures of tests/conftest.py.
-import shutil  # noqa: E402
-from pathlib import Path  # noqa: E402
-
-from browser_support import local_page, voila  # noqa: E402
 
 PAGES = Path(__file__).parent / "pages"
 

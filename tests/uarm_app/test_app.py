@@ -10,10 +10,10 @@ import pytest
 from ipywidgets import Button
 
 from mt_widgets.apps.study_app import participant_texts
-from mt_widgets.apps.uarm_bridge import arm_to_plant_cm
 from mt_widgets.apps.uarm_study import UArmEpisodePage, UArmStudyApp, UArmTeaching
 from mt_widgets.core import Trajectory
 from mt_widgets.hardware import SwiftPro
+from mt_widgets.hardware.bridge import arm_to_plant_cm
 
 from .helpers import arm_is_moving, device_of, is_move, moves, received, sim_url, wait_until
 
@@ -55,7 +55,7 @@ def teaching():
 def test_each_query_state_is_shown_on_the_arm_and_the_reproduction_played_on_it(teaching):
     page = UArmEpisodePage(teaching, "uarm-point", seed=0, guidance=True)
     episode = page.episode
-    for index, state in enumerate(episode.query_states):
+    for state in episode.query_states:
         teaching.wait(5)
         np.testing.assert_allclose(arm_to_plant_cm(teaching.bridge.position_mm()), state, atol=1e-3)
         assert teaching.panel.position_label.value == "arm at x = {:.1f} mm, y = {:.1f} mm".format(*state * 10)

@@ -9,10 +9,18 @@ import time
 import numpy as np
 import pytest
 
-from mt_widgets.apps.uarm_bridge import (MM_PER_CM, UArmBridge, arm_to_plant_cm, connect_arm, describe_error,
-                                         is_simulated, plant_to_arm_mm, polar_waypoints)
 from mt_widgets.core import SKILLS, Trajectory
 from mt_widgets.hardware import TEACHING_HEIGHT_MM, SwiftPro, SwiftProDisconnected, SwiftProStopped, UnsafeMoveError
+from mt_widgets.hardware.bridge import (
+    MM_PER_CM,
+    UArmBridge,
+    arm_to_plant_cm,
+    connect_arm,
+    describe_error,
+    is_simulated,
+    plant_to_arm_mm,
+    polar_waypoints,
+)
 
 from .helpers import arm_is_moving, device_of, is_move, is_stop, moves, received, sim_url, wait_until
 
@@ -247,7 +255,7 @@ def test_the_bridge_checks_its_arguments(arm):
 
 # ----------------------------------------------------------------------------- stop always wins
 class _StopRightAfterTheCheck(threading.Event):
-    """The bridge's stop flag, which presses Stop right after a job read it as clear: the
+    """The stop switch's held flag, which presses Stop right after a job read it as clear: the
     window between a job's check and its move being sent."""
 
     def __init__(self, bridge):
@@ -264,7 +272,7 @@ class _StopRightAfterTheCheck(threading.Event):
 
 def test_a_stop_right_after_a_job_checked_the_flag_still_keeps_its_move_from_being_sent(bridge, arm):
     flag = _StopRightAfterTheCheck(bridge)
-    bridge._stop_requested = flag
+    arm.stop_switch._held = flag
     flag.armed = True
     with pytest.raises(SwiftProStopped):
         bridge.show_state([25.0, 5.0])

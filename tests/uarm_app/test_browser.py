@@ -7,10 +7,9 @@ import re
 import numpy as np
 import pytest
 
+from browser.helpers import OKABE, status, to_page, wait_for_color, wait_for_status
 from mt_widgets import SKILLS, RidgeLearner
 from mt_widgets.core import DEFAULT_LAMBDA
-
-from browser.helpers import OKABE, status, to_page, wait_for_color, wait_for_status
 
 # The page's screen: 600 x 400 mm at 1200 x 800 px (2 px per mm, 20 px per cm), the arm's base
 # at canvas pixel (600, 690), its +X pointing up the screen.

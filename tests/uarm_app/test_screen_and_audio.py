@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from ipywidgets import Audio
 
-from mt_widgets.apps.uarm_audio import (EPISODE_END_HZ, HIGH_HZ, LOW_HZ, AudioCues, effort_tone_hz, tone_wav)
-from mt_widgets.apps.uarm_bridge import UArmBridge
+from mt_widgets.apps.uarm_audio import EPISODE_END_HZ, HIGH_HZ, LOW_HZ, AudioCues, effort_tone_hz, tone_wav
 from mt_widgets.apps.uarm_screen import SCREEN_CLASS, ScreenGeometry, fit_episode
+from mt_widgets.hardware.bridge import UArmBridge
 from mt_widgets.widgets import EpisodeWidget
 
 from .helpers import device_of

@@ -38,7 +38,15 @@ def test_line_target_and_uarm_workspace_are_drawn(recorder):
                 and np.linalg.norm(b - a) > 20:
             on_line.append((a, b))
     assert on_line, "a long stroke along the target line r1 = 2 r2"
-    assert any(name == "arc" for name, _ in background), "the uArm's reachable sector is outlined"
+    # The uArm's reachable sector is outlined: a path along both of its arcs, within its bearings.
+    sector = skill.plant.workspace
+    outline = view.transform.to_world(np.array(path_points(background), dtype=float))
+    radius = np.hypot(outline[:, 0], outline[:, 1])
+    bearing = np.degrees(np.arctan2(outline[:, 1], outline[:, 0]))
+    on_arc = (np.abs(radius - sector.r_max) < 0.05) | (np.abs(radius - sector.r_min) < 0.05)
+    assert on_arc.sum() > 100 and np.all(np.abs(bearing[on_arc]) <= sector.max_yaw_deg + 0.1), \
+        "the uArm's reachable sector is outlined"
+    assert np.any(np.abs(radius - sector.r_max) < 0.05) and np.any(np.abs(radius - sector.r_min) < 0.05)
 
 
 def test_sim_arm_is_drawn_through_its_joints_in_the_given_state(recorder):

@@ -64,7 +64,7 @@ def device_from_url(url: str) -> tuple[SimulatedSwiftPro, dict[str, str]]:
              "drop", "close_after", "busy", "name"}
     unknown = sorted(set(options) - known)
     if unknown:
-        raise SerialException(f"uarm-sim:// options must be among {sorted(known)}, got {unknown}")
+        raise SerialException(f"uarm-sim:// options: expected names among {sorted(known)}, got {unknown}")
     try:
         kwargs = {
             "firmware": int(options.get("firmware", 4)),
@@ -80,7 +80,7 @@ def device_from_url(url: str) -> tuple[SimulatedSwiftPro, dict[str, str]]:
         if "start" in options:
             start = tuple(float(v) for v in options["start"].split(","))
             if len(start) != 3:
-                raise ValueError(f"start must be x,y,z, got {options['start']!r}")
+                raise ValueError(f"start: expected x,y,z in mm, got {options['start']!r}")
             kwargs["start"] = start
         device = SimulatedSwiftPro(**kwargs)
         if "drop" in options:

@@ -1,0 +1,116 @@
+"""The kiosk: server memory after N visits and time to interactive, shipped config vs stock Voila.
+
+Run: ``python benchmarks/bench_kiosk.py`` (``--loads N``, default 20; ``--no-study`` skips the
+study page). Each visit is a visitor in the kiosk's one Chromium: open the page, wait until it is
+interactive, close the tab (``beforeunload`` runs, as when a person closes it). Before each visit
+the server is left to settle (no CPU for 0.6 s), so "warm" means the previous visit is over and,
+with preheating, the spare kernel has run the page.
+
+- memory: resident set sizes of the Voila server and every process under it (its kernels),
+  after the N visits, and the number of kernels left;
+- demo page, time to interactive: navigation -> the arm drawn on the canvas and a skill
+  button's click answered by the new skill's canvas (the page's ``performance.now()``); p50 and
+  p95 over the warm visits (all but the first, which also fills the browser's cache);
+- study page: navigation -> the experimenter panel's "Start new participant" button shown.
+
+Three servers: stock Voila (the reference), the shipped deploy/voila/voila.py, and the shipped
+file with preheating off (what the spare kernel buys). Ratios are shipped / stock.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import statistics
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT / "tests"), str(ROOT)]
+
+from playwright.sync_api import sync_playwright  # noqa: E402
+
+from browser_support import CHROMIUM, CHROMIUM_ARGS  # noqa: E402
+from tests.browser.kiosk import (DEMO_URL_PATH, kiosk_context, memory_mb, start_page_server, visit,  # noqa: E402
+                                 wait_until_quiet)
+
+STUDY = ROOT / "notebooks" / "study_sim.ipynb"
+SERVERS = {
+    "stock Voila": dict(shipped_config=False),
+    "shipped config": dict(shipped_config=True),
+    "shipped, no preheat": dict(shipped_config=True, overrides=("--VoilaConfiguration.preheat_kernel=False",)),
+}
+
+
+def study_visit(context, server) -> float:
+    """Navigation -> the experimenter panel's start button shown, in ms; then the tab is closed."""
+    page = context.new_page()
+    page.goto(server.url(DEMO_URL_PATH), wait_until="commit", timeout=60_000)
+    page.get_by_role("button", name=re.compile(r"Start new participant")).wait_for(timeout=60_000)
+    shown = page.evaluate("performance.now()")
+    page.close(run_before_unload=True)
+    return shown
+
+
+def run(browser, notebook: Path | None, loads: int, options: dict) -> dict:
+    root = Path(tempfile.mkdtemp(prefix="bench-kiosk-"))
+    server = start_page_server(root, **({"notebook": notebook} if notebook else {}), **options)
+    context = kiosk_context(browser)
+    times = []
+    try:
+        wait_until_quiet(server)
+        before = memory_mb(server)
+        for _ in range(loads):
+            wait_until_quiet(server)
+            if notebook is None:
+                times.append(visit(context, server).answered_ms)
+            else:
+                times.append(study_visit(context, server))
+        wait_until_quiet(server)
+        after = memory_mb(server)
+    finally:
+        context.close()
+        server.stop()
+    warm = sorted(times[1:]) or times
+    return {"before": before, "after": after, "first_ms": times[0], "p50_ms": statistics.median(warm),
+            "p95_ms": warm[round(0.95 * (len(warm) - 1))]}
+
+
+def _print(page: str, loads: int, results: dict) -> None:
+    stock = results["stock Voila"]
+    print(f"\n{page}, {loads} visits (each tab closed as a visitor closes it)")
+    print(f"{'server':<22} {'memory after':>13} {'kernels':>8} {'first':>8} {'p50 warm':>9} {'p95 warm':>9}"
+          f"  {'memory / stock':>14} {'p50 / stock':>11}")
+    for name, r in results.items():
+        own, children, kernels = r["after"]
+        total = own + children
+        stock_total = sum(stock["after"][:2])
+        print(f"{name:<22} {total:>10.0f} MB {kernels:>8d} {r['first_ms'] / 1000:>6.2f} s {r['p50_ms'] / 1000:>7.2f} s"
+              f" {r['p95_ms'] / 1000:>7.2f} s  {total / stock_total:>13.2f}x {r['p50_ms'] / stock['p50_ms']:>10.2f}x")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--loads", type=int, default=20, help="visits per server (default 20)")
+    parser.add_argument("--no-study", action="store_true", help="skip the study page")
+    args = parser.parse_args()
+    if args.loads < 2:
+        parser.error(f"--loads: expected an integer >= 2 (one cold visit and warm ones), got {args.loads}")
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        demo = {name: run(browser, None, args.loads, options) for name, options in SERVERS.items()}
+        study = None if args.no_study else {name: run(browser, STUDY, args.loads, options)
+                                            for name, options in SERVERS.items()}
+        browser.close()
+    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores at the end")
+    print("demo page: interactive = the arm drawn and a skill button's click answered")
+    _print("demo page (notebooks/demo.ipynb)", args.loads, demo)
+    if study:
+        print("\nstudy page: interactive = the experimenter panel's start button shown")
+        _print("study page (notebooks/study_sim.ipynb)", args.loads, study)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,62 @@
+# Voila configuration for the demo and study pages (scripts/serve-demo.sh, scripts/serve-study.sh).
+# Voila 0.5 reads it as its "voila" config file: pass --Voila.config_file_paths=<this folder>.
+# tests/browser/test_kiosk.py checks these values and what they do; benchmarks/bench_kiosk.py
+# measures memory and time to interactive with and without them.
+import sys
+from pathlib import Path
+
+c = get_config()  # noqa: F821 (traitlets' config loader provides it)
+
+# The kernel manager below lives beside this file; the server imports it by name.
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+# --- Kernels leave when their page leaves ------------------------------------------------------
+# Voila's page asks for its kernel's shutdown on `beforeunload` (a sendBeacon POST to
+# /voila/api/shutdown/<kernel>), but the page never receives an _xsrf cookie, so the server
+# refuses every such POST with 403 "'_xsrf' argument missing from POST" (voila-dashboards/voila
+# issue 1458) and each visit keeps its ~200 MB kernel for good. Voila serves these pages without
+# authentication, so the XSRF check guards nothing here: every endpoint it would protect needs
+# a kernel's random id, which only that kernel's page knows.
+c.Voila.tornado_settings = {"disable_check_xsrf": True}
+
+# --- Idle-kernel culling: what the beacon cannot catch -----------------------------------------
+# A tab that vanishes without `beforeunload` (a crashed or killed browser, a phone that
+# discards a background tab, a lost network) leaves a kernel with no page. jupyter_server's
+# culler (Voila 0.5 uses jupyter_server's AsyncMappingKernelManager, and its own subclass never
+# culls kernels still waiting in the preheated pool) shuts a kernel down once it has been idle
+# for cull_idle_timeout seconds, checking every cull_interval seconds.
+# - 600 s: a visitor who steps away for a few minutes and whose phone drops the websocket comes
+#   back to a live page (the page reconnects to its kernel); an abandoned kernel is gone within
+#   cull_idle_timeout + cull_interval = 11 minutes.
+# - cull_connected = False: a kernel whose page is still open is somebody's page (the kiosk's
+#   own screen, a participant reading consent text); culling it would leave that page with dead
+#   buttons. Open pages are the legitimate load; the culler removes what no page uses.
+# - cull_busy = False: a busy kernel is computing for its page (a reproduction).
+c.MappingKernelManager.cull_idle_timeout = 600
+c.MappingKernelManager.cull_interval = 60
+c.MappingKernelManager.cull_connected = False
+c.MappingKernelManager.cull_busy = False
+# Voila's preheating keeps spares out of the culler only while they wait in the pool; this
+# manager also spares a kernel in the second between a visitor taking it and the page
+# connecting (deploy/voila/kiosk_kernels.py says why).
+c.VoilaConfiguration.multi_kernel_manager_class = "kiosk_kernels.KioskKernelManager"
+
+# --- Preheated kernels: only for the pages that need them --------------------------------------
+# Preheating runs a page's notebook in a spare kernel before anyone asks for it, so a visitor
+# gets an executed page instead of waiting for a kernel to start and import numpy, numba and
+# ipycanvas (benchmarks/bench_kiosk.py: time to interactive drops from about 3-4 s to about
+# 1.5 s). One spare kernel per page: visitors arrive one at a time at a kiosk, and the pool
+# refills within a few seconds; every spare costs a kernel's memory all day. The other
+# notebooks of notebooks/ get no spare (analysis.ipynb does heavy work on open, study_uarm.ipynb
+# talks to hardware), which matters when the whole folder is served.
+c.VoilaConfiguration.preheat_kernel = True
+c.VoilaKernelManager.kernel_pools_config = {
+    "default": {"pool_size": 0},
+    "demo.ipynb": {"pool_size": 1},
+    "study_sim.ipynb": {"pool_size": 1},
+}
+# Refill the pool right after a visitor takes the spare (Voila waits 1 s by default).
+c.VoilaKernelManager.fill_delay = 0.0
+
+# No tracebacks on a public page: errors go to the server's log.
+c.VoilaConfiguration.show_tracebacks = False

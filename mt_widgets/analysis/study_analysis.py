@@ -1,0 +1,103 @@
+"""One call from a study folder to every table and figure: ``analyse_study(folder)``.
+
+The default folder is the small synthetic study shipped with the package
+(``mt_widgets.analysis.example_studies.EXAMPLE_STUDY``), so the analysis notebook runs out of
+the box.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+from mt_widgets.study.log import StudyFolder
+from mt_widgets.study.tidy import read_study
+
+from .example_studies import EXAMPLE_STUDY
+from .figures import plot_changes, plot_error_by_episode, plot_trajectories, save_figure
+from .statistics import StudyStatistics, analyse_changes
+
+
+@dataclass
+class StudyAnalysis:
+    """Everything ``analyse_study`` produced.
+
+    Attributes:
+        folder: the study folder read.
+        episodes, demonstrations: the tidy rows as DataFrames.
+        statistics: the ``StudyStatistics`` (tables, tests, summary).
+        figures: {name: Figure}: "error_by_episode", "changes", and "trajectories" when made.
+        saved: files written by ``save``.
+    """
+
+    folder: Path
+    episodes: pd.DataFrame
+    demonstrations: pd.DataFrame
+    statistics: StudyStatistics
+    figures: dict = field(default_factory=dict)
+    saved: list = field(default_factory=list)
+
+    def summary(self) -> str:
+        return self.statistics.summary()
+
+    def save(self, out_folder, formats=("png", "pdf")) -> list[Path]:
+        """Writes the tables as CSV and every figure in each format into ``out_folder``."""
+        out = Path(out_folder)
+        out.mkdir(parents=True, exist_ok=True)
+        tables = {"phase_summary": self.statistics.phases, "participant_changes": self.statistics.changes,
+                  "results": self.statistics.results_table(), "between_groups": self.statistics.between,
+                  "within_groups": self.statistics.within, "baseline_posthoc": self.statistics.baseline}
+        written = []
+        for name, table in tables.items():
+            path = out / f"{name}.csv"
+            table.to_csv(path, index=False)
+            written.append(path)
+        (out / "summary.txt").write_text(self.summary() + "\n", encoding="utf-8")
+        written.append(out / "summary.txt")
+        for name, figure in self.figures.items():
+            for fmt in formats:
+                written.append(save_figure(figure, out / f"{name}.{fmt}"))
+        self.saved = written
+        return written
+
+
+def analyse_study(folder=None, alternative: str | None = None, alpha: float | None = None, changes=None,
+                  trajectories_for=None, trajectory_duration: float | None = None,
+                  test: str | None = None) -> StudyAnalysis:
+    """Reads a study folder and computes every table and figure of the paper's analysis.
+
+    Args:
+        folder: a study folder (``study.json`` and participant logs); default ``EXAMPLE_STUDY``.
+        alternative: sidedness of the tests, target minus control ("less": the paper's
+            one-sided hypotheses; "two-sided"). Default: the study's analysis plan (its
+            protocol's ``[analysis]`` table), as are ``alpha``, ``changes`` and ``test``.
+        alpha: the significance level of the summary.
+        changes: the comparisons (default the paper's three).
+        test: the primary between-group test ("student", "welch", "mannwhitney").
+        trajectories_for: participant codes for the trajectory figure (default: the first of
+            each group; an empty list skips it).
+        trajectory_duration: seconds of each rollout in that figure (default the plant's).
+
+    Returns:
+        A ``StudyAnalysis``.
+    """
+    folder = EXAMPLE_STUDY if folder is None else Path(folder)
+    episodes, demonstrations = read_study(folder)
+    if not episodes:
+        raise ValueError(f"folder: expected completed episodes in {folder}, found none")
+    episodes = pd.DataFrame(episodes)
+    demonstrations = pd.DataFrame(demonstrations)
+    plan = StudyFolder(folder).protocol.analysis
+    changes = plan.changes if changes is None else changes
+    statistics = analyse_changes(episodes, changes,
+                                 alternative=plan.alternative if alternative is None else alternative,
+                                 alpha=plan.alpha if alpha is None else alpha, test=plan.test if test is None else test)
+    figures = {"error_by_episode": plot_error_by_episode(episodes), "changes": plot_changes(episodes, changes)}
+    if trajectories_for is None:
+        firsts = episodes.groupby("group")["participant"].first()
+        trajectories_for = [firsts[g] for g in ("target", "control") if g in firsts.index]
+    if trajectories_for:
+        figures["trajectories"] = plot_trajectories(episodes, trajectories_for, duration=trajectory_duration)
+    return StudyAnalysis(folder, episodes, demonstrations, statistics, figures)

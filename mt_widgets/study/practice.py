@@ -1,0 +1,35 @@
+"""Neutral practice skills: something to draw on before the study that no phase measures.
+
+The paper gives "two minutes of unstructured practice time" before P1. Practising a measured
+skill with its goal and its reproduction would train it before its baseline, so the shipped
+protocols practise these instead: the same robot and the same drawing, a goal no phase uses
+(a point on the other side of the workspace), and no guidance.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mt_widgets.core import SKILLS, PointTarget, Skill
+
+
+def _practice_skills() -> dict[str, Skill]:
+    sim, uarm = SKILLS["sim-point"], SKILLS["uarm-point"]
+    # The simulated arm's practice goal mirrors skill 1's point across the vertical axis.
+    sim_goal = (-0.8, 1.2)
+    # The uArm's practice goal lies right of skill 1's start, inside the workspace (r 26.6 cm,
+    # 20 degrees of yaw), and its start left of it, so the practice reproduction crosses the
+    # workspace without meeting skill 1's point (23, 11) cm or the line r1 = 2 r2.
+    uarm_goal, uarm_start = (25.0, -9.0), np.array([17.0, 5.0])
+    return {skill.key: skill for skill in (
+        Skill("sim-practice", "Practice: reach the point (-0.8, 1.2) m", sim.plant, sim.feature_map,
+              [[-1, 0, -1, 0, sim_goal[0]], [0, -1, 0, -1, sim_goal[1]]], sim.start, PointTarget(sim_goal),
+              "A practice goal that no part of the study uses.", max_condition=sim.max_condition),
+        Skill("uarm-practice", "Practice: reach the point (25, -9) cm", uarm.plant, uarm.feature_map,
+              [[-0.2, 0, 0.2 * uarm_goal[0]], [0, -0.2, 0.2 * uarm_goal[1]]], uarm_start, PointTarget(uarm_goal),
+              "A practice goal that no part of the study uses.", max_condition=uarm.max_condition),
+    )}
+
+
+#: Practice skills by key ("sim-practice", "uarm-practice"); protocols name them like skills.
+PRACTICE_SKILLS: dict[str, Skill] = _practice_skills()

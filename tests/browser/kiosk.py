@@ -1,0 +1,162 @@
+"""The kiosk's measurements, shared by tests/browser/test_kiosk.py and benchmarks/bench_kiosk.py.
+
+A Voila server for one page (the way scripts/serve-demo.sh serves it), with or without the
+shipped configuration deploy/voila/voila.py; the memory of the server and its kernels (resident
+set sizes, read with psutil, which ipykernel itself depends on); and one visit as a visitor makes
+it: open the page, wait for the drawn arm, click a skill button, wait for its answer, close the
+page. Times are the page's own ``performance.now()``, milliseconds since navigation started.
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+import shutil
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import psutil
+
+from browser_support import BIN, LOCAL_PREFIXES, REPO, Server, free_port
+from mt_widgets.widgets import DemoPage
+
+from .helpers import OKABE, ee_pixel, wait_for_color
+
+DEPLOY = REPO / "deploy" / "voila"
+DEMO = REPO / "notebooks" / "demo.ipynb"
+DEMO_URL_PATH = "/"                     # Voila serving one notebook renders it at the root
+#: The button a visit clicks once the arm is drawn, and the skill whose canvas answers it.
+ANSWER_BUTTON, ANSWER_SKILL = "uArm: reach a point", "uarm-point"
+
+
+def start_page_server(root: Path, notebook: Path = DEMO, *, shipped_config: bool = True,
+                      overrides: tuple[str, ...] = ()) -> Server:
+    """Voila serving a copy of ``notebook`` alone on 127.0.0.1, as scripts/serve-demo.sh does.
+
+    Args:
+        root: an empty temporary folder (the server's JUPYTER_* folders, log and ``notebooks/``).
+        shipped_config: read deploy/voila/voila.py (True) or run stock Voila (False).
+        overrides: further ``--Class.trait=value`` options; they win over the config file.
+    """
+    (root / "notebooks").mkdir(parents=True, exist_ok=True)
+    page = root / "notebooks" / notebook.name
+    shutil.copy(notebook, page)
+    port = free_port()
+    config = [f"--Voila.config_file_paths={DEPLOY}"] if shipped_config else [f"--Voila.config_file_paths={root}"]
+    return Server([str(BIN / "voila"), str(page), "--no-browser", f"--port={port}", "--Voila.ip=127.0.0.1",
+                   *config, *overrides], port, root, "voila", f"http://127.0.0.1:{port}")
+
+
+def kernel_processes(server: Server) -> dict[str, psutil.Process]:
+    """The server's kernels by kernel id (read from each kernel's ``-f .../kernel-<id>.json``)."""
+    kernels = {}
+    for child in psutil.Process(server.process.pid).children(recursive=True):
+        try:
+            match = re.search(r"kernel-([0-9a-f-]{36})\.json", " ".join(child.cmdline()))
+        except psutil.NoSuchProcess:
+            continue
+        if match:
+            kernels[match.group(1)] = child
+    return kernels
+
+
+def memory_mb(server: Server) -> tuple[float, float, int]:
+    """(server RSS, RSS of all its descendants, number of kernels), in MiB."""
+    root = psutil.Process(server.process.pid)
+    own = root.memory_info().rss
+    children = 0
+    for child in root.children(recursive=True):
+        try:
+            children += child.memory_info().rss
+        except psutil.NoSuchProcess:
+            pass
+    return own / 2**20, children / 2**20, len(kernel_processes(server))
+
+
+def wait_until_quiet(server: Server, window: float = 0.6, timeout: float = 60.0) -> None:
+    """Wait until the server and its kernels use no CPU for ``window`` seconds.
+
+    A preheated kernel is ready for the next visitor only once it has run the page's notebook;
+    Voila logs "pool filled" as soon as the kernel starts, so the idle CPU is the signal.
+    """
+    deadline = time.monotonic() + timeout
+    root = psutil.Process(server.process.pid)
+
+    def cpu() -> float:
+        total = sum(root.cpu_times()[:2])
+        for child in root.children(recursive=True):
+            try:
+                total += sum(child.cpu_times()[:2])
+            except psutil.NoSuchProcess:
+                pass
+        return total
+
+    before = cpu()
+    while time.monotonic() < deadline:
+        time.sleep(window)
+        now = cpu()
+        if now - before < 0.02:                     # 20 ms of CPU in a window: timer ticks only
+            return
+        before = now
+    raise AssertionError(f"the server did not settle within {timeout} s")
+
+
+def kiosk_context(browser, width: int = 1280, height: int = 1100):
+    """The kiosk's one browser context (its HTTP cache is shared by every visit); 127.0.0.1 only."""
+    context = browser.new_context(viewport={"width": width, "height": height})
+    context.route("**/*", lambda route: route.continue_() if route.request.url.startswith(LOCAL_PREFIXES)
+                  else route.abort())
+    return context
+
+
+@dataclass
+class Visit:
+    kernel_id: str
+    drawn_ms: float          # navigation -> the arm drawn on the teaching canvas
+    answered_ms: float       # navigation -> a skill button's click answered by the new skill's canvas
+
+
+@functools.lru_cache(maxsize=1)
+def reference_episodes():
+    """The page's first episode and the one its button opens, built without a kernel (for expected pixels)."""
+    return DemoPage().episode, DemoPage(skill=ANSWER_SKILL).episode
+
+
+def visit(context, server: Server, *, unload: bool = True, keep_open: bool = False, screenshot: str = ""):
+    """One visitor: open the demo page, wait for the arm, click a skill, wait for its canvas, close.
+
+    Args:
+        unload: close as a tab is closed (``beforeunload`` runs, so Voila's page asks for its
+            kernel's shutdown) or vanish without it (a killed browser, a discarded phone tab).
+        keep_open: leave the page open and return it too.
+    Returns:
+        the ``Visit`` (and the page when ``keep_open``).
+    """
+    first, answer = reference_episodes()
+    page = context.new_page()
+    page.goto(server.url(DEMO_URL_PATH), wait_until="commit", timeout=60_000)
+    page.wait_for_selector("canvas", timeout=60_000)
+    wait_for_color(page, 0, *ee_pixel(first), OKABE["yellow"], timeout=60_000)
+    drawn = page.evaluate("performance.now()")
+    page.get_by_role("button", name=ANSWER_BUTTON, exact=True).click()
+    wait_for_color(page, 0, *ee_pixel(answer), OKABE["black"], tolerance=20, timeout=60_000)
+    answered = page.evaluate("performance.now()")
+    if screenshot:
+        page.screenshot(path=screenshot)
+    kernel_id = page.evaluate("() => JSON.parse(document.getElementById('jupyter-config-data').textContent).kernelId")
+    result = Visit(kernel_id, drawn, answered)
+    if keep_open:
+        return result, page
+    page.close(run_before_unload=unload)
+    return result
+
+
+def wait_for_exit(server: Server, kernel_id: str, timeout: float) -> float:
+    """Seconds until kernel ``kernel_id``'s process is gone; fails after ``timeout``."""
+    started = time.monotonic()
+    while time.monotonic() - started < timeout:
+        if kernel_id not in kernel_processes(server):
+            return time.monotonic() - started
+        time.sleep(0.2)
+    raise AssertionError(f"kernel {kernel_id} still runs {timeout} s later")

@@ -1,0 +1,213 @@
+"""The package's layers, read from its source with ast: who may import whom.
+
+core (science) <- study (the runner) <- in_silico (simulated teachers) <- analysis; the widgets,
+apps and hardware are edges. No import cycle, between modules or between subpackages; no
+import of a package module inside a function (the way cycles get hidden); nothing below the
+widgets imports a widget library.
+"""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = "mt_widgets"
+
+#: Libraries that draw in a notebook or talk to a device: kept out of the science.
+WIDGET_LIBRARIES = {"ipywidgets", "ipycanvas", "IPython", "traitlets", "anywidget", "ipyevents"}
+CORE_FORBIDDEN = WIDGET_LIBRARIES | {"serial", "matplotlib"}
+
+
+def module_name(path: Path, root: Path) -> str:
+    parts = list(path.relative_to(root).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def _resolve(module: str, is_package: bool, node: ast.ImportFrom) -> str:
+    """The absolute name a ``from ... import`` refers to, relative levels resolved."""
+    if not node.level:
+        return node.module or ""
+    base = module.split(".")
+    # In a package's __init__ one dot is the package itself; in a module, its parent.
+    keep = len(base) - node.level + (1 if is_package else 0)
+    anchor = base[:keep]
+    return ".".join(anchor + ([node.module] if node.module else []))
+
+
+def _in_type_checking(node, parents) -> bool:
+    for parent in parents:
+        if isinstance(parent, ast.If) and "TYPE_CHECKING" in ast.unparse(parent.test):
+            return True
+    return False
+
+
+def read_imports(source: str, module: str, is_package: bool, modules: set[str]):
+    """[(imported module, line, inside a function)] of one module's source.
+
+    ``from pkg import name`` counts as importing ``pkg.name`` when that is a module of the
+    package, else ``pkg``. Imports under ``if TYPE_CHECKING:`` are not run and are skipped.
+    """
+    tree = ast.parse(source)
+    found = []
+
+    def visit(node, parents, in_function):
+        for child in ast.iter_child_nodes(node):
+            nested = in_function or isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda))
+            if isinstance(child, ast.Import) and not _in_type_checking(child, parents):
+                found.extend((alias.name, child.lineno, in_function) for alias in child.names)
+            elif isinstance(child, ast.ImportFrom) and not _in_type_checking(child, parents):
+                target = _resolve(module, is_package, child)
+                if target == "__future__":
+                    continue
+                for alias in child.names:
+                    candidate = f"{target}.{alias.name}"
+                    found.append((candidate if candidate in modules else target, child.lineno, in_function))
+            visit(child, parents + [child], nested)
+
+    visit(tree, [], False)
+    return found
+
+
+def build_graph(root: Path, package: str = PACKAGE):
+    """{module: [(imported module, line, inside a function)]} for every module under root/package."""
+    paths = sorted((root / package).rglob("*.py"))
+    modules = {module_name(p, root): p for p in paths}
+    names = set(modules)
+    return {name: read_imports(path.read_text(encoding="utf-8"), name, path.name == "__init__.py", names)
+            for name, path in modules.items()}
+
+
+def internal_edges(graph, package: str = PACKAGE) -> dict[str, set[str]]:
+    return {m: {t for t, _, _ in imports if t == package or t.startswith(package + ".")} - {m}
+            for m, imports in graph.items()}
+
+
+def find_cycles(edges: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one member (Tarjan), each sorted."""
+    index, low, on_stack, stack, order, cycles = {}, {}, set(), [], [0], []
+
+    def connect(v):
+        index[v] = low[v] = order[0]
+        order[0] += 1
+        stack.append(v)
+        on_stack.add(v)
+        for w in edges.get(v, ()):
+            if w not in index:
+                connect(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                cycles.append(sorted(component))
+
+    for v in sorted(edges):
+        if v not in index:
+            connect(v)
+    return cycles
+
+
+def layer(module: str) -> str:
+    """The subpackage a module belongs to ("core", "study", ...), or "" for the package root."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+GRAPH = build_graph(ROOT)
+EDGES = internal_edges(GRAPH)
+
+
+def _imports_of(prefix: str):
+    for module, imports in sorted(GRAPH.items()):
+        if module == prefix or module.startswith(prefix + "."):
+            for target, line, in_function in imports:
+                yield module, target, line, in_function
+
+
+# -- the checker itself ----------------------------------------------------------------------------
+
+def test_the_checker_finds_a_cycle_and_a_function_level_import():
+    assert find_cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert find_cycles({"a": {"b"}, "b": set()}) == []
+    modules = {"p", "p.x", "p.y"}
+    found = read_imports("from . import x\nfrom .y import f\ndef g():\n    from p import y\n", "p.z", False, modules)
+    assert found == [("p.x", 1, False), ("p.y", 2, False), ("p.y", 4, True)]
+    # In a package's __init__, "." is the package itself.
+    assert read_imports("from .x import f\n", "p", True, modules) == [("p.x", 1, False)]
+    assert read_imports("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import p.x\n", "p.y", False,
+                        modules) == [("typing", 1, False)]
+
+
+def test_the_graph_covers_every_layer():
+    assert {layer(m) for m in GRAPH} >= {"", "core", "study", "in_silico", "analysis", "widgets", "apps", "hardware"}
+    assert "mt_widgets.core.skills" in EDGES["mt_widgets.core.episode_batch"]
+
+
+# -- the rules -------------------------------------------------------------------------------------
+
+def test_no_import_cycle_between_modules():
+    assert find_cycles(EDGES) == []
+
+
+def test_no_import_cycle_between_subpackages():
+    packages: dict[str, set[str]] = {}
+    for module, targets in EDGES.items():
+        packages.setdefault(layer(module), set()).update(layer(t) for t in targets if layer(t) != layer(module))
+    assert find_cycles(packages) == []
+
+
+def test_no_package_module_is_imported_inside_a_function():
+    hidden = [f"{m}:{line} imports {t}" for m, t, line, inside in _imports_of(PACKAGE)
+              if inside and (t == PACKAGE or t.startswith(PACKAGE + "."))]
+    assert hidden == []
+
+
+def test_the_package_root_imports_only_core():
+    assert {layer(t) for t in EDGES[PACKAGE]} <= {"core"}
+
+
+def test_core_imports_nothing_above_it_and_no_widget_serial_or_plotting_library():
+    above = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of("mt_widgets.core")
+             if t.startswith(PACKAGE) and layer(t) != "core"]
+    libraries = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of("mt_widgets.core")
+                 if t.split(".")[0] in CORE_FORBIDDEN]
+    assert above == [] and libraries == []
+
+
+def test_the_study_runner_imports_only_core():
+    # The package root counts as core: it imports nothing else (test above).
+    wrong = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of("mt_widgets.study")
+             if t.startswith(PACKAGE) and layer(t) not in ("core", "", "study")]
+    libraries = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of("mt_widgets.study")
+                 if t.split(".")[0] in CORE_FORBIDDEN]
+    assert wrong == [] and libraries == []
+
+
+@pytest.mark.parametrize("package, allowed", [
+    ("in_silico", {"core", "", "study", "in_silico"}),
+    ("analysis", {"core", "", "study", "in_silico", "analysis"}),
+])
+def test_the_simulation_and_the_analysis_sit_above_the_runner_without_widgets(package, allowed):
+    prefix = f"{PACKAGE}.{package}"
+    wrong = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of(prefix)
+             if t.startswith(PACKAGE) and layer(t) not in allowed]
+    libraries = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of(prefix)
+                 if t.split(".")[0] in WIDGET_LIBRARIES]
+    assert wrong == [] and libraries == []
+
+
+@pytest.mark.parametrize("package", ["core", "study", "in_silico", "analysis", "hardware"])
+def test_nothing_below_the_widgets_imports_a_widget_library(package):
+    libraries = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of(f"{PACKAGE}.{package}")
+                 if t.split(".")[0] in WIDGET_LIBRARIES]
+    assert libraries == []
