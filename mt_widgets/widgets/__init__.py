@@ -7,7 +7,8 @@
 - ``DemoPage``: the visitors' one-click page (skill chooser, guidance switch, try again).
 - ``EffortProgress``, ``GuidancePanel``: the progress bars and the guidance in words.
 - ``ViewTransform``: world <-> pixel mapping; ``draw_arrow``: arrow rendering;
-  ``play_frames``: animation (``stop_animations`` / ``retire`` when a view is replaced); ``THEMES``: colour-blind-safe default and the paper's look.
+  ``play_frames``: animation (``stop_animations`` / ``retire`` when a view is replaced);
+  ``THEMES``: colour-blind-safe default and the paper's look.
 
 Widgets hold no science: they call ``mt_widgets.core`` and draw the result.
 """
@@ -27,7 +28,8 @@ from .teaching import ConfirmedAction, TeachingCanvas, describe_action
 from .theme import DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, ArrowStyle, Theme, get_theme
 
 __all__ = [
-    "Animation", "ArmView", "ArrowStyle", "ConfirmedAction", "DEFAULT_THEME", "DEMO_SKILLS", "DemoPage", "DemonstrationRecord", "EffortProgress",
+    "Animation", "ArmView", "ArrowStyle", "ConfirmedAction", "DEFAULT_THEME", "DEMO_SKILLS", "DemoPage",
+    "DemonstrationRecord", "EffortProgress",
     "EpisodeResult", "EpisodeWidget", "GuidancePanel", "LAYERS", "PAPER_THEME", "PAPER_UARM_THEME",
     "ReproductionPlayer", "RobotPainter", "THEMES", "TeachingCanvas", "Theme", "ViewTransform",
     "describe_action", "draw_arrow", "drawing_batch", "explain_difference", "frame_times", "get_theme",

@@ -24,7 +24,7 @@ from __future__ import annotations
 import asyncio
 import time
 import weakref
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
@@ -69,7 +69,7 @@ class _Queue:
 
 
 #: layer canvas -> the animation playing on it (weakly: a closed view takes its entry with it).
-_PLAYING: "weakref.WeakKeyDictionary[object, Animation]" = weakref.WeakKeyDictionary()
+_PLAYING: weakref.WeakKeyDictionary[object, Animation] = weakref.WeakKeyDictionary()
 
 
 class Animation:
@@ -116,7 +116,7 @@ class Animation:
         self.done = stop == self.n_frames
         self._sent_until = _Queue.add((stop - start) / self.fps)
 
-    def start(self) -> "Animation":
+    def start(self) -> Animation:
         self._loop = kernel_loop()
         if self._loop is None:  # nobody to pace for: everything at once
             self._send(self.n_frames)

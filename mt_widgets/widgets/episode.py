@@ -18,8 +18,8 @@ episode gives. A study runner drives it through constructor arguments, the obser
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 from ipywidgets import HTML, Button, HBox, Layout, VBox
