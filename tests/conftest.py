@@ -58,10 +58,14 @@ SLOW_TESTS = (
 def pytest_collection_modifyitems(config, items):
     """Marks for the fast tier (``-m "not browser and not slow"``, scripts/test-fast.sh): every
     test that drives Chromium is ``browser`` (it takes the ``browser`` fixture, or lives in a
-    browser folder), every notebook run by nbval and every test of ``SLOW_TESTS`` is ``slow``."""
+    folder named ``browser*``), every notebook run by nbval and every test of ``SLOW_TESTS`` is
+    ``slow``."""
     for item in items:
-        parts = item.path.parts
-        if "browser" in getattr(item, "fixturenames", ()) or {"browser", "browser_study"} & set(parts):
+        try:
+            folders = item.path.relative_to(config.rootpath).parts[:-1]
+        except ValueError:  # a path outside the repository (a temporary folder)
+            folders = ()
+        if "browser" in getattr(item, "fixturenames", ()) or any(f.startswith("browser") for f in folders):
             item.add_marker(pytest.mark.browser)
         if item.path.suffix == ".ipynb" or item.nodeid.startswith(SLOW_TESTS):
             item.add_marker(pytest.mark.slow)

@@ -204,8 +204,9 @@ class ClassView(VBox):
         self._timer = loop.call_later(self.refresh_s, self._tick)
 
     def _tick(self) -> None:
-        self.refresh()
+        # Scheduled first: an error in one refresh (reported by the kernel's loop) never stops the page.
         self._schedule()
+        self.refresh()
 
     def close(self) -> None:
         """Stops the timer and closes the widgets."""

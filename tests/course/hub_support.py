@@ -238,15 +238,18 @@ class ClassHub:
         self._log_file.close()
 
 
-#: What each student's kernel runs: build a skill, demonstrate with guidance, finish. Printed as
-#: one JSON line: the teaching error, the feedback latency and where the progress went.
+#: What each student's kernel runs: build a skill, then three episodes with guidance whose slips
+#: shrink (a student learning from the arrows), and one exercise check. Printed as one JSON line:
+#: the teaching errors, the feedback latencies and where the numba cache is.
 EPISODE_CODE = """
-import json, time
+import json
+import os
+
 import numpy as np
 from mt_widgets import SKILLS, Skill
 from mt_widgets.core import PointTarget
 from mt_widgets.widgets import EpisodeWidget
-from mt_widgets.classroom import ProgressRecorder
+from mt_widgets.classroom import CheckFailed, ExerciseChecks, ProgressRecorder
 
 base = SKILLS["sim-point"]
 goal = np.array([0.6 + 0.05 * {number}, 1.1])
@@ -254,12 +257,22 @@ skill = Skill("class-reach", "Reach a point", base.plant, base.feature_map,
               theta=[[-1, 0, -1, 0, goal[0]], [0, -1, 0, -1, goal[1]]], start=base.start,
               target=PointTarget(tuple(goal)))
 recorder = ProgressRecorder()
-episode = EpisodeWidget(skill, seed={number}, guidance=True)
-recorder.attach(episode, "hub-episode")
 rng = np.random.default_rng({number})
-for optimal in episode.optimal:
-    episode.demonstrate(optimal + rng.normal(0, 0.3 * {number} / 11, size=2))
-    episode.next()
-print(json.dumps({{"error": episode.result.error, "latency_s": episode.result.feedback_latency_s,
-                  "recorded": str(recorder.path), "numba_cache": __import__("os").environ.get("NUMBA_CACHE_DIR")}}))
+errors, latencies = [], []
+for index, slip in enumerate((1.0, 0.5, 0.2)):
+    episode = EpisodeWidget(skill, seed=10 * {number} + index, guidance=True, episode_index=index, episodes_total=3)
+    recorder.attach(episode, "hub-episode")
+    for optimal in episode.optimal:
+        episode.demonstrate(optimal + rng.normal(0, slip * {number} / 11, size=2))
+        episode.next()
+    errors.append(episode.result.error)
+    latencies.append(episode.result.feedback_latency_s)
+checks = ExerciseChecks("a1_ridge_learner", recorder)
+checks.true("ridge-fit", True, "")
+try:
+    checks.true("teaching-error", {number} % 3 != 0, "E: expected 0.316, got 0.1")
+except CheckFailed:
+    pass
+print(json.dumps({{"errors": errors, "latencies_s": latencies, "recorded": str(recorder.path),
+                  "numba_cache": os.environ.get("NUMBA_CACHE_DIR")}}))
 """

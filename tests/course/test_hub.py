@@ -8,8 +8,10 @@ Slow (about 2-4 minutes on two cores): a class is a dozen Jupyter servers.
 from __future__ import annotations
 
 import json
+import shutil
 import statistics
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import nbformat
@@ -17,6 +19,7 @@ import pytest
 
 from browser_support import REPO, local_page
 from mt_widgets.classroom import read_class, summarise
+from tests.browser.helpers import drag, ee_pixel, reference_episode
 
 from .course_support import copy_course, course_env, nbgrader, source_notebook
 from .hub_support import EPISODE_CODE, ClassHub, warm_numba_template
@@ -55,9 +58,12 @@ def _files(folder: Path) -> dict[str, float]:
 def hub(tmp_path_factory):
     root = tmp_path_factory.mktemp("hub")
     template = warm_numba_template(tmp_path_factory.getbasetemp() / "numba-template")
+    # Where the drawers press (computed here, before the snapshot: this process compiles with
+    # numba's in-tree cache, which is this test's own doing, not a student's).
+    draw_start = ee_pixel(reference_episode("episode_sim.ipynb"), 0)
     installed_before = _files(REPO / "mt_widgets")
     class_hub = ClassHub(root, numba_template=template)
-    class_hub.installed_before = installed_before
+    class_hub.installed_before, class_hub.draw_start = installed_before, draw_start
     yield class_hub
     class_hub.stop()
 
@@ -67,15 +73,14 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
     hub.create_users([*STUDENTS, "instructor"])
     for name in DRAWERS:
         _page(hub.homes / name, "draw.ipynb", DRAW_PAGE)
-    _page(hub.homes / "instructor", "class_view.ipynb", "")
-    (hub.homes / "instructor" / "class_view.ipynb").write_text((REPO / "notebooks" / "class_view.ipynb").read_text())
+    (hub.homes / "instructor").mkdir(parents=True, exist_ok=True)
+    shutil.copy(REPO / "notebooks" / "class_view.ipynb", hub.homes / "instructor" / "class_view.ipynb")
 
     started = time.perf_counter()
     spawn = hub.spawn_class(STUDENTS)
     spawn_wall = time.perf_counter() - started
     assert sorted(spawn) == STUDENTS
 
-    from concurrent.futures import ThreadPoolExecutor
     with ThreadPoolExecutor(len(STUDENTS)) as pool:
         runs = dict(zip(STUDENTS, pool.map(
             lambda item: hub.run_in_kernel(item[1], EPISODE_CODE.format(number=item[0])), enumerate(STUDENTS))))
@@ -85,8 +90,8 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
         results[name] = json.loads(run["stdout"].strip().splitlines()[-1])
         # Each student's numba cache is their own, in their home.
         assert results[name]["numba_cache"] == str(hub.homes / name / ".cache" / "numba")
-    assert results["student00"]["error"] < 1e-10  # no slip: taught exactly
-    assert all(results[n]["error"] > 0.01 for n in STUDENTS[1:])
+    assert max(results["student00"]["errors"]) < 1e-10  # no slip: taught exactly
+    assert all(min(results[n]["errors"]) > 1e-3 for n in STUDENTS[1:])
     memory = {name: hub.memory(name) for name in STUDENTS}
 
     # Two students draw an arrow in Chromium, logged in through the hub.
@@ -100,8 +105,7 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
             page.wait_for_url("**/user/**", timeout=120_000)
             page.goto(hub.user_url(name, "/voila/render/draw.ipynb"), timeout=120_000)
             page.locator("canvas").first.wait_for(timeout=120_000)
-            from tests.browser.helpers import drag, ee_pixel, reference_episode
-            ee = ee_pixel(reference_episode("episode_sim.ipynb"), 0)
+            ee = hub.draw_start
             page.wait_for_timeout(500)
             drag(page, 0, ee, (ee[0] + 60, ee[1] - 40))
             page.get_by_role("button", name="Confirm").click()
@@ -116,8 +120,9 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
     drawn = [e for s in read_class(hub.class_folder).students.values() for e in s.events
              if e["kind"] == "demonstration" and e.get("method") == "pointer"]
     assert len(drawn) == 2 and {e["lesson"] for e in drawn} == {"hub-draw"}
-    errors = sorted(s.errors[0] for s in progress.students)
-    assert errors == pytest.approx(sorted(r["error"] for r in results.values()))
+    errors = sorted(s.errors for s in progress.students)
+    assert errors == pytest.approx(sorted(r["errors"] for r in results.values()))
+    assert progress.exercise_shares("a1_ridge_learner") and len(progress.exercise_shares("a1_ridge_learner")) == 12
 
     # The instructor opens the class view on the hub: every student is there.
     hub.spawn("instructor")
@@ -140,7 +145,7 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
     assert _files(REPO / "mt_widgets") == hub.installed_before
 
     spawn_times = sorted(spawn.values())
-    latencies = sorted(r["latency_s"] for r in results.values())
+    latencies = sorted(latency for r in results.values() for latency in r["latencies_s"])
     print(f"\nclass of {len(STUDENTS)}: spawned in {spawn_wall:.1f} s; spawn p50 {statistics.median(spawn_times):.1f} s, "
           f"max {spawn_times[-1]:.1f} s; feedback latency p50 {statistics.median(latencies) * 1000:.0f} ms, "
           f"max {latencies[-1] * 1000:.0f} ms; memory per student {statistics.median(memory.values()) / 2**20:.0f} MiB")
