@@ -20,14 +20,23 @@ from .coords import ViewTransform
 from .demo import DEMO_SKILLS, DemoPage
 from .episode import DemonstrationRecord, EpisodeResult, EpisodeWidget
 from .guidance import GuidancePanel, explain_difference, legend_html
+from .legend import MARKS, CanvasLegend, legend_entries
 from .progress import EffortProgress
 from .redraw import drawing_batch, repaint_on_new_view
 from .reproduction import ReproductionPlayer
 from .robots import RobotPainter, painter_for
 from .teaching import ConfirmedAction, TeachingCanvas, describe_action
-from .legend import MARKS, CanvasLegend, legend_entries
-from .theme import (COLOR_NAMES, DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, ArrowStyle, Theme, fill_words,
-                    get_theme)
+from .theme import (
+                    COLOR_NAMES,
+                    DEFAULT_THEME,
+                    PAPER_THEME,
+                    PAPER_UARM_THEME,
+                    THEMES,
+                    ArrowStyle,
+                    Theme,
+                    fill_words,
+                    get_theme,
+)
 
 __all__ = [
     "COLOR_NAMES", "CanvasLegend", "MARKS", "fill_words", "legend_entries",
