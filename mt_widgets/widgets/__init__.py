@@ -18,7 +18,7 @@ from .arm_view import LAYERS, ArmView
 from .arrows import draw_arrow
 from .coords import ViewTransform
 from .demo import DEMO_SKILLS, DemoPage
-from .episode import DemonstrationRecord, EpisodeResult, EpisodeWidget
+from .episode import DemonstrationRecord, EpisodeResult, EpisodeWidget, keep_canvas_size
 from .guidance import GuidancePanel, explain_difference, legend_html
 from .legend import MARKS, CanvasLegend, legend_entries
 from .progress import EffortProgress
@@ -45,6 +45,7 @@ __all__ = [
     "EpisodeResult", "EpisodeWidget", "GuidancePanel", "LAYERS", "PAPER_THEME", "PAPER_UARM_THEME",
     "ReproductionPlayer", "RobotPainter", "THEMES", "TeachingCanvas", "Theme", "ViewTransform",
     "describe_action", "draw_arrow", "drawing_batch", "explain_difference", "frame_times", "get_theme",
+    "keep_canvas_size",
     "legend_html", "painter_for", "play_frames", "repaint_on_new_view", "retire", "sample_at",
     "stop_animations",
 ]

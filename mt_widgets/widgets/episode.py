@@ -112,6 +112,13 @@ def _canvas_class(view) -> str:
     return f"mt-stage-canvas-{round(100 * view.transform.width / view.transform.height)}"
 
 
+def keep_canvas_size(view) -> None:
+    """Stops an ``ArmView``'s canvas from growing with the window (e.g. a true-size screen under the arm)."""
+    for name in list(view.canvas._dom_classes):
+        if name.startswith("mt-stage-canvas-"):
+            view.canvas.remove_class(name)
+
+
 def stage_css(*views) -> str:
     """A style element sizing the episode's canvases to the window.
 
