@@ -296,8 +296,10 @@ def fit_episode(episode, geometry: ScreenGeometry, show_player: bool = True) -> 
     def swap(_result):
         # The episode has put its player in the teaching canvas's place; without the player
         # the screen keeps showing the teaching canvas.
-        episode.teaching.view.canvas.layout.display = "none" if show_player else None
-        episode.player.layout.display = None if show_player else "none"
+        for widget in (episode.teaching.view.canvas, episode.teaching.view.legend):
+            widget.layout.display = "none" if show_player else None
+        for widget in (episode.player, episode.player.view.legend):
+            widget.layout.display = None if show_player else "none"
 
     episode.on_finished(swap)
     if episode.phase == "finished":

@@ -250,7 +250,13 @@ class EpisodeWidget(VBox):
         # place when the episode finishes), and on the right what to do now: the arrow's
         # controls, the guidance, "Next state" / "Finish and watch", then the page's next actions.
         self.player.layout.display = "none"
-        self.side = VBox([self.teaching.controls, self.guidance_panel, self.next_button, self.next_actions],
+        # Each canvas's legend goes to the side column too, under what to do now: it explains every
+        # mark, and under the canvas it would push the reproduction's Replay line off the screen.
+        player_legend = self.player.view.legend
+        self.player.children = tuple(child for child in self.player.children if child is not player_legend)
+        player_legend.layout.display = "none"
+        self.side = VBox([self.teaching.controls, self.guidance_panel, self.next_button, self.next_actions,
+                          self.teaching.view.legend, player_legend],
                          layout=Layout(min_width="300px", max_width="400px", flex="1 1 300px"))
         canvases = VBox([self.teaching.view.canvas, self.player], layout=Layout(flex="0 1 auto"))
         self.stage = HBox([canvases, self.side], layout=Layout(flex_flow="row wrap", align_items="flex-start",
@@ -385,6 +391,8 @@ class EpisodeWidget(VBox):
         # The reproduction plays where the teaching canvas was: the person's eyes are there.
         self.teaching.view.canvas.layout.display = "none"
         self.teaching.controls.layout.display = "none"
+        self.teaching.view.legend.layout.display = "none"
+        self.player.view.legend.layout.display = None
         self.guidance_panel.hide()
         self.next_button.layout.display = "none"
         self.player.layout.display = None
