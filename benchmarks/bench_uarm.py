@@ -65,7 +65,7 @@ def main() -> int:
             targets = [(200.0, 0.0), (205.0, 0.0)]
             state = {"i": 0}
 
-            def short_move():
+            def short_move(targets=targets, state=state):  # bound now: the loop rebinds both names
                 state["i"] += 1
                 arm.move_to(*targets[state["i"] % 2], speed=100.0)
 

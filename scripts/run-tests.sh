@@ -19,6 +19,10 @@ if [ ! -x /usr/bin/chromium ]; then
 fi
 /usr/bin/chromium --version
 
+# The class-hub tests need configurable-http-proxy (npm); installed into .npm/ when missing.
+PATH="$("$REPO/scripts/install-hub.sh"):$PATH"
+export PATH
+
 cd "$REPO"
 # The one switch that shortens long notebook work under test (see mt_widgets/core/fast_mode.py).
 export MT_WIDGETS_FAST=1

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Sets up .venv with mt-widgets and every extra (lab, test, bench). Idempotent: it re-installs
+# Sets up .venv with mt-widgets and every extra (lab, test, bench, course, hub). Idempotent: it re-installs
 # only when pyproject.toml changed since the last run. Sourced by open-lab.sh and run-tests.sh.
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -17,8 +17,8 @@ fi
 stamp="$VENV/.mt-widgets-installed"
 wanted="$(sha256sum "$REPO/pyproject.toml" | cut -d' ' -f1)"
 if [ "$(cat "$stamp" 2>/dev/null || true)" != "$wanted" ]; then
-    echo "== installing mt-widgets[lab,test,bench] into $VENV"
+    echo "== installing mt-widgets[lab,test,bench,course,hub] into $VENV"
     "$VENV/bin/python" -m pip install --quiet --upgrade pip
-    "$VENV/bin/python" -m pip install --quiet -e "$REPO[lab,test,bench]"
+    "$VENV/bin/python" -m pip install --quiet -e "$REPO[lab,test,bench,course,hub]"
     echo "$wanted" > "$stamp"
 fi

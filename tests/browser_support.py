@@ -3,7 +3,7 @@ Jupyter servers in their own process groups.
 
 The one Playwright instance is the session fixture ``browser`` in ``tests/conftest.py``:
 Playwright's sync API refuses a second instance while one runs, so no folder starts its own.
-A missing Chromium or Playwright fails the tests, never skips them (BROWSER_TESTING.md).
+A missing Chromium or Playwright fails the tests, never skips them (docs/browser-testing.md).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 ARTIFACTS = REPO / "test-artifacts"
 CHROMIUM = os.environ.get("MT_WIDGETS_CHROMIUM", "/usr/bin/chromium")
-# Without the networking switches Chromium keeps trying to reach the internet (BROWSER_TESTING.md).
+# Without the networking switches Chromium keeps trying to reach the internet (docs/browser-testing.md).
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
                  "--disable-sync", "--no-first-run", "--disable-quic"]
 BIN = Path(sys.executable).parent

@@ -54,7 +54,8 @@ def test_ci_runs_the_readme_test_command():
     assert "scripts/run-tests.sh" in (REPO / ".ci" / "run").read_text()
 
 
-@pytest.mark.parametrize("name", ["open-lab.sh", "run-tests.sh", "setup.sh", "serve-demo.sh", "serve-study.sh"])
+@pytest.mark.parametrize("name", ["open-lab.sh", "run-tests.sh", "setup.sh", "serve-demo.sh", "serve-study.sh",
+                                  "test-fast.sh"])
 def test_scripts_are_valid_bash(name):
     subprocess.run(["bash", "-n", str(REPO / "scripts" / name)], check=True)
 

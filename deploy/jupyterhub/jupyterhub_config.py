@@ -9,6 +9,7 @@ Settings come from environment variables so the same file serves a course and th
 (tests/course/test_hub.py):
 
 - ``MT_HUB_PORT`` (8000): the port, on 127.0.0.1 only; put a TLS proxy in front for a real class.
+  ``MT_HUB_PROXY_API_PORT`` (8001) and ``MT_HUB_INTERNAL_PORT`` (8081): the proxy's and the hub's own.
 - ``MT_HUB_STATE`` (./mt-hub-state): the hub's database, cookie secret and proxy token.
 - ``MT_HUB_HOMES`` (<state>/homes): one home folder per student.
 - ``MT_HUB_PASSWORD``: the dummy authenticator's shared password (unset: any password). The
@@ -28,7 +29,9 @@ student (``NUMBA_CACHE_DIR``) and Python writes no bytecode there (``PYTHONDONTW
 """
 
 import os
+import random
 import shutil
+import socket
 import sys
 from pathlib import Path
 
@@ -43,6 +46,7 @@ STATE.mkdir(parents=True, exist_ok=True)
 c.JupyterHub.ip = "127.0.0.1"
 c.JupyterHub.port = int(os.environ.get("MT_HUB_PORT", "8000"))
 c.JupyterHub.hub_ip = "127.0.0.1"
+c.JupyterHub.hub_port = int(os.environ.get("MT_HUB_INTERNAL_PORT", "8081"))
 c.JupyterHub.db_url = f"sqlite:///{STATE / 'jupyterhub.sqlite'}"
 c.JupyterHub.cookie_secret_file = str(STATE / "jupyterhub_cookie_secret")
 c.ConfigurableHTTPProxy.pid_file = str(STATE / "proxy.pid")
@@ -90,8 +94,24 @@ c.Spawner.environment = {
 }
 
 
+def _port_outside_ephemeral_range() -> int:
+    """A free port below Linux's ephemeral range (32768-60999). JupyterHub's own choice comes from
+    that range, where every kernel's ZMQ sockets also bind: when a class starts at once, a kernel
+    can take a server's port between the hub choosing it and the server binding it."""
+    for _ in range(500):
+        port = random.randint(20000, 32000)
+        with socket.socket() as probe:
+            try:
+                probe.bind(("127.0.0.1", port))
+            except OSError:
+                continue
+            return port
+    raise RuntimeError("no free port between 20000 and 32000 for a student's server")
+
+
 def _prepare_home(spawner) -> None:
-    """Before a student's first start: a home with a warm numba cache (if the hub has one)."""
+    """Before a student's server starts: its port, and a home with a warm numba cache (if the hub has one)."""
+    spawner.port = _port_outside_ephemeral_range()
     home = Path(spawner.home_dir)
     cache = home / ".cache" / "numba"
     template = os.environ.get("MT_HUB_NUMBA_TEMPLATE")

@@ -5,20 +5,25 @@
 Run it once after installing (and after every upgrade) with the same Python and the same
 installation the students use: numba keys its cache by the source file's path and time stamp,
 so the copy is valid for every student of that installation and recompiles by itself when not.
+It runs what a student's episode runs, for every paper skill: numba compiles one version per
+argument type (a skill's read-only Theta and a learnt, writable one differ), so warming with
+anything less leaves compiles for the students' first episode.
 """
 
 import os
 import sys
 
-import numpy as np
-
-from mt_widgets import SKILLS, RidgeLearner
+from mt_widgets import SKILLS
+from mt_widgets.widgets import EpisodeWidget
 
 if not os.environ.get("NUMBA_CACHE_DIR"):
     sys.exit("NUMBA_CACHE_DIR: expected the folder to fill, got nothing")
-for skill in SKILLS.values():
-    states = skill.query_states(seed=0)
-    theta_hat = RidgeLearner().fit(skill.features(states), skill.target_actions(states))
-    skill.reproduce(theta_hat)
-    skill.reproduce(np.stack([theta_hat, skill.theta]))
+for key in SKILLS:
+    for guidance in (True, False):
+        episode = EpisodeWidget(key, seed=0, guidance=guidance)
+        for action in episode.optimal:
+            episode.demonstrate(action + 0.1)
+            if episode.phase == "guidance":
+                episode.next()
+        SKILLS[key].reproduce(SKILLS[key].theta)
 print("numba cache ready in", os.environ["NUMBA_CACHE_DIR"])

@@ -29,8 +29,9 @@ class KioskKernelManager(AsyncMappingKernelManager):
         self._last_seen_spare: dict = {}
 
     def _spare_kernel_ids(self) -> set[str]:
-        # ``_pools`` is Voila's preheated pool (notebook -> tasks whose result names the kernel);
-        # it exists only when Voila wraps this class for preheating.
+        # ``_pools`` is Voila's preheated pool (notebook -> tasks whose result names the kernel),
+        # a private name of Voila 0.5 (pinned below 0.6 in pyproject.toml); it exists only when
+        # Voila wraps this class for preheating.
         spares = set()
         for pool in getattr(self, "_pools", {}).values():
             for task in pool:

@@ -25,8 +25,14 @@ from ipywidgets import HTML, Button, FloatText, HBox, Image, Layout, VBox
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from mt_widgets.classroom import (STUCK_AFTER_S, ClassFolderError, ClassSummary, class_folder_from_env, read_class,
-                                  summarise)
+from mt_widgets.classroom import (
+    STUCK_AFTER_S,
+    ClassFolderError,
+    ClassSummary,
+    class_folder_from_env,
+    read_class,
+    summarise,
+)
 from mt_widgets.widgets.theme import OKABE_ITO
 
 _PALETTE = [OKABE_ITO[k] for k in ("blue", "orange", "bluish_green", "reddish_purple", "vermillion", "sky_blue",
@@ -198,8 +204,9 @@ class ClassView(VBox):
         self._timer = loop.call_later(self.refresh_s, self._tick)
 
     def _tick(self) -> None:
-        self.refresh()
+        # Scheduled first: an error in one refresh (reported by the kernel's loop) never stops the page.
         self._schedule()
+        self.refresh()
 
     def close(self) -> None:
         """Stops the timer and closes the widgets."""

@@ -49,7 +49,7 @@ from mt_widgets.study import (
     StudyFolder,
     load_protocol,
 )
-from mt_widgets.widgets import EpisodeWidget, TeachingCanvas
+from mt_widgets.widgets import EpisodeWidget, TeachingCanvas, fill_words, get_theme
 
 _log = logging.getLogger(__name__)
 
@@ -316,7 +316,7 @@ class StudyApp(VBox):
                 self.heading.value = ""
             labels = {"welcome": "Continue", "consent": "I agree", "instructions": "Start the practice"
                       if protocol.practice.duration_s > 0 else "Start", "phase_intro": "Start"}
-            children = [HTML(_paragraphs(step.text))]
+            children = [HTML(self._text(step.text, step.skill))]
             if step.kind in labels:
                 children.append(self._button(labels[step.kind], self._advance))
             if step.kind == "consent":
@@ -331,6 +331,14 @@ class StudyApp(VBox):
     def _advance(self) -> None:
         self.session.advance()
         self.show_step()
+
+    def _text(self, text: str, skill: str | None) -> str:
+        """Protocol text as HTML, its "{goal}" in the words of what the canvas draws (the skill's
+        target in this theme's colours); texts outside a phase name the first phase's target."""
+        protocol = self.session.protocol
+        target = protocol.skills[skill or protocol.phases[0].skill].target
+        goal = get_theme(self.theme).target_words(target, "goal") if target is not None else "the goal"
+        return _paragraphs(fill_words(text, goal=goal))
 
     def _decline(self) -> None:
         self.session.decline_consent()
@@ -395,7 +403,7 @@ class StudyApp(VBox):
         self._practice_done.disabled = True
         self._practice_again = self._button("Practise again", lambda: self._new_practice_round(step), "")
         self._practice_again.layout.display = "none"
-        self._practice_text = HTML(_paragraphs(step.text))
+        self._practice_text = HTML(self._text(step.text, step.skill))
         self._new_practice_round(step)
         self._tick(step.duration_s)
 
@@ -482,7 +490,7 @@ class StudyApp(VBox):
             self.heading.value = (f"<h3 style='margin:4px 0'>Part {step.phase_index + 1} of "
                                   f"{len(self.session.protocol.phases)}, round {step.episode} of "
                                   f"{step.n_episodes}</h3>")
-            instructions = HTML(_paragraphs(self.session.protocol.phase(step.phase).instructions))
+            instructions = HTML(self._text(self.session.protocol.phase(step.phase).instructions, step.skill))
             self.episode = self._episode_widget(step.skill, step.query_states, step.guidance,
                                                 step.episode - 1, step.n_episodes, self._on_demonstration,
                                                 self._on_episode_finished, step.guidance_modality)
@@ -514,7 +522,8 @@ class StudyApp(VBox):
         self._safely(finish)
 
     def _show_reproduction_controls(self) -> None:
-        self._reproduction_text.value = _paragraphs(self.session.protocol.texts["reproduction"])
+        self._reproduction_text.value = self._text(self.session.protocol.texts["reproduction"],
+                                                   self.session.current_step().skill)
         self._continue.layout.display = None
         trajectory = self.episode.result.trajectory if self.episode is not None and self.episode.result else None
         self._enable_after(self._continue, 0.0 if trajectory is None else float(trajectory.times[-1]))

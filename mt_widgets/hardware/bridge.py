@@ -41,7 +41,7 @@ import numpy as np
 from mt_widgets.core import SKILLS, running_under_test
 from mt_widgets.core.validation import as_positive
 
-from .connector import SwiftPro
+from .connector import SIMULATOR_URL, SwiftPro
 from .envelope import TEACHING_RADIUS_MM, SafetyEnvelope, polar_waypoints
 from .errors import (
     SwiftProDisconnected,
@@ -58,9 +58,8 @@ log = logging.getLogger(__name__)
 
 #: Millimetres per centimetre: the plant's unit to the arm's.
 MM_PER_CM = 10.0
-#: The simulated arm used when no Swift Pro is plugged in: firmware 4.x, real-time moves.
-SIMULATOR_URL = "uarm-sim://?firmware=4"
-#: The same, fast, for tests and ``MT_WIDGETS_FAST=1`` runs: 10 ms boot, moves 50x faster.
+#: The simulated arm (``SIMULATOR_URL``, firmware 4.x) fast, for tests and ``MT_WIDGETS_FAST=1`` runs:
+#: 10 ms boot, moves 50x faster.
 FAST_SIMULATOR_URL = "uarm-sim://?firmware=4&boot=0.01&motion_scale=0.02"
 
 #: The plant a bridge follows (step period, per-step limit, workspace): the paper's uArm skills'.

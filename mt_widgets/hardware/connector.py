@@ -39,7 +39,7 @@ log = logging.getLogger(__name__)
 
 #: USB id of the Arduino Mega 2560 inside the Swift and the Swift Pro.
 USB_VID, USB_PID = 0x2341, 0x0042
-#: URL of the simulated arm used when asked to fall back on it.
+#: The simulated arm used when no Swift Pro is plugged in: firmware 4.x, real-time moves.
 SIMULATOR_URL = "uarm-sim://?firmware=4"
 
 

@@ -24,9 +24,12 @@ from .redraw import drawing_batch, repaint_on_new_view
 from .reproduction import ReproductionPlayer
 from .robots import RobotPainter, painter_for
 from .teaching import ConfirmedAction, TeachingCanvas, describe_action
-from .theme import DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, ArrowStyle, Theme, get_theme
+from .legend import MARKS, CanvasLegend, legend_entries
+from .theme import (COLOR_NAMES, DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, ArrowStyle, Theme, fill_words,
+                    get_theme)
 
 __all__ = [
+    "COLOR_NAMES", "CanvasLegend", "MARKS", "fill_words", "legend_entries",
     "ArmView", "ArrowStyle", "ConfirmedAction", "DEFAULT_THEME", "DEMO_SKILLS", "DemoPage", "DemonstrationRecord", "EffortProgress",
     "EpisodeResult", "EpisodeWidget", "GuidancePanel", "LAYERS", "PAPER_THEME", "PAPER_UARM_THEME",
     "ReproductionPlayer", "RobotPainter", "THEMES", "TeachingCanvas", "Theme", "ViewTransform",

@@ -360,8 +360,8 @@ class EpisodeWidget(VBox):
             if self.guidance_arrows:
                 self.teaching.show_guidance(self.optimal[index])
             if self.guidance_words:
-                self.guidance_panel.show(confirmed.action, self.optimal[index], exact=self.exact,
-                                         legend=self.guidance_arrows)
+                # The arrows' legend is under the canvas (legend.py), with every other mark.
+                self.guidance_panel.show(confirmed.action, self.optimal[index], exact=self.exact, legend=False)
             self.next_button.description = "Finish and watch" if last else "Next state"
             self.next_button.layout.display = None
             self.phase = "guidance"

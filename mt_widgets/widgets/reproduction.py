@@ -71,7 +71,9 @@ class ReproductionPlayer(VBox):
         self.error = None
         self._frames = None
         self.view.show_state(skill.start, show_velocity=False)
-        super().__init__([self.view.canvas, HBox([self.replay_button, self.error_label]), self.status],
+        self.view.legend.remove("velocity")  # frames draw the robot, not its velocity
+        super().__init__([self.view.canvas, self.view.legend, HBox([self.replay_button, self.error_label]),
+                          self.status],
                          layout=Layout(align_items="flex-start"))
 
     def play(self, trajectory, error: float | None = None, ghost=None) -> None:
@@ -99,6 +101,9 @@ class ReproductionPlayer(VBox):
         if ghost_positions is not None:
             ghost_positions = ghost_positions[::2]
         self._frames = (frames, ghost_pixels, states[-1], learnt_positions, ghost_positions)
+        self.view.legend.remove("ghost", "diverged")
+        self.view.legend.add("learnt", *(("ghost",) if ghost is not None else ()),
+                             *(("diverged",) if trajectory.diverged else ()))
         self._update_labels()
         self.replay()
 

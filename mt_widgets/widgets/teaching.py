@@ -27,7 +27,7 @@ from traitlets import Any, Bool, Int, List
 from mt_widgets.core.validation import as_bool, as_float_array
 
 from .arm_view import ArmView
-from .arrows import draw_arrow
+from .arrows import draw_arrow_pair
 from .callbacks import Callbacks
 from .redraw import drawing_batch
 
@@ -158,7 +158,9 @@ class TeachingCanvas(VBox):
             HTML("<small>Keyboard: click the canvas, then arrow keys move the arrow tip "
                  "(Shift: finer), Enter confirms, Escape clears.</small>"),
         ], layout=Layout(min_width="300px", max_width="380px"))
-        super().__init__([HBox([canvas, controls], layout=Layout(flex_flow="row wrap", align_items="flex-start"))])
+        self.view.legend.add("user_arrow")
+        super().__init__([HBox([VBox([canvas, self.view.legend]), controls],
+                               layout=Layout(flex_flow="row wrap", align_items="flex-start"))])
         self._show_current_state()
 
     # -- public API ---------------------------------------------------------------------------------
@@ -237,6 +239,7 @@ class TeachingCanvas(VBox):
     def show_guidance(self, optimal_action) -> None:
         """Draw the optimal arrow (R,) beside the confirmed one at the current state."""
         self._guidance = np.array(optimal_action, dtype=float)
+        self.view.legend.add("optimal_arrow")
         self._draw_arrows()
 
     def advance(self) -> None:
@@ -294,12 +297,8 @@ class TeachingCanvas(VBox):
         style = theme.rubber_band if rubber_band else theme.user_arrow
 
         def paint(canvas):
-            # The optimal arrow last: dashed and outlined, it stays visible on the user's arrow
-            # when the two are aligned and it is the shorter, and the user's shows in its gaps.
-            if user is not None:
-                draw_arrow(canvas, start, user, style)
-            if optimal is not None:
-                draw_arrow(canvas, start, optimal, theme.optimal_arrow)
+            # Both stay visible when aligned, whichever is shorter (see draw_arrow_pair).
+            draw_arrow_pair(canvas, start, user, optimal, style, theme.optimal_arrow)
 
         view.show(paint, "arrows")
 

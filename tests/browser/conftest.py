@@ -6,7 +6,7 @@ and the ``browser`` fixture of ``tests/conftest.py``.
 Each server runs in its own process group with its own JUPYTER_* directories in a
 temporary folder and is ended (the whole group) at teardown. Pages may only talk to
 127.0.0.1: everything else is aborted (Voila asks a CDN for a font). A missing Chromium or
-Playwright fails the tests, never skips them (BROWSER_TESTING.md).
+Playwright fails the tests, never skips them (docs/browser-testing.md).
 """
 
 from __future__ import annotations

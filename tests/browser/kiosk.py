@@ -9,6 +9,7 @@ page. Times are the page's own ``performance.now()``, milliseconds since navigat
 
 from __future__ import annotations
 
+import functools
 import re
 import shutil
 import time
@@ -18,6 +19,7 @@ from pathlib import Path
 import psutil
 
 from browser_support import BIN, LOCAL_PREFIXES, REPO, Server, free_port
+from mt_widgets.widgets import DemoPage
 
 from .helpers import OKABE, ee_pixel, wait_for_color
 
@@ -115,8 +117,9 @@ class Visit:
     answered_ms: float       # navigation -> a skill button's click answered by the new skill's canvas
 
 
-def _reference_episodes():
-    from mt_widgets.widgets import DemoPage
+@functools.lru_cache(maxsize=1)
+def reference_episodes():
+    """The page's first episode and the one its button opens, built without a kernel (for expected pixels)."""
     return DemoPage().episode, DemoPage(skill=ANSWER_SKILL).episode
 
 
@@ -130,7 +133,7 @@ def visit(context, server: Server, *, unload: bool = True, keep_open: bool = Fal
     Returns:
         the ``Visit`` (and the page when ``keep_open``).
     """
-    first, answer = _reference_episodes()
+    first, answer = reference_episodes()
     page = context.new_page()
     page.goto(server.url(DEMO_URL_PATH), wait_until="commit", timeout=60_000)
     page.wait_for_selector("canvas", timeout=60_000)

@@ -48,6 +48,13 @@ my_skill = Skill("my-reach", "Reach (1.0, 0.6) m", base.plant, base.feature_map,
                  theta=[[-k, 0, -d, 0, target[0]], [0, -k, 0, -d, target[1]]],   # rest point not times k
                  start=base.start, target=PointTarget((1.0, 0.6)))
 """, 3.0),  # the skill (4) and where it ends (3) fail; teaching it exactly (3) still works
+    "a7_reading_a_study": ("test", """
+groups = episodes.groupby("participant")["group"].first()
+target = retention[groups[retention.index] == "target"]
+control = retention[groups[retention.index] == "control"]
+test_choice = "welch-two-sided"                           # ignores the hypothesis' direction
+p_value = float(stats.ttest_ind(target, control, equal_var=False).pvalue)
+""", 7.0),  # the choice (1) and the p-value (2) fail; p = 0.155 and 0.078 are both above 0.05
 }
 
 
@@ -120,7 +127,7 @@ def test_the_instructors_solutions_get_full_marks(graded, assignment):
 @pytest.mark.parametrize("assignment", ASSIGNMENTS)
 def test_untouched_released_notebooks_get_less_than_full_marks_without_crashing(graded, assignment):
     score, total = graded["scores"][(assignment, "untouched")]
-    assert score < total
+    assert score == 0.0 < total  # every answer is still nbgrader's placeholder
     autograded = graded["course"] / "autograded" / "untouched" / assignment / f"{assignment}.ipynb"
     text = autograded.read_text()
     # The checks' words ("not written yet", "expected a Skill, got NoneType"), not a bare assertion.

@@ -1,0 +1,278 @@
+"""A class JupyterHub on loopback for tests and benchmarks/bench_hub.py.
+
+``ClassHub`` starts ``deploy/jupyterhub/jupyterhub_config.py`` with its own state, homes, class
+folder and nbgrader exchange in a temporary folder, on free ports of 127.0.0.1, and drives it
+only through its REST APIs: the hub's (users, servers), each student's Jupyter server (kernels
+over websockets, contents, nbgrader's assignment handlers). The hub runs in its own process
+group, ended at ``stop``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import secrets
+import shutil
+import signal
+import subprocess
+import sys
+import time
+import uuid
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import psutil
+import requests
+import websocket
+
+REPO = Path(__file__).resolve().parents[2]
+CONFIG = REPO / "deploy" / "jupyterhub" / "jupyterhub_config.py"
+BIN = Path(sys.executable).parent
+sys.path.insert(0, str(REPO / "tests"))
+from browser_support import free_port  # noqa: E402
+
+
+def proxy_folder() -> Path:
+    """Where configurable-http-proxy is, installing it (scripts/install-hub.sh) when missing."""
+    found = shutil.which("configurable-http-proxy")
+    if found:
+        return Path(found).parent
+    result = subprocess.run(["bash", str(REPO / "scripts" / "install-hub.sh")], capture_output=True, text=True,
+                            timeout=300)
+    if result.returncode != 0:
+        raise RuntimeError(f"configurable-http-proxy could not be installed:\n{result.stderr[-2000:]}")
+    return Path(result.stdout.strip().splitlines()[-1])
+
+
+def warm_numba_template(folder: Path) -> Path:
+    """A numba cache warmed by deploy/jupyterhub/warm_numba_cache.py (what an install step does once)."""
+    if not folder.exists():
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(folder), PYTHONPATH=str(REPO))
+        subprocess.run([sys.executable, str(REPO / "deploy" / "jupyterhub" / "warm_numba_cache.py")], env=env,
+                       check=True, capture_output=True, timeout=600)
+    return folder
+
+
+def _decode(frame) -> dict:
+    """A kernel message from a websocket frame: JSON text, or Jupyter's binary framing (messages
+    with buffers, as a canvas's drawing commands): a count, offsets, the JSON, then the buffers."""
+    if isinstance(frame, str):
+        return json.loads(frame)
+    count = int.from_bytes(frame[:4], "big")
+    offsets = [int.from_bytes(frame[4 + 4 * i:8 + 4 * i], "big") for i in range(count)]
+    end = offsets[1] if count > 1 else len(frame)
+    return json.loads(frame[offsets[0]:end])
+
+
+class ClassHub:
+    """A JupyterHub for a class, in ``root`` (state, homes, class folder, exchange)."""
+
+    def __init__(self, root: Path, numba_template: Path | None = None, spawn_limit: int = 40):
+        self.root = root
+        self.port, self.proxy_api_port, self.hub_port = free_port(), free_port(), free_port()
+        self.url = f"http://127.0.0.1:{self.port}"
+        self.token = secrets.token_hex(24)
+        self.password = "class-password"
+        self.homes = root / "homes"
+        self.class_folder = root / "class"
+        self.exchange = root / "exchange"
+        self.exchange.mkdir(parents=True, exist_ok=True)
+        os.chmod(self.exchange, 0o777)
+        env = dict(os.environ)
+        env.update({
+            "PATH": f"{proxy_folder()}{os.pathsep}{BIN}{os.pathsep}{env.get('PATH', '')}",
+            "PYTHONPATH": str(REPO),
+            "MT_HUB_PORT": str(self.port), "MT_HUB_PROXY_API_PORT": str(self.proxy_api_port),
+            "MT_HUB_INTERNAL_PORT": str(self.hub_port),
+            "MT_HUB_STATE": str(root / "state"), "MT_HUB_HOMES": str(self.homes),
+            "MT_HUB_PASSWORD": self.password, "MT_HUB_API_TOKEN": self.token,
+            "MT_HUB_SPAWN_LIMIT": str(spawn_limit),
+            "MT_WIDGETS_CLASS_FOLDER": str(self.class_folder), "MT_WIDGETS_EXCHANGE": str(self.exchange),
+        })
+        env.pop("MT_WIDGETS_STUDENT", None)
+        if numba_template is not None:
+            env["MT_HUB_NUMBA_TEMPLATE"] = str(numba_template)
+        self.env = env
+        self.log = root / "jupyterhub.log"
+        self._log_file = open(self.log, "w")
+        self.process = subprocess.Popen([str(BIN / "jupyterhub"), "-f", str(CONFIG)], cwd=root, env=env,
+                                        stdout=self._log_file, stderr=subprocess.STDOUT, start_new_session=True)
+        self.session = requests.Session()
+        self.session.headers["Authorization"] = f"token {self.token}"
+        # One connection per student thread when a whole class is driven at once.
+        adapter = requests.adapters.HTTPAdapter(pool_connections=4, pool_maxsize=64)
+        self.session.mount("http://", adapter)
+        deadline = time.monotonic() + 90
+        while True:
+            if self.process.poll() is not None:
+                raise RuntimeError(f"jupyterhub exited with {self.process.returncode}:\n{self.tail()}")
+            try:
+                if self.session.get(f"{self.url}/hub/api/", timeout=2).status_code == 200:
+                    break
+            except requests.ConnectionError:
+                pass
+            if time.monotonic() > deadline:
+                self.stop()
+                raise RuntimeError(f"jupyterhub did not answer within 90 s:\n{self.tail()}")
+            time.sleep(0.25)
+
+    def tail(self, chars: int = 4000) -> str:
+        self._log_file.flush()
+        return self.log.read_text()[-chars:]
+
+    # -- the hub's API -------------------------------------------------------------------------------
+    def api(self, method: str, path: str, **kwargs):
+        response = self.session.request(method, f"{self.url}/hub/api{path}", timeout=60, **kwargs)
+        if response.status_code >= 400:
+            raise RuntimeError(f"{method} /hub/api{path}: {response.status_code} {response.text[:500]}")
+        return response.json() if response.content else None
+
+    def create_users(self, names) -> None:
+        self.api("POST", "/users", json={"usernames": list(names)})
+
+    def ensure_running(self, name: str) -> None:
+        """Creates ``name`` if the hub does not know them and starts their server if it is not running."""
+        users = {user["name"]: user for user in self.api("GET", "/users")}
+        if name not in users:
+            self.create_users([name])
+        if not ((users.get(name) or {}).get("servers") or {}).get(""):
+            self.spawn(name)
+
+    def spawn(self, name: str, timeout: float = 180) -> float:
+        """Starts ``name``'s server; returns the seconds until the hub reports it ready."""
+        started = time.perf_counter()
+        self.api("POST", f"/users/{name}/server")
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            server = (self.api("GET", f"/users/{name}").get("servers") or {}).get("")
+            if server and server.get("ready"):
+                return time.perf_counter() - started
+            time.sleep(0.2)
+        raise RuntimeError(f"{name}'s server was not ready within {timeout} s:\n{self.tail()}")
+
+    def spawn_class(self, names) -> dict[str, float]:
+        """Starts every student's server at once; returns name -> spawn seconds."""
+        with ThreadPoolExecutor(len(names)) as pool:
+            return dict(zip(names, pool.map(self.spawn, names)))
+
+    # -- a student's server ---------------------------------------------------------------------------
+    def user_url(self, name: str, path: str) -> str:
+        return f"{self.url}/user/{name}{path}"
+
+    def server_api(self, name: str, method: str, path: str, **kwargs):
+        response = self.session.request(method, self.user_url(name, path), timeout=120, **kwargs)
+        if response.status_code >= 400:
+            raise RuntimeError(f"{method} /user/{name}{path}: {response.status_code} {response.text[:800]}")
+        return response.json() if response.content else None
+
+    def run_in_kernel(self, name: str, code: str, timeout: float = 180) -> dict:
+        """Starts a kernel in ``name``'s server, runs ``code``, and returns its output and timings.
+
+        Returns:
+            {"stdout": text printed, "error": the error's name and value or None,
+             "kernel_id": ..., "seconds": wall time of the execution}
+        """
+        kernel = self.server_api(name, "POST", "/api/kernels", json={"name": "python3"})
+        ws_url = self.user_url(name, f"/api/kernels/{kernel['id']}/channels").replace("http://", "ws://")
+        connection = websocket.create_connection(ws_url, header=[f"Authorization: token {self.token}"],
+                                                 timeout=timeout)
+        try:
+            msg_id = uuid.uuid4().hex
+            connection.send(json.dumps({
+                "header": {"msg_id": msg_id, "username": name, "session": uuid.uuid4().hex,
+                           "msg_type": "execute_request", "version": "5.3"},
+                "parent_header": {}, "metadata": {}, "channel": "shell", "buffers": [],
+                "content": {"code": code, "silent": False, "store_history": False, "user_expressions": {},
+                            "allow_stdin": False, "stop_on_error": True},
+            }))
+            started = time.perf_counter()
+            stdout, error, replied, idle = [], None, False, False
+            deadline = time.monotonic() + timeout
+            while not (replied and idle):
+                if time.monotonic() > deadline:
+                    raise TimeoutError(f"{name}'s kernel did not finish within {timeout} s")
+                message = _decode(connection.recv())
+                if message.get("parent_header", {}).get("msg_id") != msg_id:
+                    continue
+                kind = message["msg_type"]
+                if kind == "stream":
+                    stdout.append(message["content"]["text"])
+                elif kind == "error":
+                    error = f"{message['content']['ename']}: {message['content']['evalue']}"
+                elif kind == "execute_reply":
+                    replied = True
+                elif kind == "status" and message["content"]["execution_state"] == "idle":
+                    idle = True
+            return {"stdout": "".join(stdout), "error": error, "kernel_id": kernel["id"],
+                    "seconds": time.perf_counter() - started}
+        finally:
+            connection.close()
+
+    def memory(self, name: str) -> int:
+        """Resident bytes of ``name``'s server and its kernels."""
+        total = 0
+        for process in psutil.process_iter(["pid"]):
+            try:
+                if process.environ().get("JUPYTERHUB_USER") == name:
+                    total += process.memory_info().rss
+            except (psutil.NoSuchProcess, psutil.AccessDenied, psutil.ZombieProcess):
+                continue
+        return total
+
+    def stop(self) -> None:
+        if self.process.poll() is None:
+            # The hub, the proxy and every student's server and kernel are in this process group.
+            try:
+                os.killpg(self.process.pid, signal.SIGTERM)
+                self.process.wait(20)
+            except subprocess.TimeoutExpired:
+                os.killpg(self.process.pid, signal.SIGKILL)
+                self.process.wait(5)
+        # Student servers are started in sessions of their own: end what is left of them.
+        for process in psutil.process_iter(["pid"]):
+            try:
+                if process.environ().get("JUPYTERHUB_API_URL") == f"http://127.0.0.1:{self.hub_port}/hub/api":
+                    process.kill()
+            except (psutil.NoSuchProcess, psutil.AccessDenied, psutil.ZombieProcess):
+                continue
+        self._log_file.close()
+
+
+#: What each student's kernel runs: build a skill, then three episodes with guidance whose slips
+#: shrink (a student learning from the arrows), and one exercise check. Printed as one JSON line:
+#: the teaching errors, the feedback latencies and where the numba cache is.
+EPISODE_CODE = """
+import json
+import os
+
+import numpy as np
+from mt_widgets import SKILLS, Skill
+from mt_widgets.core import PointTarget
+from mt_widgets.widgets import EpisodeWidget
+from mt_widgets.classroom import CheckFailed, ExerciseChecks, ProgressRecorder
+
+base = SKILLS["sim-point"]
+goal = np.array([0.6 + 0.05 * {number}, 1.1])
+skill = Skill("class-reach", "Reach a point", base.plant, base.feature_map,
+              theta=[[-1, 0, -1, 0, goal[0]], [0, -1, 0, -1, goal[1]]], start=base.start,
+              target=PointTarget(tuple(goal)))
+recorder = ProgressRecorder()
+rng = np.random.default_rng({number})
+errors, latencies = [], []
+for index, slip in enumerate((1.0, 0.5, 0.2)):
+    episode = EpisodeWidget(skill, seed=10 * {number} + index, guidance=True, episode_index=index, episodes_total=3)
+    recorder.attach(episode, "hub-episode")
+    for optimal in episode.optimal:
+        episode.demonstrate(optimal + rng.normal(0, slip * {number} / 11, size=2))
+        episode.next()
+    errors.append(episode.result.error)
+    latencies.append(episode.result.feedback_latency_s)
+checks = ExerciseChecks("a1_ridge_learner", recorder)
+checks.true("ridge-fit", True, "")
+try:
+    checks.true("teaching-error", {number} % 3 != 0, "E: expected 0.316, got 0.1")
+except CheckFailed:
+    pass
+print(json.dumps({{"errors": errors, "latencies_s": latencies, "recorded": str(recorder.path),
+                  "numba_cache": os.environ.get("NUMBA_CACHE_DIR")}}))
+"""
