@@ -31,7 +31,9 @@ from .kiosk import (DEPLOY, kernel_processes, kiosk_context, memory_mb, referenc
 
 LOADS = 20
 ABANDONED = {4, 9, 14}                 # visits whose page vanishes without beforeunload (a killed tab)
-CULL_TIMEOUT_S, CULL_INTERVAL_S = 8, 1  # the test's culler: the shipped one waits 600 s
+# The test's culler (the shipped one waits 600 s). 15 s stays above the time a page takes to
+# connect to its kernel on a machine loaded far beyond its cores (up to 8 s was seen).
+CULL_TIMEOUT_S, CULL_INTERVAL_S = 15, 1
 
 
 def shipped():
@@ -166,6 +168,9 @@ def test_twenty_visits_keep_memory_bounded_and_each_page_is_interactive_within_3
         ARTIFACTS.mkdir(exist_ok=True)
         (ARTIFACTS / "kiosk-figures.json").write_text(json.dumps(summary, indent=1))
         assert summary["answered_p50_ms"] <= 3000 * share, summary
+    except BaseException:
+        print(server.log.read_text()[-6000:])          # pytest shows it with the failure
+        raise
     finally:
         context.close()
         server.stop()
