@@ -26,8 +26,16 @@ import pytest
 from browser_support import ARTIFACTS
 
 from .helpers import OKABE, ee_pixel, wait_for_color
-from .kiosk import (kernel_processes, kiosk_context, memory_mb, reference_episodes, start_page_server,
-                    visit, wait_for_exit, wait_until_quiet)
+from .kiosk import (
+    kernel_processes,
+    kiosk_context,
+    memory_mb,
+    reference_episodes,
+    start_page_server,
+    visit,
+    wait_for_exit,
+    wait_until_quiet,
+)
 
 LOADS = 20
 ABANDONED = {4, 9, 14}                 # visits whose page vanishes without beforeunload (a killed tab)
