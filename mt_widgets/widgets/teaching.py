@@ -147,13 +147,13 @@ class TeachingCanvas(VBox):
         canvas.on_key_down(self._on_key_down)
 
         self.view.legend.add("user_arrow")
-        # The legend beside the canvas, where the eyes go from a mark to its meaning, and not
-        # under it, where it would push what follows the canvas below the fold.
+        # The legend beside the canvas under the controls, where the eyes go from a mark to its
+        # meaning; under the canvas it would push what follows below the fold. (An episode places
+        # ``controls`` and ``view.legend`` in its own side column.)
         self.view.legend.layout.max_width = "100%"
         self.controls = controls = VBox([
             self.readout,
             HBox([self.confirm_button, self.clear_button]),
-            self.view.legend,
             HTML("<small>Or type the arrow:</small>"),
             self.entry_mode,
             HBox([self.first_entry, self.second_entry]),
@@ -163,7 +163,7 @@ class TeachingCanvas(VBox):
             HTML("<small>Keyboard: click the canvas, then arrow keys move the arrow tip "
                  "(Shift: finer), Enter confirms, Escape clears.</small>"),
         ], layout=Layout(min_width="300px", max_width="380px"))
-        super().__init__([HBox([canvas, controls],
+        super().__init__([HBox([canvas, VBox([controls, self.view.legend], layout=Layout(max_width="400px"))],
                                layout=Layout(flex_flow="row wrap", align_items="flex-start"))])
         self._show_current_state()
 
