@@ -1,4 +1,4 @@
-"""Tutorial 05's own plant (a puck) taught on the demo page in Chromium, with real mouse drags.
+"""Tutorial 09's own plant (a puck) taught on the demo page in Chromium, with real mouse drags.
 
 The page (pages/demo_user_plant.ipynb) gives ``DemoPage`` the caller's skills, the puck first.
 Nothing in the views knows the puck: it is drawn from its end-effector alone (a dot with its
@@ -33,7 +33,7 @@ def reference_page():
     return DemoPage(skills=[("Puck: park it", park), ("Arm: reach a point", "sim-point")], duration=3.0).episode
 
 
-def test_tutorial_05s_puck_is_taught_with_real_drags_on_the_demo_page(page, voila_server, artifacts):
+def test_the_your_own_skill_tutorials_puck_is_taught_with_real_drags_on_the_demo_page(page, voila_server, artifacts):
     reference = reference_page()
     view = reference.teaching.view
     page.goto(voila_server.url(f"/voila/render/{PAGE}"), timeout=60_000)
