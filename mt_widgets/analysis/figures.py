@@ -25,6 +25,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from mt_widgets.core import SKILLS, LineTarget
+from mt_widgets.core.validation import as_bool
 
 from .statistics import GROUPS, PAPER_CHANGES, episodes_frame, participant_changes, phase_summary
 
@@ -245,6 +246,7 @@ def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration
         The figure. Each trajectory is a line with ``gid`` "<participant>/<phase>E<episode>"
         through the end-effector positions; earlier episodes of a phase are lighter.
     """
+    true_skill, zoom = as_bool("true_skill", true_skill), as_bool("zoom", zoom)
     frame = episodes_frame(episodes)
     participants = [str(p) for p in participants]
     if not participants:
