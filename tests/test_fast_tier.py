@@ -4,7 +4,7 @@ would otherwise quietly join the fast tier, a moved browser folder leave it."""
 import ast
 from pathlib import Path
 
-from conftest import SLOW_TESTS
+from tiers import SLOW_TESTS
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -20,6 +20,7 @@ def test_every_listed_slow_test_exists():
             assert any(test.startswith(name) for test in tests), f"no test in {path} starts with {name!r}"
 
 
-def test_the_browser_folders_exist():
-    for folder in ("browser", "browser_study"):
-        assert (ROOT / "tests" / folder).is_dir()
+def test_the_browser_test_folders_are_named_as_the_marking_expects():
+    # tests/conftest.py marks every test in a folder named browser* as a browser test.
+    folders = {path.name for path in (ROOT / "tests").glob("browser*") if path.is_dir()}
+    assert {"browser", "browser_study"} <= folders

@@ -49,7 +49,7 @@ from mt_widgets.study import (
     StudyFolder,
     load_protocol,
 )
-from mt_widgets.widgets import EpisodeWidget, TeachingCanvas
+from mt_widgets.widgets import EpisodeWidget, TeachingCanvas, fill_words, get_theme, stop_animations
 
 _log = logging.getLogger(__name__)
 
@@ -145,7 +145,7 @@ class StudyApp(VBox):
         self.heading = HTML()
         self.body = VBox(layout=Layout(max_width="1000px"))
         self.withdraw_button = Button(description="Withdraw from the study", icon="sign-out",
-                                      layout=Layout(width="auto", margin="24px 0 0 0"))
+                                      layout=Layout(width="auto", margin="24px 0 0 0", align_self="flex-start"))
         self.withdraw_button.on_click(lambda _: self._safely(self._ask_withdraw))
         self.withdraw_box = VBox([self.withdraw_button])
         self.participant_view = VBox([self.heading, self.body, self.withdraw_box], layout=Layout(padding="4px"))
@@ -234,7 +234,9 @@ class StudyApp(VBox):
 
     # -- the participant view ------------------------------------------------------------------------------
     def _button(self, description: str, on_click, style: str = "primary") -> Button:
-        button = Button(description=description, button_style=style, layout=Layout(width="auto", min_width="160px"))
+        # align_self: a button keeps its own width in the page's column instead of spanning it.
+        button = Button(description=description, button_style=style,
+                        layout=Layout(width="auto", min_width="160px", align_self="flex-start"))
 
         def clicked(_):
             button.disabled = True  # one click, one step: a double click cannot skip a screen
@@ -295,6 +297,10 @@ class StudyApp(VBox):
         step = self.session.current_step()
         protocol = self.session.protocol
         self._cancel_timer()
+        if isinstance(self.episode, EpisodeWidget) and step.kind not in ("demonstration", "episode_end",
+                                                                          "reproduction"):
+            # The episode leaves the page: a replay still playing must not hold up what comes next.
+            stop_animations(self.episode)
         # Withdrawing is offered on every page of a logged session until it is over.
         self.withdraw_box.layout.display = "none" if self.session.finished or self.session.folder is None else None
         self._reset_withdraw()
@@ -314,7 +320,7 @@ class StudyApp(VBox):
                 self.heading.value = ""
             labels = {"welcome": "Continue", "consent": "I agree", "instructions": "Start the practice"
                       if protocol.practice.duration_s > 0 else "Start", "phase_intro": "Start"}
-            children = [HTML(_paragraphs(step.text))]
+            children = [HTML(self._text(step.text, step.skill))]
             if step.kind in labels:
                 children.append(self._button(labels[step.kind], self._advance))
             if step.kind == "consent":
@@ -329,6 +335,14 @@ class StudyApp(VBox):
     def _advance(self) -> None:
         self.session.advance()
         self.show_step()
+
+    def _text(self, text: str, skill: str | None) -> str:
+        """Protocol text as HTML, its "{goal}" in the words of what the canvas draws (the skill's
+        target in this theme's colours); texts outside a phase name the first phase's target."""
+        protocol = self.session.protocol
+        target = protocol.skills[skill or protocol.phases[0].skill].target
+        goal = get_theme(self.theme).target_words(target, "goal") if target is not None else "the goal"
+        return _paragraphs(fill_words(text, goal=goal))
 
     def _decline(self) -> None:
         self.session.decline_consent()
@@ -393,13 +407,15 @@ class StudyApp(VBox):
         self._practice_done.disabled = True
         self._practice_again = self._button("Practise again", lambda: self._new_practice_round(step), "")
         self._practice_again.layout.display = "none"
-        self._practice_text = HTML(_paragraphs(step.text))
+        self._practice_text = HTML(self._text(step.text, step.skill))
         self._new_practice_round(step)
         self._tick(step.duration_s)
 
     def _new_practice_round(self, step) -> None:
         seed = self._practice_seed.spawn(1)[0]
         self._practice_round += 1
+        if self.episode is not None:
+            stop_animations(self.episode)
         skill = self.session.protocol.skill(step.skill)
         states = skill.query_states(seed=seed)
         if step.practice_reproduction:
@@ -473,6 +489,8 @@ class StudyApp(VBox):
     def _show_episode(self, step) -> None:
         key = (step.phase_index, step.episode)
         if self.episode is None or self._episode_key != key:
+            if self.episode is not None:
+                stop_animations(self.episode)
             self._episode_key = key
             self._continue = self._button("Continue", self._advance)
             self._continue.layout.display = "none"
@@ -480,11 +498,13 @@ class StudyApp(VBox):
             self.heading.value = (f"<h3 style='margin:4px 0'>Part {step.phase_index + 1} of "
                                   f"{len(self.session.protocol.phases)}, round {step.episode} of "
                                   f"{step.n_episodes}</h3>")
-            instructions = HTML(_paragraphs(self.session.protocol.phase(step.phase).instructions))
+            instructions = HTML(self._text(self.session.protocol.phase(step.phase).instructions, step.skill))
             self.episode = self._episode_widget(step.skill, step.query_states, step.guidance,
                                                 step.episode - 1, step.n_episodes, self._on_demonstration,
                                                 self._on_episode_finished, step.guidance_modality)
-            self.body.children = [instructions, self.episode, self._reproduction_text, self._continue]
+            self.body.children = [instructions, self.episode]
+            # Beside the canvas the reproduction plays in: what to do next is in view.
+            self.episode.next_actions.children = [self._reproduction_text, self._continue]
             if len(step.actions):
                 # Resuming: the given demonstrations are restored; if all are given the widget
                 # finishes at once, and _on_episode_finished logs the end if it is not logged yet.
@@ -512,7 +532,8 @@ class StudyApp(VBox):
         self._safely(finish)
 
     def _show_reproduction_controls(self) -> None:
-        self._reproduction_text.value = _paragraphs(self.session.protocol.texts["reproduction"])
+        self._reproduction_text.value = self._text(self.session.protocol.texts["reproduction"],
+                                                   self.session.current_step().skill)
         self._continue.layout.display = None
         trajectory = self.episode.result.trajectory if self.episode is not None and self.episode.result else None
         self._enable_after(self._continue, 0.0 if trajectory is None else float(trajectory.times[-1]))
@@ -565,7 +586,8 @@ class VideoStep(VBox):
             f"<div><button class='mt-video-replay' onclick=\"const v=this.closest('.mt-video-step')"
             f".querySelector('video'); v.currentTime=0; v.play();\">Play again from the start</button></div>")
         self.continue_button = Button(description="Continue", button_style="primary",
-                                      disabled=study_step.require_watched, layout=Layout(width="auto"))
+                                      disabled=study_step.require_watched,
+                                      layout=Layout(width="auto", min_width="160px", align_self="flex-start"))
         self.continue_button.on_click(lambda _: self._continue())
         self.note = HTML("<small>Continue becomes available once the video has played to the end.</small>"
                          if study_step.require_watched else "")
@@ -619,7 +641,8 @@ class QuestionForm(VBox):
             self.fields[item.id] = field
             rows.append(VBox([label, field], layout=Layout(margin="6px 0")))
         self.message = HTML()
-        self.continue_button = Button(description="Continue", button_style="primary", layout=Layout(width="auto"))
+        self.continue_button = Button(description="Continue", button_style="primary",
+                                      layout=Layout(width="auto", min_width="160px", align_self="flex-start"))
         self.continue_button.on_click(lambda _: on_submit(self.answers()))
         super().__init__(rows + [self.message, self.continue_button])
 

@@ -48,6 +48,8 @@ class PlantDrawing:
         action_length: world units of arrow per action unit, or None to let the skill choose
             one from its typical action (``Skill.drawing``).
         velocity_length: world units of arrow per unit of velocity (units per second).
+        has_velocity: whether a state has a velocity worth drawing (a kinematic plant such as
+            the uArm's is at rest at every state).
     """
 
     view: Box
@@ -59,6 +61,7 @@ class PlantDrawing:
     outline: tuple[np.ndarray, ...] = field(default_factory=tuple)
     action_length: float | None = None
     velocity_length: float = 0.3
+    has_velocity: bool = True
 
     def __post_init__(self):
         if not isinstance(self.view, Box):
@@ -75,6 +78,8 @@ class PlantDrawing:
         if self.action_length is not None:
             object.__setattr__(self, "action_length", as_positive("action_length", self.action_length))
         object.__setattr__(self, "velocity_length", as_positive("velocity_length", self.velocity_length))
+        if not isinstance(self.has_velocity, bool):
+            raise TypeError(f"has_velocity: expected True or False, got {self.has_velocity!r}")
 
 
 @dataclass(frozen=True)

@@ -62,7 +62,7 @@ class UArmPlant(KinematicPlant):
         # per cm of action: the 1-4 cm moves of a step read as 2-8 cm on screen.
         return PlantDrawing(view=self.view, units=self.units, action_units=self.action_units, links="reach",
                             marker="dot", base=(0.0, 0.0), outline=(self.workspace.outline(),),
-                            action_length=2.0, velocity_length=1.0)
+                            action_length=2.0, velocity_length=1.0, has_velocity=False)
 
     def sketch(self, states):
         positions, velocities = self.end_effector(states)

@@ -14,7 +14,7 @@ attaches later (Voila, a page reload) gets everything again (see ``redraw.py``).
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from ipycanvas import MultiCanvas
@@ -23,6 +23,7 @@ from ipywidgets import Layout
 from mt_widgets.core.validation import as_bool
 
 from .coords import ViewTransform, nice_ticks
+from .legend import CanvasLegend
 from .redraw import drawing_batch, repaint_on_new_view
 from .robots import painter_for
 from .theme import get_theme
@@ -100,6 +101,12 @@ class ArmView:
         for name in LAYERS:
             layer = self.layer(name)
             repaint_on_new_view(layer, lambda name=name: self._repaint(name))
+        #: The legend of the marks this view draws (an HTML widget for the caller to place).
+        self.legend = CanvasLegend(self.theme, self.drawing, skill.target, target_label,
+                                   marks=("target", "base", "links", "outline", "robot", "velocity"))
+        # No wider than the canvas: its entries wrap under it instead of widening the column
+        # they share (a stretched canvas would follow the legend's width).
+        self.legend.layout.max_width = css_width if css_width and css_width.strip().endswith("px") else f"{width}px"
         self.show(self.draw_background, "background")
 
     # -- layers -----------------------------------------------------------------------------------

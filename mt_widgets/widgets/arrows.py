@@ -79,3 +79,52 @@ def _head(canvas, tip, left, right) -> None:
     canvas.line_to(round(left[0], 1), round(left[1], 1))
     canvas.line_to(round(right[0], 1), round(right[1], 1))
     canvas.close_path()
+
+
+#: Arrows closer in direction than this (degrees) are drawn side by side, not on top of each other.
+ALIGNED_DEG = 10.0
+
+
+def side_offset(user_style: ArrowStyle, optimal_style: ArrowStyle) -> float:
+    """Pixels an aligned optimal arrow is moved sideways: the two shafts' half-widths, its
+    outline, and a pixel and a half of daylight between them."""
+    return (user_style.width + optimal_style.width) / 2 + optimal_style.outline_width + 1.5
+
+
+def draw_arrow_pair(canvas, start, user_tip, optimal_tip, user_style: ArrowStyle,
+                    optimal_style: ArrowStyle) -> float:
+    """Draw the user's arrow and the optimal one from the same pixel ``start``, both visible.
+
+    The optimal arrow is drawn last (dashed and outlined, it shows over the user's), and when
+    the two point within ``ALIGNED_DEG`` of each other it is moved sideways by about the two
+    shafts' half-widths, so that neither hides the other whichever is shorter: the two read as
+    two parallel arrows from the hand.
+
+    Args:
+        canvas: the layer to draw on.
+        start: (x, y) pixel of both tails (the end-effector).
+        user_tip, optimal_tip: (x, y) pixels of the tips; either may be None (not drawn).
+        user_style, optimal_style: their styles.
+
+    Returns:
+        The sideways offset of the optimal arrow in pixels (0 when not aligned).
+    """
+    x0, y0 = float(start[0]), float(start[1])
+    offset = 0.0
+    shift = (0.0, 0.0)
+    if user_tip is not None and optimal_tip is not None:
+        ux, uy = float(user_tip[0]) - x0, float(user_tip[1]) - y0
+        ox, oy = float(optimal_tip[0]) - x0, float(optimal_tip[1]) - y0
+        user_length, optimal_length = math.hypot(ux, uy), math.hypot(ox, oy)
+        if user_length >= 2.0 and optimal_length >= 2.0:
+            cosine = (ux * ox + uy * oy) / (user_length * optimal_length)
+            if cosine >= math.cos(math.radians(ALIGNED_DEG)):
+                offset = side_offset(user_style, optimal_style)
+                # To the left of the optimal arrow's direction, as the screen shows it.
+                shift = (oy / optimal_length * offset, -ox / optimal_length * offset)
+    if user_tip is not None:
+        draw_arrow(canvas, start, user_tip, user_style)
+    if optimal_tip is not None:
+        draw_arrow(canvas, (x0 + shift[0], y0 + shift[1]),
+                   (float(optimal_tip[0]) + shift[0], float(optimal_tip[1]) + shift[1]), optimal_style)
+    return offset

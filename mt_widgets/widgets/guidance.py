@@ -43,7 +43,10 @@ def explain_difference(action, optimal, units: str) -> str:
     if size < 1e-9:
         direction = "You gave no push."
     elif abs(angle) < 5:
-        direction = f"Direction: good (within {abs(angle):.0f}&deg;)."
+        # Said as the angle off, never "within 0 degrees": below half a degree it rounds to 0.
+        off = abs(angle)
+        direction = ("Direction: good (less than 1&deg; off)." if off < 0.5
+                     else f"Direction: good ({off:.0f}&deg; off).")
     else:
         turn = "clockwise" if angle > 0 else "anticlockwise"
         direction = f"Direction: {abs(angle):.0f}&deg; off; turn your arrow {turn}."
@@ -58,7 +61,7 @@ def explain_difference(action, optimal, units: str) -> str:
 
 
 class GuidancePanel(HTML):
-    """Shows the legend and the explanation after each demonstration (when guidance is on)."""
+    """Shows the explanation in words after each demonstration (when guidance is on)."""
 
     def __init__(self, theme: Theme, units: str):
         self.theme = theme
@@ -71,7 +74,7 @@ class GuidancePanel(HTML):
         note = "" if as_bool("exact", exact) else ("<br><small>With fewer query states than features no "
                                                    "demonstration teaches the "
                                  "skill exactly; the optimal arrow is the least-error one.</small>")
-        self.value = (f"<div>{legend_html(self.theme) if legend else ''}</div>"
+        self.value = (f"<div>{legend_html(self.theme) if as_bool('legend', legend) else ''}</div>"
                       f"<div style='margin-top:4px'>{explain_difference(action, optimal, self.units)}</div>{note}")
 
     def hide(self) -> None:

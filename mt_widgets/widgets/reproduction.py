@@ -54,6 +54,7 @@ class ReproductionPlayer(VBox):
     def __init__(self, skill, theme=None, fps: float = DEFAULT_FPS, width=None, height=None, css_width=None,
                  action_length=None, target_label: str | None = "goal", show_outcome: bool = True):
         self.skill = skill
+        self.target_label = target_label
         self.show_outcome = as_bool("show_outcome", show_outcome)
         self.fps = float(fps)
         self.view = ArmView(skill, width=width, height=height, theme=theme, action_length=action_length,
@@ -71,7 +72,9 @@ class ReproductionPlayer(VBox):
         self.error = None
         self._frames = None
         self.view.show_state(skill.start, show_velocity=False)
-        super().__init__([self.view.canvas, HBox([self.replay_button, self.error_label]), self.status],
+        self.view.legend.remove("velocity")  # frames draw the robot, not its velocity
+        super().__init__([self.view.canvas, self.view.legend, HBox([self.replay_button, self.error_label]),
+                          self.status],
                          layout=Layout(align_items="flex-start"))
 
     def play(self, trajectory, error: float | None = None, ghost=None) -> None:
@@ -99,6 +102,9 @@ class ReproductionPlayer(VBox):
         if ghost_positions is not None:
             ghost_positions = ghost_positions[::2]
         self._frames = (frames, ghost_pixels, states[-1], learnt_positions, ghost_positions)
+        self.view.legend.remove("ghost", "diverged")
+        self.view.legend.add("learnt", *(("ghost",) if ghost is not None else ()),
+                             *(("diverged",) if trajectory.diverged else ()))
         self._update_labels()
         self.replay()
 
@@ -145,13 +151,16 @@ class ReproductionPlayer(VBox):
                 canvas.stroke_line(x - 12, y - 12, x + 12, y + 12)
                 canvas.stroke_line(x - 12, y + 12, x + 12, y - 12)
 
-        with drawing_batch():
-            view.show(ghost_path, "ghost")
-            play_frames(view, "robot", len(frames), setup, draw_frame, final, self.fps)
-            # Queued after the last frame, so the learnt path appears when the motion ends.
-            ghost_canvas = view.layer("ghost")
+        ghost_canvas = view.layer("ghost")
+
+        def path_after_motion():
+            # Sent with the last frame, so the learnt path appears when the motion ends.
             ghost_canvas.clear()
             ghost_layer_after(ghost_canvas)
+
+        with drawing_batch():
+            view.show(ghost_path, "ghost")
+            play_frames(view, "robot", len(frames), setup, draw_frame, final, self.fps, then=path_after_motion)
         view.remember(ghost_layer_after, "ghost")
         self.replay_button.disabled = False
 
@@ -171,11 +180,18 @@ class ReproductionPlayer(VBox):
             self.status.value = (
                 f"<div style='color:white;background:{self.theme.diverged};padding:4px 8px;border-radius:4px'>"
                 f"<b>The learnt skill diverged{when}</b>: the robot left its safe range, so the replay stops "
-                f"there (red cross). The demonstrations did not teach a stable skill.</div>")
+                f"there ({self._named('diverged')}cross). The demonstrations did not teach a stable skill.</div>")
         else:
             distance = self.skill.target.distance(end) if self.skill.target is not None else None
-            extra = "" if distance is None else f", {float(distance):.3g} {units} from the goal"
-            self.status.value = (f"After {trajectory.times[-1]:.1f} s the end-effector is at "
+            goal = "" if self.skill.target is None else self.theme.target_words(self.skill.target, self.target_label)
+            extra = "" if distance is None else f", {float(distance):.3g} {units} from {goal}"
+            self.status.value = (f"After {trajectory.times[-1]:.1f} s the robot's hand is at "
                                  f"({end[0]:.2f}, {end[1]:.2f}) {units}{extra}. "
-                                 + ("The faint dashed path is the target skill's own motion."
-                                    if self.ghost is not None else ""))
+                                 f"Its path is the {self._named('trail')}line"
+                                 + (f"; the faint dashed {self._named('ghost')}line is the skill's own motion."
+                                    if self.ghost is not None else "."))
+
+    def _named(self, role: str) -> str:
+        """The theme's name of a mark's colour and a space ("pink "), or nothing if it has none."""
+        name = self.theme.color_name(role)
+        return f"{name} " if name else ""

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 from ipywidgets import HTML, Button, FloatText, HBox, Layout, ToggleButtons, VBox
@@ -27,7 +27,7 @@ from traitlets import Any, Bool, Int, List
 from mt_widgets.core.validation import as_bool, as_float_array
 
 from .arm_view import ArmView
-from .arrows import draw_arrow
+from .arrows import draw_arrow_pair
 from .callbacks import Callbacks
 from .redraw import drawing_batch
 
@@ -99,8 +99,8 @@ class TeachingCanvas(VBox):
     pending_action = Any(None, allow_none=True, help="The arrow drawn but not confirmed: [u1, u2] or None.")
     locked = Bool(False, help="True while input is disabled (guidance shown, episode over).")
 
-    def __init__(self, skill, query_states, theme=None, grab_radius: float = 28.0, auto_advance: bool = True, width=None, height=None,
-                 css_width=None, action_length=None, target_label: str | None = "goal"):
+    def __init__(self, skill, query_states, theme=None, grab_radius: float = 28.0, auto_advance: bool = True,
+                 width=None, height=None, css_width=None, action_length=None, target_label: str | None = "goal"):
         states = np.array(query_states, dtype=float)
         if states.ndim != 2 or states.shape[1] != skill.state_dim or len(states) == 0:
             raise ValueError(f"query_states: expected shape (N, {skill.state_dim}) with N >= 1, got {states.shape}")
@@ -146,7 +146,12 @@ class TeachingCanvas(VBox):
         canvas.on_mouse_out(self._on_mouse_up)
         canvas.on_key_down(self._on_key_down)
 
-        controls = VBox([
+        self.view.legend.add("user_arrow")
+        # The legend beside the canvas under the controls, where the eyes go from a mark to its
+        # meaning; under the canvas it would push what follows below the fold. (An episode places
+        # ``controls`` and ``view.legend`` in its own side column.)
+        self.view.legend.layout.max_width = "100%"
+        self.controls = controls = VBox([
             self.readout,
             HBox([self.confirm_button, self.clear_button]),
             HTML("<small>Or type the arrow:</small>"),
@@ -158,7 +163,8 @@ class TeachingCanvas(VBox):
             HTML("<small>Keyboard: click the canvas, then arrow keys move the arrow tip "
                  "(Shift: finer), Enter confirms, Escape clears.</small>"),
         ], layout=Layout(min_width="300px", max_width="380px"))
-        super().__init__([HBox([canvas, controls], layout=Layout(flex_flow="row wrap", align_items="flex-start"))])
+        super().__init__([HBox([canvas, VBox([controls, self.view.legend], layout=Layout(max_width="400px"))],
+                               layout=Layout(flex_flow="row wrap", align_items="flex-start"))])
         self._show_current_state()
 
     # -- public API ---------------------------------------------------------------------------------
@@ -234,9 +240,15 @@ class TeachingCanvas(VBox):
         if len(self.demonstrations) == confirmed.index:
             self.demonstrations = self.demonstrations + [[float(a) for a in confirmed.action]]
 
-    def show_guidance(self, optimal_action) -> None:
-        """Draw the optimal arrow (R,) beside the confirmed one at the current state."""
+    def show_guidance(self, optimal_action, legend: bool = True) -> None:
+        """Draw the optimal arrow (R,) beside the confirmed one at the current state.
+
+        ``legend``: name it in the canvas legend too (a replication of the paper shows the
+        arrows and no words).
+        """
         self._guidance = np.array(optimal_action, dtype=float)
+        if as_bool("legend", legend):
+            self.view.legend.add("optimal_arrow")
         self._draw_arrows()
 
     def advance(self) -> None:
@@ -277,8 +289,8 @@ class TeachingCanvas(VBox):
             else:
                 self.view.show_state(state)
             self._draw_arrows()
+        self._sync_entries()  # before the readout names the new state: typed numbers never lag behind it
         self._update_readout()
-        self._sync_entries()
         self.confirm_button.disabled = True
 
     def _draw_arrows(self, rubber_band: bool = False) -> None:
@@ -294,12 +306,8 @@ class TeachingCanvas(VBox):
         style = theme.rubber_band if rubber_band else theme.user_arrow
 
         def paint(canvas):
-            # The optimal arrow last: dashed and outlined, it stays visible on the user's arrow
-            # when the two are aligned and it is the shorter, and the user's shows in its gaps.
-            if user is not None:
-                draw_arrow(canvas, start, user, style)
-            if optimal is not None:
-                draw_arrow(canvas, start, optimal, theme.optimal_arrow)
+            # Both stay visible when aligned, whichever is shorter (see draw_arrow_pair).
+            draw_arrow_pair(canvas, start, user, optimal, style, theme.optimal_arrow)
 
         view.show(paint, "arrows")
 
@@ -309,8 +317,10 @@ class TeachingCanvas(VBox):
         if self.current_state is None:
             self.readout.value = f"<b>All {self.n_states} demonstrations given.</b>"
         elif self.pending_action is None:
-            # "the robot's hand (the dot)": novices and visitors do not know "end-effector".
-            self.readout.value = (f"<b>State {n + 1} of {self.n_states}</b>: press on the robot's hand (the dot) "
+            # "the robot's hand (the yellow dot)": novices and visitors do not know "end-effector";
+            # the colour is the one the theme draws the marker in.
+            marker = self.theme.marker_words(self.view.drawing)
+            self.readout.value = (f"<b>State {n + 1} of {self.n_states}</b>: press on the robot's hand ({marker}) "
                                   f"and drag to draw the action.")
         else:
             self.readout.value = (f"<b>State {n + 1} of {self.n_states}</b>: your arrow "
@@ -355,7 +365,8 @@ class TeachingCanvas(VBox):
         near_tip = (self.pending_action is not None and np.hypot(
             *(pointer - view.transform.action_tip(origin, self.pending_action))) <= self.grab_radius)
         if not (near_origin or near_tip):
-            self.hint.value = "<small>Press on the robot's hand (the dot) to start an arrow.</small>"
+            self.hint.value = (f"<small>Press on the robot's hand ({self.theme.marker_words(self.view.drawing)}) "
+                               f"to start an arrow.</small>")
             return
         self.hint.value = ""
         self._dragging = True
