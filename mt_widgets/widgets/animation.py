@@ -35,7 +35,7 @@ DEFAULT_FPS = 60.0
 #: Seconds of frames in one message.
 CHUNK_S = 0.2
 #: How far ahead of the browser's playback the next chunk is sent (seconds).
-AHEAD_S = 0.25
+AHEAD_S = 0.2
 #: Extra seconds before a retired widget is closed, for messages in flight.
 CLOSE_MARGIN_S = 2.0
 
