@@ -4,7 +4,7 @@ would otherwise quietly join the fast tier, a moved browser folder leave it."""
 import ast
 from pathlib import Path
 
-from conftest import SLOW_TESTS
+from tiers import SLOW_TESTS
 
 ROOT = Path(__file__).resolve().parents[1]
 

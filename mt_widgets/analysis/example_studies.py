@@ -11,6 +11,7 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
+from mt_widgets.core.validation import as_bool
 from mt_widgets.in_silico.sessions import run_through_sessions
 
 #: The synthetic study shipped with the package.
@@ -35,6 +36,8 @@ def write_example_study(folder=EXAMPLE_STUDY, overwrite: bool = False, **setting
     Returns:
         The folder.
     """
+    # Checked before anything else: a truthy non-bool ("no") must never reach the rmtree below.
+    overwrite = as_bool("overwrite", overwrite)
     folder = Path(folder)
     if folder.exists():
         if not overwrite:

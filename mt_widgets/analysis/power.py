@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from mt_widgets.core.validation import as_bool
 from mt_widgets.in_silico.engine import run_many_studies
 
 from .statistics import PAPER_CHANGES, check_alternative, hedges_correction
@@ -165,6 +166,8 @@ def simulated_power(n_per_group: int = 16, n_studies: int = 1000, alpha: float =
     """
     alpha = _check_level("alpha", alpha)
     alternative = check_alternative(alternative)
+    share_states = as_bool("share_states", share_states)
+    progress = as_bool("progress", progress, allow_none=True)
     changes = PAPER_CHANGES if changes is None else tuple(changes)
     deltas = run_many_studies(n_studies, n_per_group, seed=seed, parameters=parameters, changes=changes,
                               progress=progress, protocol=protocol, share_states=share_states,

@@ -28,11 +28,20 @@ import hashlib
 import json
 import os
 import secrets
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
-from mt_widgets.study.log import (LOCK_FOLDER, LogError, LogFolderError, _fsync_folder, _Lock, _write_all,
-                                  check_folder_writable, to_jsonable, utc_now)
+from mt_widgets.study.log import (
+    LOCK_FOLDER,
+    LogError,
+    LogFolderError,
+    _fsync_folder,
+    _Lock,
+    _write_all,
+    check_folder_writable,
+    to_jsonable,
+    utc_now,
+)
 
 #: The environment variable an instructor (or a hub's spawner) sets to the class folder.
 CLASS_FOLDER_ENV = "MT_WIDGETS_CLASS_FOLDER"

@@ -18,7 +18,7 @@ from .features import EndEffectorFeatures, FeatureMap, PositionFeatures
 from .query_states import sample_query_states
 from .targets import LineTarget, PointTarget, Target
 from .uarm_plant import UArmPlant
-from .validation import as_count, as_float_array, as_positive
+from .validation import as_bool, as_count, as_float_array, as_positive
 
 
 @dataclass(frozen=True, eq=False)
@@ -217,8 +217,7 @@ class SkillRegistry(Mapping):
     """
 
     def __init__(self, skills: Iterable[Skill] = (), *, read_only: bool = False):
-        if not isinstance(read_only, bool):
-            raise TypeError(f"read_only: expected True or False, got {read_only!r}")
+        read_only = as_bool("read_only", read_only)
         self._skills: dict[str, Skill] = {}
         for skill in skills:
             self._put(skill, replace=False)
@@ -227,8 +226,7 @@ class SkillRegistry(Mapping):
     def _put(self, skill, replace: bool) -> Skill:
         if not isinstance(skill, Skill):
             raise TypeError(f"skill: expected a Skill, got {type(skill).__name__}")
-        if not isinstance(replace, bool):
-            raise TypeError(f"replace: expected True or False, got {replace!r}")
+        replace = as_bool("replace", replace)
         if skill.key in self._skills and self._skills[skill.key] is not skill and not replace:
             raise ValueError(f"skill: the key {skill.key!r} is already taken by {self._skills[skill.key]!r}; "
                              f"pass replace=True to replace it")

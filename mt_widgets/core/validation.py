@@ -72,8 +72,17 @@ def as_count(name: str, value, *, minimum: int = 1) -> int:
     return int(value)
 
 
-def as_bool(name: str, value) -> bool:
-    """Checks a boolean option: only ``True`` or ``False`` (not 0, 1, None or a string)."""
+def as_bool(name: str, value, *, allow_none: bool = False) -> bool | None:
+    """Checks a boolean option: only ``True`` or ``False`` (not 0, 1, None or a string).
+
+    Args:
+        name: the argument's name, used in the error message.
+        value: the option.
+        allow_none: also accept ``None`` (an option whose default is decided later).
+    """
+    if value is None and allow_none is True:
+        return None
     if not isinstance(value, bool):
-        raise ValueError(f"{name}: expected True or False, got {_describe(value)}")
+        wanted = "True, False or None" if allow_none is True else "True or False"
+        raise ValueError(f"{name}: expected {wanted}, got {_describe(value)}")
     return value

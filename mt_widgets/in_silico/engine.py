@@ -25,6 +25,7 @@ import numpy as np
 import pandas as pd
 
 from mt_widgets.core.episode_batch import EpisodeBatch
+from mt_widgets.core.validation import as_bool
 from mt_widgets.study.analysis_plan import PAPER_CHANGES
 from mt_widgets.study.participants import block_assignment
 
@@ -149,6 +150,8 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
     Returns:
         An ``InSilicoStudy``.
     """
+    reproduce = as_bool("reproduce", reproduce)
+    progress = as_bool("progress", progress, allow_none=True)
     protocol = resolve_protocol(protocol)
     if isinstance(n_participants, bool) or not isinstance(n_participants, (int, np.integer)) or n_participants < 1:
         raise ValueError(f"n_participants: expected a whole number >= 1, got {n_participants!r}")
@@ -247,6 +250,8 @@ def run_many_studies(n_studies: int, n_per_group: int, seed: int = 0, parameters
     Returns:
         {change name: {group: (n_studies, n_per_group) array of after - before}}.
     """
+    share_states = as_bool("share_states", share_states)
+    progress = as_bool("progress", progress, allow_none=True)
     protocol = resolve_protocol(protocol)
     parameters = default_parameters(protocol) if parameters is None else parameters
     for name, value in (("n_studies", n_studies), ("n_per_group", n_per_group)):
@@ -327,6 +332,7 @@ def simulate_changes(protocol, population: TeacherPopulation, n_studies: int, n_
         {change name: {group: (n_studies, n_per_group) after - before,
         "before": (n_studies, 2 n_per_group) the earlier episode's errors}}.
     """
+    shared = as_bool("shared", shared, allow_none=True)
     changes = PAPER_CHANGES if changes is None else tuple(changes)
     plan = episode_plan(protocol)
     per_study = 2 * n_per_group

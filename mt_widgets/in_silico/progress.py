@@ -9,6 +9,8 @@ from __future__ import annotations
 import sys
 import time
 
+from mt_widgets.core.validation import as_bool
+
 
 class Progress:
     """A text progress line: "description done/total (elapsed s)", a few times a second at most.
@@ -20,9 +22,7 @@ class Progress:
     """
 
     def __init__(self, total: int, description: str = "", enabled: bool = True):
-        if not isinstance(enabled, bool):
-            raise TypeError(f"enabled: expected a bool, got {type(enabled).__name__} {enabled!r}")
-        self.total, self.description, self.enabled = max(int(total), 1), description, enabled
+        self.total, self.description, self.enabled = max(int(total), 1), description, as_bool("enabled", enabled)
         self.done, self._started, self._last_print = 0, time.perf_counter(), 0.0
 
     def update(self, steps: int = 1) -> None:

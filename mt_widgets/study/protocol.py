@@ -82,6 +82,7 @@ except ModuleNotFoundError:  # pragma: no cover - exercised only on Python 3.10
         _toml = None
 
 from mt_widgets.core.guidance import GUIDANCE_MODALITIES
+from mt_widgets.core.validation import as_bool
 
 from .analysis_plan import ALTERNATIVES, PAPER_CHANGES, TESTS, AnalysisPlan, Change
 from .practice import PRACTICE_SKILLS
@@ -500,6 +501,7 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
     Raises:
         ProtocolError: naming the line and field of the first problem.
     """
+    check_files = as_bool("check_files", check_files)
     if not isinstance(text, str):
         raise ValueError(f"text: expected the protocol as a str, got {type(text).__name__}")
     kind = kind or ("json" if str(source).lower().endswith(".json") else "toml")

@@ -29,6 +29,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from mt_widgets.core.validation import as_bool
+
 #: Where the shipped protocols' media are; a relative video file not found beside the protocol
 #: is looked for here (a protocol rebuilt from a study folder's study.json).
 SHIPPED_MEDIA = Path(__file__).parent / "protocols"
@@ -187,6 +189,7 @@ def parse_steps(check, raw: dict, position: str, protocol_folder: Path | None, i
         ids: the step ids taken so far (updated).
         check_files: refuse a video file that does not exist.
     """
+    check_files = as_bool("check_files", check_files)
     entries = raw.get(position, [])
     if not isinstance(entries, list) or any(not isinstance(e, dict) for e in entries):
         check.fail((position,), f"expected a list of [[{position}]] tables, got {type(entries).__name__}")

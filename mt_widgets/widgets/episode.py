@@ -432,7 +432,7 @@ class EpisodeWidget(VBox):
         if self.guidance:
             self.teaching._set_locked(True)
             if self.guidance_arrows:
-                self.teaching.show_guidance(self.optimal[index])
+                self.teaching.show_guidance(self.optimal[index], legend=self.guidance_words)
             if self.guidance_words:
                 # The arrows' legend is under the canvas (legend.py), with every other mark.
                 self.guidance_panel.show(confirmed.action, self.optimal[index], exact=self.exact, legend=False)

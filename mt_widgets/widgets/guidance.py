@@ -74,7 +74,7 @@ class GuidancePanel(HTML):
         note = "" if as_bool("exact", exact) else ("<br><small>With fewer query states than features no "
                                                    "demonstration teaches the "
                                  "skill exactly; the optimal arrow is the least-error one.</small>")
-        self.value = (f"<div>{legend_html(self.theme) if legend else ''}</div>"
+        self.value = (f"<div>{legend_html(self.theme) if as_bool('legend', legend) else ''}</div>"
                       f"<div style='margin-top:4px'>{explain_difference(action, optimal, self.units)}</div>{note}")
 
     def hide(self) -> None:

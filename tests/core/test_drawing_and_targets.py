@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 
 from mt_widgets import SKILLS
-from mt_widgets.core import (Box, LineTarget, PlantDrawing, PointTarget, Skill, SkillRegistry, Target,
-                             TargetShape)
+from mt_widgets.core import Box, LineTarget, PlantDrawing, PointTarget, Skill, SkillRegistry, Target, TargetShape
 from mt_widgets.core.drawing import clip_line, framing_box
 
 
@@ -130,5 +129,5 @@ def test_skills_live_in_registries_their_users_own():
     assert "sim-stiff" not in registry
     with pytest.raises(TypeError, match="skill: expected a Skill"):
         registry.add("sim-point")
-    with pytest.raises(TypeError, match="read_only: expected True or False"):
+    with pytest.raises(ValueError, match="read_only: expected True or False"):
         SkillRegistry(read_only="yes")

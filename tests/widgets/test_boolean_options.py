@@ -38,6 +38,7 @@ OPTIONS = {
     "auto_advance": lambda v: TeachingCanvas(SKILL, STATES, auto_advance=v),
     "show_velocity": lambda v: ReproductionPlayer(SKILL).view.show_state(SKILL.start, show_velocity=v),
     "exact": lambda v: GuidancePanel(_episode().theme, "cm").show([1.0, 0.0], [0.0, 1.0], exact=v),
+    "legend": lambda v: GuidancePanel(_episode().theme, "cm").show([1.0, 0.0], [0.0, 1.0], legend=v),
     "guidance ": lambda v: DemoPage(skill="uarm-point", guidance=v),
     "new_states": _demo_new_states,
     "gravity_compensation": lambda v: TwoLinkArm(gravity_compensation=v),
