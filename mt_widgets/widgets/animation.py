@@ -27,20 +27,28 @@ import weakref
 from collections.abc import Callable
 
 import numpy as np
+from IPython import get_ipython
 
 from .redraw import drawing_batch
 
 DEFAULT_FPS = 60.0
 #: Seconds of frames in one message.
-CHUNK_S = 0.25
+CHUNK_S = 0.2
 #: How far ahead of the browser's playback the next chunk is sent (seconds).
-AHEAD_S = 0.3
+AHEAD_S = 0.2
 #: Extra seconds before a retired widget is closed, for messages in flight.
 CLOSE_MARGIN_S = 2.0
 
 
 def kernel_loop():
-    """The kernel's running asyncio loop (it paces animations), or None in a plain script."""
+    """The running event loop of the IPython kernel this runs in (it paces animations), else None.
+
+    Only a kernel's: another library's loop running in the same thread (Playwright's sync API
+    keeps one) has no browser view of these widgets to pace for.
+    """
+    shell = get_ipython()
+    if shell is None or getattr(shell, "kernel", None) is None:
+        return None
     try:
         return asyncio.get_running_loop()
     except RuntimeError:

@@ -270,6 +270,9 @@ class EpisodeWidget(VBox):
         if css_width is None:  # the canvases grow with the page (see stage_css)
             for view in (self.teaching.view, self.player.view):
                 view.canvas.add_class(_canvas_class(view))
+            # The column is as wide as its canvas: long lines under it (the reproduction's
+            # status) wrap instead of widening it and pushing the side column under it.
+            canvases.add_class(_canvas_class(self.teaching.view))
             children.append(HTML(stage_css(self.teaching.view, self.player.view)))
         super().__init__(children)
         if demonstrations is not None and len(demonstrations):

@@ -6,10 +6,46 @@ after a command for a closed canvas; these tests hold the kernel side to what av
 """
 
 import asyncio
+import threading
 
 import pytest
 
 from mt_widgets.widgets import DemoPage, EpisodeWidget, animation, stop_animations
+
+REAL_KERNEL_LOOP = animation.kernel_loop
+
+
+@pytest.fixture(autouse=True)
+def kernel_like(monkeypatch):
+    """The tests' own loop stands for a kernel's (there is no IPython kernel under pytest)."""
+    def running_loop():
+        try:
+            return asyncio.get_running_loop()
+        except RuntimeError:
+            return None
+    monkeypatch.setattr(animation, "kernel_loop", running_loop)
+
+
+def run_in_a_kernel_like_loop(scenario):
+    """Runs the coroutine function ``scenario`` on a fresh event loop of its own thread, as a kernel's.
+
+    A thread of its own: the test process may already run a loop in the main thread (Playwright's
+    sync API does, in a run with the browser tests), and asyncio.run refuses to nest.
+    """
+    outcome = {}
+
+    def run():
+        try:
+            outcome["value"] = asyncio.run(scenario())
+        except BaseException as error:  # noqa: BLE001 - re-raised in the test's thread
+            outcome["error"] = error
+
+    thread = threading.Thread(target=run)
+    thread.start()
+    thread.join(60)
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome["value"]
 
 
 def _robot_messages(recorder, layer):
@@ -32,7 +68,8 @@ def _finished_episode(recorder, duration=2.0):
     return episode
 
 
-def test_without_an_event_loop_the_animation_is_one_message(recorder):
+def test_without_a_kernel_the_animation_is_one_message(recorder, monkeypatch):
+    monkeypatch.setattr(animation, "kernel_loop", REAL_KERNEL_LOOP)  # no IPython kernel here, whatever loop runs
     episode = _finished_episode(recorder)
     messages = _robot_messages(recorder, episode.player.view.layer("robot"))
     n_frames = len(animation.frame_times(0.0, float(episode.result.trajectory.times[-1]), 60.0))
@@ -52,7 +89,7 @@ def test_in_a_kernel_the_animation_goes_in_short_chunks_just_ahead_of_playback(r
             await asyncio.sleep(0.02)
         return episode, layer, sent_at
 
-    episode, layer, sent_at = asyncio.run(scenario())
+    episode, layer, sent_at = run_in_a_kernel_like_loop(scenario)
     messages = _robot_messages(recorder, layer)
     n_frames = len(animation.frame_times(0.0, float(episode.result.trajectory.times[-1]), 60.0))
     assert sum(len(sleeps) for _, sleeps in messages) == n_frames - 1, "every frame is sent, once"
@@ -86,7 +123,7 @@ def test_a_stopped_animation_sends_nothing_more_and_a_retired_view_closes_after_
         closed_after = asyncio.get_running_loop().time() - replaced
         return sent_before, sent_after, closed_after, episode
 
-    sent_before, sent_after, closed_after, episode = asyncio.run(scenario())
+    sent_before, sent_after, closed_after, episode = run_in_a_kernel_like_loop(scenario)
     assert sent_after == sent_before, "the replaced episode's animation went on sending frames"
     assert sent_before >= 2
     # Closed once what was sent (at most about half a second ahead) has played, plus the margin.
@@ -107,7 +144,7 @@ def test_stop_animations_shows_nothing_more_and_replay_replaces_a_playing_animat
         await asyncio.sleep(0.6)
         return first, count, len(_robot_messages(recorder, layer))
 
-    first, count, later = asyncio.run(scenario())
+    first, count, later = run_in_a_kernel_like_loop(scenario)
     assert first.cancelled and count == later
 
 
@@ -121,6 +158,6 @@ def test_a_cancelled_animation_can_show_its_final_picture(recorder, show_final):
         animation.stop_animation(layer, show_final=show_final)
         return recorder.on(layer)
 
-    drawn = asyncio.run(scenario())
+    drawn = run_in_a_kernel_like_loop(scenario)
     assert bool(drawn) == show_final
     assert not [args for name, args in drawn if name == "sleep"]
