@@ -259,7 +259,7 @@ def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration
         raise ValueError("participants: expected at least one participant code, got none")
     unknown = sorted(set(participants) - set(frame["participant"]))
     if unknown:
-        raise ValueError(f"participants: no episodes for {unknown}")
+        raise ValueError(f"participants: expected codes with episodes, got {unknown} without any")
     needed = [phase for panel in panels for phase in panel]
     rolled = dict(trajectories or {})
     missing = [p for p in participants if any((p, row.phase, int(row.episode)) not in rolled for row in

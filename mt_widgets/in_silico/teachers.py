@@ -65,6 +65,8 @@ from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
+from mt_widgets.core.validation import as_positive
+
 #: Standard-normal draws kept per demonstration: direction slip, magnitude slip, the time to
 #: the first input and the drawing time.
 _PER_DEMONSTRATION = 4
@@ -113,11 +115,7 @@ class TeacherParameters:
 
     def __post_init__(self):
         for f in fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) or not np.isfinite(value):
-                raise ValueError(f"{f.name}: expected a finite number, got {value!r}")
-            if value < 0:
-                raise ValueError(f"{f.name}: expected a number >= 0, got {value}")
+            as_positive(f.name, getattr(self, f.name), allow_zero=True)
         for name in ("retention", "transfer", "initial_understanding", "line_as_point"):
             if getattr(self, name) > 1:
                 raise ValueError(f"{name}: expected a share in [0, 1], got {getattr(self, name)}")
