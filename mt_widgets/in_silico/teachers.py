@@ -169,11 +169,6 @@ PAPER_FIT_UARM = TeacherParameters(
     transfer=0.9691, line_as_point=0.78953,
 )
 
-#: The fields ``fit_to_paper`` fitted for ``PAPER_FIT_UARM`` (``magnitude_spread`` held, above).
-UARM_FITTED_FIELDS = ("magnitude", "exploration", "learning_rate", "learning_spread", "reproduction_learning",
-                      "retention", "transfer", "line_as_point")
-
-
 #: A teacher who already knows the skill and draws without slips: the machine-teaching optimum.
 OPTIMAL_TEACHER = TeacherParameters(magnitude=1.0, magnitude_spread=0.0, direction_noise=0.0, magnitude_noise=0.0,
                                     exploration=0.0, learning_rate=0.0, learning_spread=0.0, retention=1.0,

@@ -90,7 +90,6 @@ from .log import LogError, MemoryLog, ParticipantLog, StudyFolder, to_jsonable
 from .protocol import Phase, Protocol
 from .steps import StudyStep
 
-TEXT_STEPS = ("welcome", "consent", "instructions", "phase_intro", "reproduction", "thank_you")
 #: Timing keys ``submit_demonstration`` reads (seconds, None when unknown).
 TIMING_KEYS = ("time_to_first_input_s", "drawing_duration_s")
 
