@@ -32,9 +32,8 @@ sys.path[:0] = [str(ROOT / "tests"), str(ROOT)]
 
 from playwright.sync_api import sync_playwright  # noqa: E402
 
+import tests.browser.kiosk as kiosk  # noqa: E402
 from browser_support import CHROMIUM, CHROMIUM_ARGS  # noqa: E402
-from tests.browser.kiosk import (DEMO_URL_PATH, kiosk_context, memory_mb, start_page_server, visit,  # noqa: E402
-                                 wait_until_quiet)
 
 STUDY = ROOT / "notebooks" / "study_sim.ipynb"
 SERVERS = {
@@ -47,7 +46,7 @@ SERVERS = {
 def study_visit(context, server) -> float:
     """Navigation -> the experimenter panel's start button shown, in ms; then the tab is closed."""
     page = context.new_page()
-    page.goto(server.url(DEMO_URL_PATH), wait_until="commit", timeout=60_000)
+    page.goto(server.url(kiosk.DEMO_URL_PATH), wait_until="commit", timeout=60_000)
     page.get_by_role("button", name=re.compile(r"Start new participant")).wait_for(timeout=60_000)
     shown = page.evaluate("performance.now()")
     page.close(run_before_unload=True)
@@ -56,20 +55,20 @@ def study_visit(context, server) -> float:
 
 def run(browser, notebook: Path | None, loads: int, options: dict) -> dict:
     root = Path(tempfile.mkdtemp(prefix="bench-kiosk-"))
-    server = start_page_server(root, **({"notebook": notebook} if notebook else {}), **options)
-    context = kiosk_context(browser)
+    server = kiosk.start_page_server(root, **({"notebook": notebook} if notebook else {}), **options)
+    context = kiosk.kiosk_context(browser)
     times = []
     try:
-        wait_until_quiet(server)
-        before = memory_mb(server)
+        kiosk.wait_until_quiet(server)
+        before = kiosk.memory_mb(server)
         for _ in range(loads):
-            wait_until_quiet(server)
+            kiosk.wait_until_quiet(server)
             if notebook is None:
-                times.append(visit(context, server).answered_ms)
+                times.append(kiosk.visit(context, server).answered_ms)
             else:
                 times.append(study_visit(context, server))
-        wait_until_quiet(server)
-        after = memory_mb(server)
+        kiosk.wait_until_quiet(server)
+        after = kiosk.memory_mb(server)
     finally:
         context.close()
         server.stop()

@@ -56,7 +56,7 @@ def _png(figure: Figure) -> bytes:
 
 def errors_figure(summary: ClassSummary) -> Figure:
     """Each student's teaching error over their episodes, and the class mean (the paper's Fig. 3a, for a class)."""
-    figure = Figure(figsize=(6.4, 3.6), dpi=100, layout="constrained")
+    figure = Figure(figsize=(6.4, 4.4), dpi=100, layout="constrained")
     axes = figure.add_subplot()
     longest = max((len(s.errors) for s in summary.students), default=0)
     for number, student in enumerate(s for s in summary.students if s.errors):
@@ -68,7 +68,8 @@ def errors_figure(summary: ClassSummary) -> Figure:
         axes.plot(np.arange(1, longest + 1), means, color="black", lw=2.6, label="class mean")
         axes.set_xticks(np.arange(1, longest + 1))
         if sum(1 for s in summary.students if s.errors) <= 14:
-            axes.legend(fontsize=6, ncols=2, loc="best")
+            # Below the axes: inside, the legend of a dozen students hides their first episodes.
+            axes.legend(fontsize=6, ncols=4, loc="upper center", bbox_to_anchor=(0.5, -0.18), frameon=False)
     else:
         axes.text(0.5, 0.5, "no finished episodes yet", ha="center", va="center", transform=axes.transAxes)
     axes.set_xlabel("episode (each student's own, in order)")

@@ -49,7 +49,7 @@ from mt_widgets.study import (
     StudyFolder,
     load_protocol,
 )
-from mt_widgets.widgets import EpisodeWidget, TeachingCanvas, fill_words, get_theme
+from mt_widgets.widgets import EpisodeWidget, TeachingCanvas, fill_words, get_theme, stop_animations
 
 _log = logging.getLogger(__name__)
 
@@ -297,6 +297,10 @@ class StudyApp(VBox):
         step = self.session.current_step()
         protocol = self.session.protocol
         self._cancel_timer()
+        if isinstance(self.episode, EpisodeWidget) and step.kind not in ("demonstration", "episode_end",
+                                                                          "reproduction"):
+            # The episode leaves the page: a replay still playing must not hold up what comes next.
+            stop_animations(self.episode)
         # Withdrawing is offered on every page of a logged session until it is over.
         self.withdraw_box.layout.display = "none" if self.session.finished or self.session.folder is None else None
         self._reset_withdraw()
@@ -410,6 +414,8 @@ class StudyApp(VBox):
     def _new_practice_round(self, step) -> None:
         seed = self._practice_seed.spawn(1)[0]
         self._practice_round += 1
+        if self.episode is not None:
+            stop_animations(self.episode)
         skill = self.session.protocol.skill(step.skill)
         states = skill.query_states(seed=seed)
         if step.practice_reproduction:
@@ -483,6 +489,8 @@ class StudyApp(VBox):
     def _show_episode(self, step) -> None:
         key = (step.phase_index, step.episode)
         if self.episode is None or self._episode_key != key:
+            if self.episode is not None:
+                stop_animations(self.episode)
             self._episode_key = key
             self._continue = self._button("Continue", self._advance)
             self._continue.layout.display = "none"
@@ -494,7 +502,9 @@ class StudyApp(VBox):
             self.episode = self._episode_widget(step.skill, step.query_states, step.guidance,
                                                 step.episode - 1, step.n_episodes, self._on_demonstration,
                                                 self._on_episode_finished, step.guidance_modality)
-            self.body.children = [instructions, self.episode, self._reproduction_text, self._continue]
+            self.body.children = [instructions, self.episode]
+            # Beside the canvas the reproduction plays in: what to do next is in view.
+            self.episode.next_actions.children = [self._reproduction_text, self._continue]
             if len(step.actions):
                 # Resuming: the given demonstrations are restored; if all are given the widget
                 # finishes at once, and _on_episode_finished logs the end if it is not logged yet.

@@ -33,7 +33,7 @@ from ipywidgets import HTML
 
 from mt_widgets.core import Box
 from mt_widgets.core.validation import as_bool
-from mt_widgets.widgets import ViewTransform
+from mt_widgets.widgets import ViewTransform, keep_canvas_size
 
 #: The paper's display: 518 mm x 325 mm (a 24-inch 16:10 monitor, 1920 x 1200 pixels).
 PAPER_SCREEN_MM = (518.0, 325.0)
@@ -273,6 +273,7 @@ def fit_view(view, geometry: ScreenGeometry) -> None:
     view.canvas.width, view.canvas.height = width, height
     view.canvas.layout.width = f"{width}px"
     view.canvas.layout.height = f"{height}px"
+    keep_canvas_size(view)  # true size: the episode's window-sized canvas rule must not apply
     if geometry.pinned:
         view.canvas.add_class(SCREEN_CLASS)
     view.show(screen_background(view, geometry), "background")
@@ -293,9 +294,12 @@ def fit_episode(episode, geometry: ScreenGeometry, show_player: bool = True) -> 
     episode.player.layout.display = "none"
 
     def swap(_result):
-        if show_player:
-            episode.teaching.view.canvas.layout.display = "none"
-            episode.player.layout.display = None
+        # The episode has put its player in the teaching canvas's place; without the player
+        # the screen keeps showing the teaching canvas.
+        for widget in (episode.teaching.view.canvas, episode.teaching.view.legend):
+            widget.layout.display = "none" if show_player else None
+        for widget in (episode.player, episode.player.view.legend):
+            widget.layout.display = None if show_player else "none"
 
     episode.on_finished(swap)
     if episode.phase == "finished":

@@ -71,7 +71,7 @@ def _frozen(array: np.ndarray) -> np.ndarray:
 #: skill -> {duration: the target skill's own rollout}. Keyed by the skill object itself (a Skill
 #: hashes by identity), weakly: an entry goes with its skill, and a new skill that happens to
 #: get a freed skill's id never gets that skill's ghost.
-_TARGET_ROLLOUTS: "weakref.WeakKeyDictionary[Skill, dict[float, object]]" = weakref.WeakKeyDictionary()
+_TARGET_ROLLOUTS: weakref.WeakKeyDictionary[Skill, dict[float, object]] = weakref.WeakKeyDictionary()
 
 
 def target_reproduction(skill: Skill, duration: float | None = None):
@@ -148,7 +148,7 @@ class TeachingEpisode:
 
     @classmethod
     def from_actions(cls, skill: Skill, query_states, actions, *, lam: float = DEFAULT_LAMBDA,
-                     duration: float | None = None) -> "TeachingEpisode":
+                     duration: float | None = None) -> TeachingEpisode:
         """An episode resumed with actions already given (k, R), k <= N (complete when k = N)."""
         episode = cls(skill, query_states, lam=lam, duration=duration)
         episode.restore(actions)

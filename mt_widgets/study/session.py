@@ -110,16 +110,18 @@ class _Slot:
 ENDING_EVENTS = {"consent_declined": "declined", "screened_out": "ineligible", "withdrawn": "withdrawn"}
 
 
-def timeline(protocol: Protocol) -> list[_Slot]:
+def timeline(protocol: Protocol, around_task: bool = True) -> list[_Slot]:
     """The protocol unrolled into the steps a participant goes through, in order.
 
     A step of the protocol's ``before`` / ``after`` lists is ``_Slot("step", index=i)`` with i
-    its index in ``protocol.steps``.
+    its index in ``protocol.steps``. ``around_task=False`` leaves those steps out (a lesson
+    runs the task only: welcome, the default consent, instructions, practice, the phases).
     """
+    before = protocol.before if around_task else ()
     slots = [_Slot("welcome")]
-    if not any(step.kind == "consent" for step in protocol.before):
+    if not any(step.kind == "consent" for step in before):
         slots.append(_Slot("consent"))
-    slots += [_Slot("step", index=i) for i in range(len(protocol.before))]
+    slots += [_Slot("step", index=i) for i in range(len(before))]
     slots.append(_Slot("instructions"))
     if protocol.practice.duration_s > 0:
         slots.append(_Slot("practice"))
@@ -128,7 +130,8 @@ def timeline(protocol: Protocol) -> list[_Slot]:
         for episode in range(1, phase.episodes + 1):
             slots += [_Slot("demonstration", phase.index, episode, i) for i in range(phase.demonstrations)]
             slots += [_Slot("episode_end", phase.index, episode), _Slot("reproduction", phase.index, episode)]
-    slots += [_Slot("step", index=len(protocol.before) + j) for j in range(len(protocol.after))]
+    if around_task:
+        slots += [_Slot("step", index=len(protocol.before) + j) for j in range(len(protocol.after))]
     slots.append(_Slot("thank_you"))
     return slots
 
@@ -233,9 +236,10 @@ def _check_seconds(name: str, value):
 class Session:
     """One participant's run through a protocol. Build with ``start``, ``resume`` or ``lesson``."""
 
-    def __init__(self, protocol: Protocol, log, group: str, enrolment: dict, folder: StudyFolder | None = None):
+    def __init__(self, protocol: Protocol, log, group: str, enrolment: dict, folder: StudyFolder | None = None,
+                 around_task: bool = True):
         self.protocol, self.log, self.group, self.enrolment, self.folder = protocol, log, group, enrolment, folder
-        self._slots = timeline(protocol)
+        self._slots = timeline(protocol, around_task)
         self._position = 0
         self._episodes: dict[tuple[int, int], dict] = {}
         self._actions: dict[tuple[int, int], list[np.ndarray]] = {}
@@ -314,7 +318,8 @@ class Session:
 
     @classmethod
     def lesson(cls, protocol: Protocol, group: str | None = None, participant: str = "lesson") -> Session:
-        """The same engine, unlogged (events kept in memory): for a guided lesson.
+        """The same engine, unlogged (events kept in memory), for a guided lesson: the task only,
+        without the protocol's steps around it (video, information, forms, questionnaires).
 
         Args:
             protocol: what to run.
@@ -331,7 +336,8 @@ class Session:
         log.append("session_started", software_version=mt_widgets.__version__, protocol_hash=protocol.hash,
                    protocol_name=protocol.name, group=group, enrolment=enrolment, lam=protocol.lam,
                    numpy_version=np.__version__, python_version=platform.python_version())
-        session = cls(protocol, log, group, enrolment)
+        # A lesson is the task only: the study's video, forms and questionnaires are for participants.
+        session = cls(protocol, log, group, enrolment, around_task=False)
         session._enter()
         return session
 

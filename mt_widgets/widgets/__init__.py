@@ -7,32 +7,45 @@
 - ``DemoPage``: the visitors' one-click page (skill chooser, guidance switch, try again).
 - ``EffortProgress``, ``GuidancePanel``: the progress bars and the guidance in words.
 - ``ViewTransform``: world <-> pixel mapping; ``draw_arrow``: arrow rendering;
-  ``play_frames``: animation; ``THEMES``: colour-blind-safe default and the paper's look.
+  ``play_frames``: animation (``stop_animations`` / ``retire`` when a view is replaced);
+  ``THEMES``: colour-blind-safe default and the paper's look.
 
 Widgets hold no science: they call ``mt_widgets.core`` and draw the result.
 """
 
-from .animation import frame_times, play_frames, sample_at
+from .animation import Animation, frame_times, play_frames, retire, sample_at, stop_animations
 from .arm_view import LAYERS, ArmView
 from .arrows import draw_arrow
 from .coords import ViewTransform
 from .demo import DEMO_SKILLS, DemoPage
-from .episode import DemonstrationRecord, EpisodeResult, EpisodeWidget
+from .episode import DemonstrationRecord, EpisodeResult, EpisodeWidget, keep_canvas_size
 from .guidance import GuidancePanel, explain_difference, legend_html
+from .legend import MARKS, CanvasLegend, legend_entries
 from .progress import EffortProgress
 from .redraw import drawing_batch, repaint_on_new_view
 from .reproduction import ReproductionPlayer
 from .robots import RobotPainter, painter_for
 from .teaching import ConfirmedAction, TeachingCanvas, describe_action
-from .legend import MARKS, CanvasLegend, legend_entries
-from .theme import (COLOR_NAMES, DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, ArrowStyle, Theme, fill_words,
-                    get_theme)
+from .theme import (
+                    COLOR_NAMES,
+                    DEFAULT_THEME,
+                    PAPER_THEME,
+                    PAPER_UARM_THEME,
+                    THEMES,
+                    ArrowStyle,
+                    Theme,
+                    fill_words,
+                    get_theme,
+)
 
 __all__ = [
     "COLOR_NAMES", "CanvasLegend", "MARKS", "fill_words", "legend_entries",
-    "ArmView", "ArrowStyle", "ConfirmedAction", "DEFAULT_THEME", "DEMO_SKILLS", "DemoPage", "DemonstrationRecord", "EffortProgress",
+    "Animation", "ArmView", "ArrowStyle", "ConfirmedAction", "DEFAULT_THEME", "DEMO_SKILLS", "DemoPage",
+    "DemonstrationRecord", "EffortProgress",
     "EpisodeResult", "EpisodeWidget", "GuidancePanel", "LAYERS", "PAPER_THEME", "PAPER_UARM_THEME",
     "ReproductionPlayer", "RobotPainter", "THEMES", "TeachingCanvas", "Theme", "ViewTransform",
     "describe_action", "draw_arrow", "drawing_batch", "explain_difference", "frame_times", "get_theme",
-    "legend_html", "painter_for", "play_frames", "repaint_on_new_view", "sample_at",
+    "keep_canvas_size",
+    "legend_html", "painter_for", "play_frames", "repaint_on_new_view", "retire", "sample_at",
+    "stop_animations",
 ]

@@ -1,21 +1,207 @@
-"""Animation playing: every frame plus ``canvas.sleep`` in one message, played by the browser.
+"""Animation playing: frames plus ``canvas.sleep`` sent in short chunks the browser plays by itself.
 
 A Python loop with ``time.sleep`` would send one message per frame, block the kernel and
-drop frames; ipycanvas can instead queue all frames in one ``hold_canvas`` batch, and the
-front end's canvas manager plays them, awaiting each ``sleep`` (docs/design.md, "Widgets").
+drop frames; ipycanvas can instead queue frames in a ``hold_canvas`` batch, and the front
+end's canvas manager plays them, awaiting each ``sleep`` (docs/design.md, "Widgets").
+
+That manager has ONE queue for every canvas of the page, and it cannot be told to skip
+what it holds: a 10 s reproduction sent as one message delays every other canvas's drawing
+by up to 10 s, and a command for a canvas closed meanwhile ("widget model not found") stops
+the manager for good (its promise chain stays rejected: every canvas of the page stays
+blank). So an animation is sent in chunks of ``CHUNK_S`` seconds of frames, each a little
+before the browser needs it (``AHEAD_S``), from the kernel's event loop; ``Animation.cancel``
+stops sending, so whatever replaces an animation waits at most about half a second, and
+``retire`` closes a replaced view only once the frames already sent have played. Without a
+running event loop (a script, kernel-free tests: no browser to pace) the whole animation
+goes as one message, as before.
+
 The kernel cannot know when playback ends; the layer's final content is recorded so a
 new browser view shows the last frame.
 """
 
 from __future__ import annotations
 
-from typing import Callable
+import asyncio
+import time
+import weakref
+from collections.abc import Callable
 
 import numpy as np
 
 from .redraw import drawing_batch
 
 DEFAULT_FPS = 60.0
+#: Seconds of frames in one message.
+CHUNK_S = 0.25
+#: How far ahead of the browser's playback the next chunk is sent (seconds).
+AHEAD_S = 0.3
+#: Extra seconds before a retired widget is closed, for messages in flight.
+CLOSE_MARGIN_S = 2.0
+
+
+def kernel_loop():
+    """The kernel's running asyncio loop (it paces animations), or None in a plain script."""
+    try:
+        return asyncio.get_running_loop()
+    except RuntimeError:
+        pass
+    try:
+        loop = asyncio.get_event_loop_policy().get_event_loop()
+    except RuntimeError:
+        return None
+    return loop if loop.is_running() else None
+
+
+class _Queue:
+    """An estimate of when the browser's (single) canvas queue has played what was sent."""
+
+    free_at = 0.0
+
+    @classmethod
+    def add(cls, seconds: float) -> float:
+        """Records ``seconds`` of playback sent now; returns when it will have played."""
+        cls.free_at = max(cls.free_at, time.monotonic()) + seconds
+        return cls.free_at
+
+    @classmethod
+    def drained_in(cls) -> float:
+        return max(0.0, cls.free_at - time.monotonic())
+
+
+#: layer canvas -> the animation playing on it (weakly: a closed view takes its entry with it).
+_PLAYING: weakref.WeakKeyDictionary[object, Animation] = weakref.WeakKeyDictionary()
+
+
+class Animation:
+    """An animation being sent to the browser chunk by chunk (see the module's docstring).
+
+    Built and started by ``play_frames``; ``cancel`` stops it, ``done`` says whether every
+    frame (and the final picture) has been sent.
+    """
+
+    def __init__(self, canvas, n_frames: int, setup, draw_frame, final, then, fps: float):
+        self.canvas, self.n_frames, self.fps = canvas, n_frames, fps
+        self._setup, self._draw_frame, self._final, self._then = setup, draw_frame, final, then
+        self._next = 0
+        self._handle = None
+        self._loop = None
+        self.done = False
+        self.cancelled = False
+
+    @property
+    def _chunk(self) -> int:
+        return max(1, int(round(CHUNK_S * self.fps)))
+
+    def _send(self, stop: int) -> None:
+        """Sends frames ``self._next`` to ``stop`` (and the final picture after the last) in one message."""
+        canvas, delay_ms = self.canvas, round(1000.0 / self.fps, 2)
+        start = self._next
+        with drawing_batch():
+            if start == 0:
+                canvas.clear()
+            # Styles are set again in every chunk: something else may have drawn on the layer between.
+            self._setup(canvas)
+            for index in range(start, stop):
+                if index:
+                    canvas.clear()
+                self._draw_frame(canvas, index)
+                if index < self.n_frames - 1:
+                    canvas.sleep(delay_ms)
+            if stop == self.n_frames:
+                canvas.clear()
+                self._final(canvas)
+                if self._then is not None:
+                    self._then()
+        self._next = stop
+        self.done = stop == self.n_frames
+        self._sent_until = _Queue.add((stop - start) / self.fps)
+
+    def start(self) -> Animation:
+        self._loop = kernel_loop()
+        if self._loop is None:  # nobody to pace for: everything at once
+            self._send(self.n_frames)
+            return self
+        self._send(min(self.n_frames, self._chunk))
+        self._schedule()
+        return self
+
+    def _schedule(self) -> None:
+        if self.done or self.cancelled:
+            return
+        delay = max(0.0, self._sent_until - time.monotonic() - AHEAD_S)
+        self._handle = self._loop.call_later(delay, self._continue)
+
+    def _continue(self) -> None:
+        self._handle = None
+        if self.done or self.cancelled:
+            return
+        if getattr(self.canvas, "comm", None) is None:  # the widget was closed: nothing to draw on
+            self.cancelled = True
+            return
+        self._send(min(self.n_frames, self._next + self._chunk))
+        self._schedule()
+
+    def cancel(self, show_final: bool = False) -> None:
+        """Stops sending frames; with ``show_final`` the layer shows the final picture at once."""
+        if self._handle is not None:
+            self._handle.cancel()
+            self._handle = None
+        if self.done or self.cancelled:
+            return
+        self.cancelled = True
+        if show_final and getattr(self.canvas, "comm", None) is not None:
+            with drawing_batch():
+                self.canvas.clear()
+                self._final(self.canvas)
+                if self._then is not None:
+                    self._then()
+
+
+def stop_animation(canvas, show_final: bool = False) -> None:
+    """Stops the animation playing on a layer ``canvas``, if any (see ``Animation.cancel``)."""
+    animation = _PLAYING.pop(canvas, None)
+    if animation is not None:
+        animation.cancel(show_final=show_final)
+
+
+def _canvases(widget):
+    """Every ipycanvas layer in a widget tree (MultiCanvas layers included)."""
+    seen = set()
+    stack = [widget]
+    while stack:
+        node = stack.pop()
+        if id(node) in seen:
+            continue
+        seen.add(id(node))
+        yield node
+        stack.extend(getattr(node, "children", ()) or ())
+        stack.extend(getattr(node, "_canvases", ()) or ())
+
+
+def stop_animations(widget) -> None:
+    """Stops every animation playing on any canvas in ``widget``'s tree (its view is being replaced)."""
+    for node in _canvases(widget):
+        stop_animation(node)
+
+
+def retire(widget) -> None:
+    """Takes a widget tree off the page for good: stops its animations, and closes every widget in it
+    once the browser has played what was already sent (closing earlier would leave queued
+    commands pointing at a closed canvas, which stops ipycanvas' drawing for the whole page).
+    """
+    nodes = list(_canvases(widget))
+    for node in nodes:
+        stop_animation(node)
+
+    def close():
+        for node in nodes:
+            node.close()
+
+    loop = kernel_loop()
+    if loop is None:
+        close()
+    else:
+        loop.call_later(_Queue.drained_in() + CLOSE_MARGIN_S, close)
 
 
 def set_style_now(canvas, name: str, value) -> None:
@@ -63,34 +249,37 @@ def sample_at(times: np.ndarray, values: np.ndarray, at: np.ndarray) -> np.ndarr
 
 def play_frames(view, layer: str, n_frames: int, setup: Callable[[object], None],
                 draw_frame: Callable[[object, int], None], final: Callable[[object], None],
-                fps: float = DEFAULT_FPS) -> None:
-    """Send an animation of ``n_frames`` frames on one layer of an ``ArmView``, in one message.
+                fps: float = DEFAULT_FPS, then: Callable[[], None] | None = None) -> Animation:
+    """Play an animation of ``n_frames`` frames on one layer of an ``ArmView``.
+
+    The frames go in chunks paced by the kernel's event loop (one message without one); an
+    animation already playing on the layer is stopped first.
 
     Args:
         view: The ``ArmView`` to draw on.
         layer: The layer name (normally "robot").
         n_frames: Number of frames (>= 1).
-        setup: ``setup(canvas)`` sets styles that stay fixed for the whole animation (once).
+        setup: ``setup(canvas)`` sets styles that stay fixed for the whole animation (sent
+            with every chunk).
         draw_frame: ``draw_frame(canvas, i)`` draws frame i on a cleared layer.
         final: ``final(canvas)`` paints what the layer shows after playback; it is
             recorded for new views and must draw the same as the last frame (or more).
         fps: Frames per second of playback.
+        then: Drawn right after the final picture, in the same message (e.g. another layer
+            that changes when the motion ends); also when the animation is stopped early
+            with ``show_final``.
+
+    Returns:
+        The ``Animation`` (``cancel()`` stops it).
     """
     if n_frames < 1:
         raise ValueError(f"n_frames: expected at least 1 frame, got {n_frames}")
     if not fps > 0:
         raise ValueError(f"fps: expected a positive number of frames per second, got {fps!r}")
     canvas = view.layer(layer)
-    delay_ms = round(1000.0 / fps, 2)
-    with drawing_batch():
-        canvas.clear()
-        setup(canvas)
-        for index in range(n_frames):
-            if index:
-                canvas.clear()
-            draw_frame(canvas, index)
-            if index < n_frames - 1:
-                canvas.sleep(delay_ms)
-        canvas.clear()
-        final(canvas)
+    stop_animation(canvas)
+    animation = Animation(canvas, n_frames, setup, draw_frame, final, then, float(fps))
+    _PLAYING[canvas] = animation
+    animation.start()
     view.remember(final, layer)
+    return animation

@@ -8,7 +8,7 @@ is not on disk: ``Callbacks`` calls each callback in order and lets the first er
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from mt_widgets.core.validation import as_bool
 

@@ -8,11 +8,12 @@ starts a fresh episode; the teaching error comes from the episode's result.
 
 from __future__ import annotations
 
-from ipywidgets import HTML, Box, Button, Checkbox, Layout, ToggleButtons, VBox
+from ipywidgets import HTML, Box, Button, Checkbox, HBox, Layout, ToggleButtons, VBox
 
 from mt_widgets.core import SKILLS, Skill
 from mt_widgets.core.validation import as_bool
 
+from .animation import retire
 from .episode import EpisodeResult, EpisodeWidget
 
 #: The four skills of the paper, as a visitor reads them on the chooser.
@@ -24,10 +25,10 @@ DEMO_SKILLS = (
 )
 
 WELCOME = (
-    "<h2 style='margin:4px 0'>Teach a robot by showing it what to do</h2>"
-    "<div style='max-width:760px'>At each state of the robot, press on its hand and drag an arrow: the "
-    "push you would give it there. After your last arrow the robot learns from them and shows what "
-    "it learnt. With guidance on, you also see the best arrow after each of yours.</div>"
+    "<h2 style='margin:2px 0'>Teach a robot by showing it what to do</h2>"
+    "<div style='max-width:1100px'>At each state, press on the robot's hand and drag an arrow: the push you "
+    "would give it there. After your last arrow the robot learns from them and shows what it learnt. With "
+    "guidance on, you also see the best arrow after each of yours.</div>"
 )
 
 
@@ -54,13 +55,6 @@ def _chooser_skills(skills) -> dict[str, Skill]:
     return chosen
 
 
-def _close_tree(widget) -> None:
-    """Close ``widget`` and every widget under it (``close()`` alone leaves the children open)."""
-    for child in (*getattr(widget, "children", ()), *getattr(widget, "_canvases", ())):
-        _close_tree(child)
-    widget.close()
-
-
 class DemoPage(VBox):
     """A welcome line, a skill chooser, a guidance switch, an episode and a "try again" button.
 
@@ -85,10 +79,11 @@ class DemoPage(VBox):
         self.episode_options = episode_options
         self.errors: list[tuple[str, bool, float]] = []
         self.skill_chooser = ToggleButtons(options=[(labels[key], key) for key in keys], value=skill,
-                                           description="Skill:", style={"button_width": "150px"},
+                                           style={"button_width": "150px"},
                                            tooltips=[self.skills[key].title for key in keys])
-        self.guidance_switch = Checkbox(value=as_bool("guidance", guidance), description="Guidance: show the best arrow after "
-                                        "each of mine", indent=False, layout=Layout(width="auto"))
+        self.guidance_switch = Checkbox(value=as_bool("guidance", guidance),
+                                        description="Guidance: show the best arrow after each of mine", indent=False,
+                                        layout=Layout(width="auto"))
         self.new_states_button = Button(description="Try again with new states", icon="refresh",
                                         layout=Layout(width="auto"))
         self.result_line = HTML(value="")
@@ -97,10 +92,12 @@ class DemoPage(VBox):
         self.skill_chooser.observe(lambda _: self.start_episode(), names="value")
         self.guidance_switch.observe(lambda _: self.start_episode(), names="value")
         self.new_states_button.on_click(lambda _: self.start_episode(new_states=True))
-        # The result and "try again" come after the episode: that is where a visitor's eyes are
-        # when the reproduction ends.
-        super().__init__([HTML(WELCOME), self.skill_chooser, self.guidance_switch, self.episode_slot,
-                          self.result_line, self.new_states_button])
+        # The choices on one line, so the episode's canvas starts high on the page; the result and
+        # "try again" go beside the canvas (the episode's next_actions), where the visitor is
+        # looking when the reproduction plays.
+        choices = HBox([self.skill_chooser, self.guidance_switch],
+                       layout=Layout(flex_flow="row wrap", align_items="center", grid_gap="2px 16px"))
+        super().__init__([HTML(WELCOME), choices, self.episode_slot])
         self.start_episode()
 
     def start_episode(self, new_states: bool = False) -> EpisodeWidget:
@@ -108,10 +105,14 @@ class DemoPage(VBox):
         if as_bool("new_states", new_states):
             self.seed += 1
         if self.episode is not None:
-            # A kiosk page may run for hours: the replaced episode's widgets leave the kernel too.
-            _close_tree(self.episode)
-        self.episode = EpisodeWidget(self.skills[self.skill_chooser.value], seed=self.seed, guidance=self.guidance_switch.value,
+            # The page's own widgets move to the next episode; the rest leaves the kernel too (a
+            # kiosk page may run for hours), once the browser has played what it holds for them.
+            self.episode.next_actions.children = []
+            retire(self.episode)
+        self.episode = EpisodeWidget(self.skills[self.skill_chooser.value], seed=self.seed,
+                                     guidance=self.guidance_switch.value,
                                      on_finished=self._on_finished, **self.episode_options)
+        self.episode.next_actions.children = [self.result_line, self.new_states_button]
         self.episode_slot.children = [self.episode]
         self.result_line.value = ""
         return self.episode
@@ -126,6 +127,6 @@ class DemoPage(VBox):
         advice = ("Switch guidance off and try again: can you teach as well without help?" if guided
                   else "Switch guidance on to see the best arrow after each of yours.")
         self.result_line.value = (
-            f"<div style='font-size:1.15em;margin:6px 0;max-width:760px'><b>Your teaching error: "
+            f"<div style='font-size:1.15em;margin:6px 0;max-width:400px'><b>Your teaching error: "
             f"{result.error:.3f}</b> (0 means the robot learnt the skill exactly; it is the distance between "
             f"what the robot learnt and the skill).{history} {advice}</div>")

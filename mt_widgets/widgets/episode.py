@@ -18,11 +18,11 @@ episode gives. A study runner drives it through constructor arguments, the obser
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
-from ipywidgets import HTML, Button, Layout, VBox
+from ipywidgets import HTML, Button, HBox, Layout, VBox
 from traitlets import Float, Int, List, Unicode
 
 from mt_widgets.core import DEFAULT_LAMBDA, SKILLS, Skill, TeachingEpisode
@@ -98,6 +98,45 @@ class EpisodeResult:
     diverged: bool
     feedback_latency_s: float
     episode: TeachingEpisode | None = field(default=None, repr=False, compare=False)
+
+
+#: Vertical room (CSS px) a canvas leaves in the window: for a page's heading above it (the demo's
+#: welcome and choices, the episode's title and progress) and the replay line under it, so that
+#: at 1400 x 1000 the whole reproduction is on screen without scrolling; the side column's
+#: width; the widest a canvas grows.
+_ROOM_Y_PX, _SIDE_PX, _MAX_CANVAS_PX = 350, 420, 760
+
+
+def _canvas_class(view) -> str:
+    """A CSS class per canvas aspect ratio (width / height, in hundredths)."""
+    return f"mt-stage-canvas-{round(100 * view.transform.width / view.transform.height)}"
+
+
+def keep_canvas_size(view) -> None:
+    """Stops an ``ArmView``'s canvas from growing with the window (e.g. a true-size screen under the arm)."""
+    for name in list(view.canvas._dom_classes):
+        if name.startswith("mt-stage-canvas-"):
+            view.canvas.remove_class(name)
+
+
+def stage_css(*views) -> str:
+    """A style element sizing the episode's canvases to the window.
+
+    A canvas is as wide as the page allows beside the side column (below it on a narrow page,
+    where the column wraps under the canvas), but never taller than the window minus a little
+    room, so the whole reproduction is in view where the person is looking, on a laptop as on
+    a large screen. Pointer input is mapped through the element's box, so any size works.
+    """
+    rules = []
+    for view in views:
+        ratio = view.transform.width / view.transform.height
+        by_height = f"calc((100vh - {_ROOM_Y_PX}px) * {ratio:.4f})"
+        name = _canvas_class(view)
+        rules.append(f".{name} {{width: max(260px, min(calc(100vw - {_SIDE_PX + 60}px), {by_height}, "
+                     f"{_MAX_CANVAS_PX}px)) !important; height: auto !important}}")
+        rules.append(f"@media (max-width: 860px) {{.{name} {{width: max(260px, min(calc(100vw - 40px), "
+                     f"{by_height}, {_MAX_CANVAS_PX}px)) !important}}}}")
+    return "<style>" + "\n".join(dict.fromkeys(rules)) + "</style>"
 
 
 def _resolve_skill(skill) -> Skill:
@@ -204,8 +243,30 @@ class EpisodeWidget(VBox):
         self.header = HTML(f"<h3 style='margin:4px 0'>{heading}</h3>{description}" if heading or description else "")
         self.teaching.on_confirm(self._on_confirm)
         self.teaching.observe(self._sync_traits, names=["state_index", "demonstrations"])
-        super().__init__([self.header, self.progress, self.teaching, self.guidance_panel, self.next_button,
-                          self.player])
+        #: Where a page puts what comes after the episode (the demo: its result and "Try again");
+        #: it sits beside the canvas, where the person is looking when the reproduction plays.
+        self.next_actions = VBox(layout=Layout(margin="8px 0 0 0"))
+        # The stage: one canvas on the left (the teaching canvas; the reproduction takes its
+        # place when the episode finishes), and on the right what to do now: the arrow's
+        # controls, the guidance, "Next state" / "Finish and watch", then the page's next actions.
+        self.player.layout.display = "none"
+        # Each canvas's legend goes to the side column too, under what to do now: it explains every
+        # mark, and under the canvas it would push the reproduction's Replay line off the screen.
+        player_legend = self.player.view.legend
+        self.player.children = tuple(child for child in self.player.children if child is not player_legend)
+        player_legend.layout.display = "none"
+        self.side = VBox([self.teaching.controls, self.guidance_panel, self.next_button, self.next_actions,
+                          self.teaching.view.legend, player_legend],
+                         layout=Layout(min_width="300px", max_width="400px", flex="1 1 300px"))
+        canvases = VBox([self.teaching.view.canvas, self.player], layout=Layout(flex="0 1 auto"))
+        self.stage = HBox([canvases, self.side], layout=Layout(flex_flow="row wrap", align_items="flex-start",
+                                                                grid_gap="4px 16px", width="100%"))
+        children = [self.header, self.progress, self.stage]
+        if css_width is None:  # the canvases grow with the page (see stage_css)
+            for view in (self.teaching.view, self.player.view):
+                view.canvas.add_class(_canvas_class(view))
+            children.append(HTML(stage_css(self.teaching.view, self.player.view)))
+        super().__init__(children)
         if demonstrations is not None and len(demonstrations):
             self.restore(demonstrations)
         elif self.episode.demonstrations:  # an episode resumed in core: show what it holds
@@ -327,6 +388,14 @@ class EpisodeWidget(VBox):
         self.player.play(trajectory, error=episode.error, ghost=ghost)
         latency = time.perf_counter() - started
         self.teaching._set_locked(True)
+        # The reproduction plays where the teaching canvas was: the person's eyes are there.
+        self.teaching.view.canvas.layout.display = "none"
+        self.teaching.controls.layout.display = "none"
+        self.teaching.view.legend.layout.display = "none"
+        self.player.view.legend.layout.display = None
+        self.guidance_panel.hide()
+        self.next_button.layout.display = "none"
+        self.player.layout.display = None
         self.progress.episodes_done = min(self.episode_index + 1, self.progress.episode_budget)
         self.result = EpisodeResult(self.skill.key, self.query_states.copy(), episode.actions,
                                     self.optimal.copy(), self.lam, episode.theta_hat, episode.error, trajectory,

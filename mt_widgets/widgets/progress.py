@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ipywidgets import HTML, IntProgress, Layout, VBox
+from ipywidgets import HTML, HBox, IntProgress, Layout, VBox
 from traitlets import Int, observe
 
 
@@ -31,7 +31,9 @@ class EffortProgress(VBox):
                                              description="Demos", bar_style="info")
         self.episode_bar = IntProgress(min=0, max=self.episode_budget, layout=bar, description="Episodes")
         self.label = HTML()
-        super().__init__([self.demonstration_bar, self.episode_bar, self.label])
+        # The bars side by side (wrapping on a narrow page): the episode's canvas stays high on the page.
+        super().__init__([HBox([self.demonstration_bar, self.episode_bar], layout=Layout(flex_flow="row wrap")),
+                          self.label])
         self.demonstrations_done = int(demonstrations_done)
         self.episodes_done = int(episodes_done)
         self._refresh()

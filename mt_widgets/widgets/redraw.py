@@ -14,8 +14,8 @@ itself when its front-end model (re)appears.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from contextlib import contextmanager
-from typing import Callable
 
 import ipycanvas
 from ipycanvas import hold_canvas

@@ -150,13 +150,16 @@ class ReproductionPlayer(VBox):
                 canvas.stroke_line(x - 12, y - 12, x + 12, y + 12)
                 canvas.stroke_line(x - 12, y + 12, x + 12, y - 12)
 
-        with drawing_batch():
-            view.show(ghost_path, "ghost")
-            play_frames(view, "robot", len(frames), setup, draw_frame, final, self.fps)
-            # Queued after the last frame, so the learnt path appears when the motion ends.
-            ghost_canvas = view.layer("ghost")
+        ghost_canvas = view.layer("ghost")
+
+        def path_after_motion():
+            # Sent with the last frame, so the learnt path appears when the motion ends.
             ghost_canvas.clear()
             ghost_layer_after(ghost_canvas)
+
+        with drawing_batch():
+            view.show(ghost_path, "ghost")
+            play_frames(view, "robot", len(frames), setup, draw_frame, final, self.fps, then=path_after_motion)
         view.remember(ghost_layer_after, "ghost")
         self.replay_button.disabled = False
 

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 from ipywidgets import HTML, Button, FloatText, HBox, Layout, ToggleButtons, VBox
@@ -99,8 +99,8 @@ class TeachingCanvas(VBox):
     pending_action = Any(None, allow_none=True, help="The arrow drawn but not confirmed: [u1, u2] or None.")
     locked = Bool(False, help="True while input is disabled (guidance shown, episode over).")
 
-    def __init__(self, skill, query_states, theme=None, grab_radius: float = 28.0, auto_advance: bool = True, width=None, height=None,
-                 css_width=None, action_length=None, target_label: str | None = "goal"):
+    def __init__(self, skill, query_states, theme=None, grab_radius: float = 28.0, auto_advance: bool = True,
+                 width=None, height=None, css_width=None, action_length=None, target_label: str | None = "goal"):
         states = np.array(query_states, dtype=float)
         if states.ndim != 2 or states.shape[1] != skill.state_dim or len(states) == 0:
             raise ValueError(f"query_states: expected shape (N, {skill.state_dim}) with N >= 1, got {states.shape}")
@@ -146,7 +146,7 @@ class TeachingCanvas(VBox):
         canvas.on_mouse_out(self._on_mouse_up)
         canvas.on_key_down(self._on_key_down)
 
-        controls = VBox([
+        self.controls = controls = VBox([
             self.readout,
             HBox([self.confirm_button, self.clear_button]),
             HTML("<small>Or type the arrow:</small>"),
@@ -280,8 +280,8 @@ class TeachingCanvas(VBox):
             else:
                 self.view.show_state(state)
             self._draw_arrows()
+        self._sync_entries()  # before the readout names the new state: typed numbers never lag behind it
         self._update_readout()
-        self._sync_entries()
         self.confirm_button.disabled = True
 
     def _draw_arrows(self, rubber_band: bool = False) -> None:

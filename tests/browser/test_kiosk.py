@@ -8,7 +8,8 @@ preheated spare makes the next visitor's page interactive within 3 s.
 
 The culler's timings are shortened here through the config's own knobs
 (``--MappingKernelManager.cull_idle_timeout`` / ``cull_interval`` on the command line win over
-the file); the shipped values are checked as values and as what Voila logs it runs.
+the file); the shipped values are checked as what Voila logs it runs here and as values in
+tests/test_deploy.py.
 """
 
 from __future__ import annotations
@@ -21,40 +22,26 @@ import urllib.error
 import urllib.request
 
 import pytest
-from traitlets.config.loader import PyFileConfigLoader
 
-from browser_support import ARTIFACTS, REPO
+from browser_support import ARTIFACTS
 
 from .helpers import OKABE, ee_pixel, wait_for_color
-from .kiosk import (DEPLOY, kernel_processes, kiosk_context, memory_mb, reference_episodes, start_page_server,
-                    visit, wait_for_exit, wait_until_quiet)
+from .kiosk import (
+    kernel_processes,
+    kiosk_context,
+    memory_mb,
+    reference_episodes,
+    start_page_server,
+    visit,
+    wait_for_exit,
+    wait_until_quiet,
+)
 
 LOADS = 20
 ABANDONED = {4, 9, 14}                 # visits whose page vanishes without beforeunload (a killed tab)
-CULL_TIMEOUT_S, CULL_INTERVAL_S = 8, 1  # the test's culler: the shipped one waits 600 s
-
-
-def shipped():
-    return PyFileConfigLoader("voila.py", path=str(DEPLOY)).load_config()
-
-
-def test_shipped_configuration_culls_idle_unconnected_kernels_and_preheats_only_the_two_pages():
-    config = shipped()
-    culler = config.MappingKernelManager
-    assert culler.cull_idle_timeout >= 300, "a visitor who steps away for a few minutes must find a live page"
-    assert 0 < culler.cull_interval <= culler.cull_idle_timeout / 5
-    assert culler.cull_connected is False, "an open page (the kiosk's own screen) must keep its kernel"
-    assert culler.cull_busy is False
-    assert config.Voila.tornado_settings == {"disable_check_xsrf": True}   # the pages' shutdown beacons
-    assert config.VoilaConfiguration.preheat_kernel is True
-    assert config.VoilaConfiguration.multi_kernel_manager_class == "kiosk_kernels.KioskKernelManager"
-    pools = config.VoilaKernelManager.kernel_pools_config
-    assert pools["default"]["pool_size"] == 0
-    assert pools["demo.ipynb"]["pool_size"] == 1 and pools["study_sim.ipynb"]["pool_size"] == 1
-    # The README's way of serving the pages uses this file.
-    for script, page in (("serve-demo.sh", "notebooks/demo.ipynb"), ("serve-study.sh", "notebooks/study_sim.ipynb")):
-        text = (REPO / "scripts" / script).read_text()
-        assert "--Voila.config_file_paths=" in text and "deploy/voila" in text and page in text, script
+# The test's culler (the shipped one waits 600 s). 15 s stays above the time a page takes to
+# connect to its kernel on a machine loaded far beyond its cores (up to 8 s was seen).
+CULL_TIMEOUT_S, CULL_INTERVAL_S = 15, 1
 
 
 @pytest.mark.slow
@@ -166,6 +153,9 @@ def test_twenty_visits_keep_memory_bounded_and_each_page_is_interactive_within_3
         ARTIFACTS.mkdir(exist_ok=True)
         (ARTIFACTS / "kiosk-figures.json").write_text(json.dumps(summary, indent=1))
         assert summary["answered_p50_ms"] <= 3000 * share, summary
+    except BaseException:
+        print(server.log.read_text()[-6000:])          # pytest shows it with the failure
+        raise
     finally:
         context.close()
         server.stop()

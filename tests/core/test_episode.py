@@ -125,7 +125,8 @@ def test_the_reproduction_is_rolled_out_once_and_is_the_learnt_skills(monkeypatc
     skill = SKILLS["uarm-line"]
     calls = []
     original = Skill.reproduce
-    monkeypatch.setattr(Skill, "reproduce", lambda self, theta, **kw: calls.append(theta) or original(self, theta, **kw))
+    monkeypatch.setattr(Skill, "reproduce",
+                        lambda self, theta, **kw: calls.append(theta) or original(self, theta, **kw))
     episode = TeachingEpisode(skill, seed=4, duration=3.0)
     episode.restore(episode.optimal_actions + 0.2)
     assert not episode.reproduced and calls == []

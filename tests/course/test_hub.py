@@ -120,8 +120,9 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
     drawn = [e for s in read_class(hub.class_folder).students.values() for e in s.events
              if e["kind"] == "demonstration" and e.get("method") == "pointer"]
     assert len(drawn) == 2 and {e["lesson"] for e in drawn} == {"hub-draw"}
-    errors = sorted(s.errors for s in progress.students)
-    assert errors == pytest.approx(sorted(r["errors"] for r in results.values()))
+    recorded = [error for errors in sorted(s.errors for s in progress.students) for error in errors]
+    returned = [error for errors in sorted(r["errors"] for r in results.values()) for error in errors]
+    assert recorded == pytest.approx(returned, rel=1e-12)
     assert progress.exercise_shares("a1_ridge_learner") and len(progress.exercise_shares("a1_ridge_learner")) == 12
 
     # The instructor opens the class view on the hub: every student is there.

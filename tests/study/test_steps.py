@@ -322,7 +322,8 @@ def test_an_experimenter_assignment_frees_no_randomised_place(tmp_path):
 
 # -- in the app -----------------------------------------------------------------------------------------
 
-GUIDANCE_WORDS = re.compile(r"\b(optimal|off by|too long|too short|direction: |size: )", re.IGNORECASE)
+# The words of guidance (how the arrow differs from the optimal one), not the legend naming the arrows.
+GUIDANCE_WORDS = re.compile(r"(off by|too long|too short|direction: |size: |&deg; off|° off)", re.IGNORECASE)
 
 
 def test_the_app_shows_arrows_only_to_the_target_group_when_the_protocol_says_arrows(tmp_path):
@@ -397,3 +398,13 @@ def test_the_widget_shows_words_only_or_nothing_when_told():
     assert none.phase == "teaching" and none.state_index == 1
     with pytest.raises(ValueError, match="guidance_modality"):
         EpisodeWidget(skill, guidance_modality="sparkles")
+
+
+def test_a_lesson_runs_the_task_without_the_steps_around_it():
+    session = Session.lesson(steps_protocol(), group="target")
+    kinds = []
+    while not session.finished:
+        kinds.append(session.current_step().kind)
+        run_to_end_one(session)
+    assert kinds[:3] == ["welcome", "consent", "instructions"] and session.completed
+    assert not {"video", "information", "eligibility", "demographics", "questionnaire"} & set(kinds)

@@ -1,9 +1,12 @@
 import numpy as np
 import pytest
+from ipywidgets import HTML
 
 from mt_widgets import SKILLS, RidgeLearner, optimal_actions, teaching_risk
+from mt_widgets.apps.uarm_screen import ScreenGeometry, fit_episode
 from mt_widgets.core import DEFAULT_LAMBDA
 from mt_widgets.widgets import EpisodeWidget
+from mt_widgets.widgets.episode import stage_css
 
 from .conftest import near, path_points, pointer
 
@@ -213,3 +216,18 @@ def test_the_typed_arrow_fields_start_empty_at_each_new_state(guidance):
     assert (teaching.first_entry.value, teaching.second_entry.value) == (1.5, -0.5), "the fields show the arrow"
     teaching.clear_action()
     assert (teaching.first_entry.value, teaching.second_entry.value) == (0.0, 0.0)
+
+
+def test_the_canvases_grow_with_the_window_unless_sized_or_fitted_to_a_screen():
+    episode = EpisodeWidget("uarm-point", seed=0)
+    views = (episode.teaching.view, episode.player.view)
+    classes = [[c for c in view.canvas._dom_classes if c.startswith("mt-stage-canvas-")] for view in views]
+    assert classes == [["mt-stage-canvas-63"]] * 2, "304 x 480 canvases: width / height = 0.63"
+    css = stage_css(*views)
+    assert ".mt-stage-canvas-63 {width: max(260px, min(calc(100vw - 480px), calc((100vh - 350px) * 0.6333)" in css
+    assert any(isinstance(w, HTML) and w.value == css for w in episode.children)
+    # A given CSS width is kept as it is, and a true-size screen under the arm keeps its size.
+    sized = EpisodeWidget("uarm-point", seed=0, css_width="260px")
+    assert not any(c.startswith("mt-stage") for c in sized.teaching.view.canvas._dom_classes)
+    fit_episode(episode, ScreenGeometry())
+    assert not any(c.startswith("mt-stage") for view in views for c in view.canvas._dom_classes)

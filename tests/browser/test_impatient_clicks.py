@@ -1,0 +1,122 @@
+"""An impatient visitor on the demo page: clicks while the reproduction or a replay plays.
+
+Whatever is clicked and whenever, every canvas must be drawn within a second of the page
+settling, and the browser's console must not report a widget model that is gone (ipycanvas'
+canvas manager stops drawing for the whole page after one failed command).
+"""
+
+import time
+
+import pytest
+
+from .helpers import OKABE, ee_pixel, wait_for_color
+
+pytestmark = pytest.mark.browser
+
+#: How long after the page settles every canvas must show its drawing.
+DRAWN_WITHIN_MS = 1000
+
+
+def reference(skill="sim-point", guidance=False, seed=0):
+    """The demo's episode for these settings, built without a kernel (same defaults as the page)."""
+    from mt_widgets.widgets import DemoPage
+    page = DemoPage(skill=skill, guidance=True, seed=seed)
+    if not guidance:
+        page.guidance_switch.value = False
+    return page.episode
+
+
+def open_demo(page, voila_server, console):
+    page.on("console", lambda message: console.append(message.text))
+    page.on("pageerror", lambda error: console.append(str(error)))
+    page.goto(voila_server.url("/voila/render/demo.ipynb"), timeout=60_000)
+    page.wait_for_selector("canvas", timeout=60_000)
+    wait_for_color(page, 0, *ee_pixel(reference(guidance=True)), OKABE["yellow"])
+
+
+def set_guidance(page, on: bool) -> None:
+    box = page.get_by_role("checkbox")
+    if box.is_checked() != on:
+        box.click()
+
+
+def teach_by_numbers(page, episode, guidance: bool) -> None:
+    """Types each optimal arrow, sets and confirms it (and moves on after guidance)."""
+    n = len(episode.query_states)
+    for index, action in enumerate(episode.optimal):
+        page.get_by_text(f"State {index + 1} of {n}").first.wait_for(timeout=10_000)
+        fields = page.locator(".widget-text input[type=number]")
+        fields.nth(0).fill(f"{action[0]:.6f}")
+        fields.nth(1).fill(f"{action[1]:.6f}")
+        fields.nth(1).press("Tab")  # the last value reaches the kernel before the click
+        page.get_by_role("button", name="Set arrow").click()
+        try:
+            page.get_by_text(f"State {index + 1} of {n}: your arrow").first.wait_for(timeout=10_000)
+        except Exception:
+            page.screenshot(path="test-artifacts/impatient-debug.png")
+            raise
+        page.get_by_role("button", name="Confirm").click()
+        if guidance:
+            page.get_by_role("button", name="Finish and watch" if index == n - 1 else "Next state").click()
+    page.get_by_text("Your teaching error").wait_for(timeout=20_000)
+
+
+def mark_canvases(page) -> None:
+    """Marks the canvas elements on the page now, to tell when a new episode's have replaced them."""
+    page.evaluate("() => document.querySelectorAll('canvas').forEach(c => { c.dataset.old = '1'; })")
+
+
+def wait_for_new_canvases(page) -> None:
+    page.wait_for_function("() => { const all = document.querySelectorAll('canvas');"
+                           " return all.length === 2 && [...all].every(c => !c.dataset.old); }", timeout=10_000)
+
+
+def expect_drawn(page, episode, what: str) -> None:
+    """Both canvases show the episode's first state (teaching) and the start pose (player) soon after
+    the page settles: the marked canvases replaced by the new episode's, its texts shown."""
+    wait_for_new_canvases(page)
+    page.get_by_text(f"Teaching effort: 0 of {len(episode.query_states)} demonstrations").wait_for(timeout=10_000)
+    page.get_by_text("Your teaching error").wait_for(state="detached", timeout=10_000)
+    settled = time.monotonic()
+    start = episode.player.view.transform.to_pixel(episode.skill.end_effector(episode.skill.start[None])[0][0])
+    try:
+        wait_for_color(page, 0, *ee_pixel(episode), OKABE["yellow"], timeout=DRAWN_WITHIN_MS)
+        wait_for_color(page, 1, *start, OKABE["yellow"], timeout=DRAWN_WITHIN_MS)
+    except Exception:
+        raise AssertionError(f"{what}: a canvas was not drawn within {DRAWN_WITHIN_MS} ms of the page settling "
+                             f"({time.monotonic() - settled:.2f} s)") from None
+
+
+@pytest.mark.parametrize("scenario", ["try-again", "replay-then-try-again", "another-skill", "guidance-toggle"])
+def test_every_canvas_is_drawn_within_a_second_whatever_is_clicked_during_the_reproduction(
+        page, voila_server, artifacts, scenario):
+    console = []
+    open_demo(page, voila_server, console)
+    mark_canvases(page)
+    set_guidance(page, False)
+    wait_for_new_canvases(page)  # the episode without guidance has replaced the first one
+    episode = reference(guidance=False)
+    wait_for_color(page, 0, *ee_pixel(episode), OKABE["yellow"])
+    teach_by_numbers(page, episode, guidance=False)
+    time.sleep(1.0)  # the reproduction (10 s) is playing
+    page.screenshot(path=artifacts("playing"))
+    mark_canvases(page)
+    if scenario == "try-again":
+        page.get_by_role("button", name="Try again with new states").click()
+        expect_drawn(page, reference(guidance=False, seed=1), scenario)
+    elif scenario == "replay-then-try-again":
+        page.get_by_role("button", name="Replay").click()
+        time.sleep(0.5)
+        page.get_by_role("button", name="Try again with new states").click()
+        expect_drawn(page, reference(guidance=False, seed=1), scenario)
+    elif scenario == "another-skill":
+        page.get_by_role("button", name="Arm: reach a line", exact=True).click()
+        expect_drawn(page, reference("sim-line", guidance=False), scenario)
+    else:
+        set_guidance(page, True)   # a fresh episode, guidance on, while the reproduction's frames are queued
+        wait_for_new_canvases(page)
+        mark_canvases(page)
+        page.get_by_role("button", name="Try again with new states").click()
+        expect_drawn(page, reference(guidance=True, seed=1), scenario)
+    page.screenshot(path=artifacts("after"))
+    assert not [text for text in console if "not found" in text.lower()], console

@@ -1,0 +1,33 @@
+"""The shipped Voila configuration of the demo and study pages (deploy/voila/voila.py), as values.
+
+What the values do is shown in a real Voila and Chromium by tests/browser/test_kiosk.py."""
+
+from pathlib import Path
+
+from traitlets.config.loader import PyFileConfigLoader
+
+REPO = Path(__file__).resolve().parents[1]
+DEPLOY = REPO / "deploy" / "voila"
+
+
+def shipped():
+    return PyFileConfigLoader("voila.py", path=str(DEPLOY)).load_config()
+
+
+def test_shipped_configuration_culls_idle_unconnected_kernels_and_preheats_only_the_two_pages():
+    config = shipped()
+    culler = config.MappingKernelManager
+    assert culler.cull_idle_timeout >= 300, "a visitor who steps away for a few minutes must find a live page"
+    assert 0 < culler.cull_interval <= culler.cull_idle_timeout / 5
+    assert culler.cull_connected is False, "an open page (the kiosk's own screen) must keep its kernel"
+    assert culler.cull_busy is False
+    assert config.Voila.tornado_settings == {"disable_check_xsrf": True}   # the pages' shutdown beacons
+    assert config.VoilaConfiguration.preheat_kernel is True
+    assert config.VoilaConfiguration.multi_kernel_manager_class == "kiosk_kernels.KioskKernelManager"
+    pools = config.VoilaKernelManager.kernel_pools_config
+    assert pools["default"]["pool_size"] == 0
+    assert pools["demo.ipynb"]["pool_size"] == 1 and pools["study_sim.ipynb"]["pool_size"] == 1
+    # The README's way of serving the pages uses this file.
+    for script, page in (("serve-demo.sh", "notebooks/demo.ipynb"), ("serve-study.sh", "notebooks/study_sim.ipynb")):
+        text = (REPO / "scripts" / script).read_text()
+        assert "--Voila.config_file_paths=" in text and "deploy/voila" in text and page in text, script

@@ -1,0 +1,126 @@
+"""Animations in a kernel (a running event loop): sent in short chunks, stoppable, and a replaced
+view is closed only after the browser has played what it holds.
+
+The browser's canvas manager plays every canvas's commands from one queue and stops for good
+after a command for a closed canvas; these tests hold the kernel side to what avoids both.
+"""
+
+import asyncio
+
+import pytest
+
+from mt_widgets.widgets import DemoPage, EpisodeWidget, animation, stop_animations
+
+
+def _robot_messages(recorder, layer):
+    """Indices of the messages that draw on ``layer`` (a canvas or its model id), and the sleeps (ms) each holds."""
+    model_id = layer if isinstance(layer, str) else layer.model_id
+    found = []
+    for index in range(len(recorder.messages)):
+        commands = [(name, args) for canvas, name, args in recorder.commands(index) if canvas == model_id]
+        if commands:
+            found.append((index, [args[0] for name, args in commands if name == "sleep"]))
+    return found
+
+
+def _finished_episode(recorder, duration=2.0):
+    episode = EpisodeWidget("sim-point", seed=0, guidance=False, duration=duration)
+    for action in episode.optimal[:-1]:
+        episode.demonstrate(action)
+    recorder.clear()
+    episode.demonstrate(episode.optimal[-1])
+    return episode
+
+
+def test_without_an_event_loop_the_animation_is_one_message(recorder):
+    episode = _finished_episode(recorder)
+    messages = _robot_messages(recorder, episode.player.view.layer("robot"))
+    n_frames = len(animation.frame_times(0.0, float(episode.result.trajectory.times[-1]), 60.0))
+    assert len(messages) == 1 and len(messages[0][1]) == n_frames - 1
+
+
+def test_in_a_kernel_the_animation_goes_in_short_chunks_just_ahead_of_playback(recorder):
+    async def scenario():
+        loop = asyncio.get_running_loop()
+        started = loop.time()
+        episode = _finished_episode(recorder)
+        layer = episode.player.view.layer("robot")
+        sent_at = {}
+        while not animation._PLAYING[layer].done:
+            for index, _ in _robot_messages(recorder, layer):
+                sent_at.setdefault(index, loop.time() - started)
+            await asyncio.sleep(0.02)
+        return episode, layer, sent_at
+
+    episode, layer, sent_at = asyncio.run(scenario())
+    messages = _robot_messages(recorder, layer)
+    n_frames = len(animation.frame_times(0.0, float(episode.result.trajectory.times[-1]), 60.0))
+    assert sum(len(sleeps) for _, sleeps in messages) == n_frames - 1, "every frame is sent, once"
+    assert len(messages) >= 7, "a 2 s animation goes in chunks of a quarter of a second"
+    assert all(sum(sleeps) <= 1000 * animation.CHUNK_S + 20 for _, sleeps in messages)
+    # Paced: the last chunk leaves well after the first, and never far ahead of playback.
+    times = sorted(sent_at.values())
+    assert times[-1] - times[0] >= 2.0 - animation.CHUNK_S - animation.AHEAD_S - 0.2
+
+
+def test_a_stopped_animation_sends_nothing_more_and_a_retired_view_closes_after_the_browser_has_played(
+        recorder, monkeypatch):
+    monkeypatch.setattr(animation, "CLOSE_MARGIN_S", 0.2)
+
+    async def scenario():
+        page = DemoPage(duration=3.0)
+        episode = page.episode
+        for action in episode.optimal:
+            episode.demonstrate(action)
+            episode.next()
+        layer = episode.player.view.layer("robot").model_id
+        await asyncio.sleep(0.5)
+        sent_before = len(_robot_messages(recorder, layer))
+        page.new_states_button.click()          # "Try again" while the reproduction plays
+        replaced = asyncio.get_running_loop().time()
+        assert episode.player.view.canvas.comm is not None, "closed while the browser may still draw on it"
+        await asyncio.sleep(0.6)
+        sent_after = len(_robot_messages(recorder, layer))
+        while episode.player.view.canvas.comm is not None:
+            await asyncio.sleep(0.05)
+        closed_after = asyncio.get_running_loop().time() - replaced
+        return sent_before, sent_after, closed_after, episode
+
+    sent_before, sent_after, closed_after, episode = asyncio.run(scenario())
+    assert sent_after == sent_before, "the replaced episode's animation went on sending frames"
+    assert sent_before >= 2
+    # Closed once what was sent (at most about half a second ahead) has played, plus the margin.
+    assert 0.2 <= closed_after <= animation.CHUNK_S + animation.AHEAD_S + 0.2 + 0.5
+    assert episode.teaching.view.canvas.comm is None and episode.teaching.view.canvas[0].comm is None
+
+
+def test_stop_animations_shows_nothing_more_and_replay_replaces_a_playing_animation(recorder):
+    async def scenario():
+        episode = _finished_episode(recorder, duration=3.0)
+        layer = episode.player.view.layer("robot")
+        await asyncio.sleep(0.3)
+        episode.player.replay()                 # Replay while playing: the first one stops
+        first = animation._PLAYING[layer]
+        await asyncio.sleep(0.3)
+        stop_animations(episode)
+        count = len(_robot_messages(recorder, layer))
+        await asyncio.sleep(0.6)
+        return first, count, len(_robot_messages(recorder, layer))
+
+    first, count, later = asyncio.run(scenario())
+    assert first.cancelled and count == later
+
+
+@pytest.mark.parametrize("show_final", [True, False])
+def test_a_cancelled_animation_can_show_its_final_picture(recorder, show_final):
+    async def scenario():
+        episode = _finished_episode(recorder, duration=3.0)
+        layer = episode.player.view.layer("robot")
+        await asyncio.sleep(0.1)
+        recorder.clear()
+        animation.stop_animation(layer, show_final=show_final)
+        return recorder.on(layer)
+
+    drawn = asyncio.run(scenario())
+    assert bool(drawn) == show_final
+    assert not [args for name, args in drawn if name == "sleep"]
