@@ -19,7 +19,6 @@ so the figures are for a class whose install step ran, not for a first-ever comp
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 import sys
 import tempfile
@@ -65,7 +64,7 @@ def main() -> None:
             failed = [run["error"] for run in runs if run["error"]]
             if failed:
                 raise SystemExit(f"episodes failed: {failed[:3]}")
-            results = [json.loads(run["stdout"].strip().splitlines()[-1]) for run in runs]
+            results = [hub.read_json(name, "episode-result.json") for name in students]
             latencies = [latency * 1000 for r in results for latency in r["latencies_s"]]
             walls = [run["seconds"] for run in runs]
             memory = [hub.memory(name) / 2**20 for name in students]
@@ -73,8 +72,8 @@ def main() -> None:
             hub.stop()
     spawn_times = list(spawn.values())
     print(f"spawn time: p50 {percentile(spawn_times, 0.5):.1f} s, p95 {percentile(spawn_times, 0.95):.1f} s")
-    print(f"feedback latency under load ({len(students)} students' episodes at once): p50 {percentile(latencies, 0.5):.0f} ms, "
-          f"p95 {percentile(latencies, 0.95):.0f} ms")
+    print(f"feedback latency under load ({len(students)} students' episodes at once): "
+          f"p50 {percentile(latencies, 0.5):.0f} ms, p95 {percentile(latencies, 0.95):.0f} ms")
     print(f"three episodes in a fresh kernel (imports included): p50 {percentile(walls, 0.5):.1f} s, "
           f"p95 {percentile(walls, 0.95):.1f} s")
     print(f"memory per student (server + one kernel): p50 {statistics.median(memory):.0f} MiB, "

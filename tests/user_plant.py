@@ -1,4 +1,4 @@
-"""Tutorial 05's own plant and skill, as a user writes them: a 2 kg point mass pushed on a table.
+"""Tutorial 09's own plant and skill, as a user writes them: a 2 kg point mass pushed on a table.
 
 Kept as a plain module (no test in it) so the widget, protocol and browser tests teach the same
 user skill the tutorial shows, and a protocol can point at this file with ``[skills] module``.

@@ -279,7 +279,8 @@ def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration
                 ax.set_axis_off()
                 continue
             skill = (SKILLS if skills is None else skills)[rows["skill"].iloc[0]]
-            inset = ax.inset_axes([0.58, 0.58, 0.4, 0.4]) if zoom else None
+            # Lower right: the start and the goal of the paper's skills lie in the upper half.
+            inset = ax.inset_axes([0.62, 0.03, 0.36, 0.36]) if zoom else None
             drawn = []
             for target_ax in [ax] + ([inset] if inset is not None else []):
                 _draw_target(target_ax, skill)
@@ -313,7 +314,7 @@ def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration
             ax.set_ylim(*box.ylim)
             ax.set_aspect("equal")
             ax.set_title(f"{participant} ({groups[participant]}): {' & '.join(panel)}", fontsize=9)
-            ax.legend(fontsize=6, frameon=False, loc="lower left", ncol=2)
+            ax.legend(fontsize=6, frameon=False, loc="upper left", ncol=2)
             ax.set_xlabel(f"r1 ({skill.units})")
             ax.set_ylabel(f"r2 ({skill.units})")
     return figure

@@ -7,8 +7,17 @@
 """
 
 from .checks import CheckFailed, ExerciseChecks
-from .progress import (CLASS_FOLDER_ENV, STUDENT_ENV, ClassFolderError, ProgressRecorder, class_folder_from_env,
-                       create_class_folder, pseudonym, read_class_meta, student_name)
+from .progress import (
+                       CLASS_FOLDER_ENV,
+                       STUDENT_ENV,
+                       ClassFolderError,
+                       ProgressRecorder,
+                       class_folder_from_env,
+                       create_class_folder,
+                       pseudonym,
+                       read_class_meta,
+                       student_name,
+)
 from .reader import ClassProgress, StudentProgress, read_class, read_student
 from .summary import STUCK_AFTER_S, ClassSummary, StudentSummary, summarise
 

@@ -15,7 +15,7 @@ Widgets hold no science: they call ``mt_widgets.core`` and draw the result.
 
 from .animation import Animation, frame_times, play_frames, retire, sample_at, stop_animations
 from .arm_view import LAYERS, ArmView
-from .arrows import draw_arrow
+from .arrows import draw_arrow, draw_arrow_pair
 from .coords import ViewTransform
 from .demo import DEMO_SKILLS, DemoPage
 from .episode import DemonstrationRecord, EpisodeResult, EpisodeWidget, keep_canvas_size
@@ -39,13 +39,10 @@ from .theme import (
 )
 
 __all__ = [
-    "COLOR_NAMES", "CanvasLegend", "MARKS", "fill_words", "legend_entries",
-    "Animation", "ArmView", "ArrowStyle", "ConfirmedAction", "DEFAULT_THEME", "DEMO_SKILLS", "DemoPage",
-    "DemonstrationRecord", "EffortProgress",
-    "EpisodeResult", "EpisodeWidget", "GuidancePanel", "LAYERS", "PAPER_THEME", "PAPER_UARM_THEME",
-    "ReproductionPlayer", "RobotPainter", "THEMES", "TeachingCanvas", "Theme", "ViewTransform",
-    "describe_action", "draw_arrow", "drawing_batch", "explain_difference", "frame_times", "get_theme",
-    "keep_canvas_size",
-    "legend_html", "painter_for", "play_frames", "repaint_on_new_view", "retire", "sample_at",
-    "stop_animations",
+    "COLOR_NAMES", "MARKS", "Animation", "ArmView", "ArrowStyle", "CanvasLegend", "ConfirmedAction", "DEFAULT_THEME",
+    "DEMO_SKILLS", "DemoPage", "DemonstrationRecord", "EffortProgress", "EpisodeResult", "EpisodeWidget",
+    "GuidancePanel", "LAYERS", "PAPER_THEME", "PAPER_UARM_THEME", "ReproductionPlayer", "RobotPainter", "THEMES",
+    "TeachingCanvas", "Theme", "ViewTransform", "describe_action", "draw_arrow", "draw_arrow_pair", "drawing_batch",
+    "explain_difference", "fill_words", "frame_times", "get_theme", "keep_canvas_size", "legend_entries",
+    "legend_html", "painter_for", "play_frames", "repaint_on_new_view", "retire", "sample_at", "stop_animations",
 ]

@@ -14,7 +14,7 @@ attaches later (Voila, a page reload) gets everything again (see ``redraw.py``).
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from ipycanvas import MultiCanvas

@@ -85,6 +85,12 @@ def _head(canvas, tip, left, right) -> None:
 ALIGNED_DEG = 10.0
 
 
+def side_offset(user_style: ArrowStyle, optimal_style: ArrowStyle) -> float:
+    """Pixels an aligned optimal arrow is moved sideways: the two shafts' half-widths, its
+    outline, and a pixel and a half of daylight between them."""
+    return (user_style.width + optimal_style.width) / 2 + optimal_style.outline_width + 1.5
+
+
 def draw_arrow_pair(canvas, start, user_tip, optimal_tip, user_style: ArrowStyle,
                     optimal_style: ArrowStyle) -> float:
     """Draw the user's arrow and the optimal one from the same pixel ``start``, both visible.
@@ -113,7 +119,7 @@ def draw_arrow_pair(canvas, start, user_tip, optimal_tip, user_style: ArrowStyle
         if user_length >= 2.0 and optimal_length >= 2.0:
             cosine = (ux * ox + uy * oy) / (user_length * optimal_length)
             if cosine >= math.cos(math.radians(ALIGNED_DEG)):
-                offset = (user_style.width + optimal_style.width) / 2 + optimal_style.outline_width + 1.5
+                offset = side_offset(user_style, optimal_style)
                 # To the left of the optimal arrow's direction, as the screen shows it.
                 shift = (oy / optimal_length * offset, -ox / optimal_length * offset)
     if user_tip is not None:

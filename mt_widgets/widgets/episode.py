@@ -105,6 +105,8 @@ class EpisodeResult:
 #: at 1400 x 1000 the whole reproduction is on screen without scrolling; the side column's
 #: width; the widest a canvas grows.
 _ROOM_Y_PX, _SIDE_PX, _MAX_CANVAS_PX = 350, 420, 760
+#: On a narrow page (a tablet upright) the side column is under the canvas: room for its top.
+_NARROW_EXTRA_Y_PX = 220
 
 
 def _canvas_class(view) -> str:
@@ -134,8 +136,11 @@ def stage_css(*views) -> str:
         name = _canvas_class(view)
         rules.append(f".{name} {{width: max(260px, min(calc(100vw - {_SIDE_PX + 60}px), {by_height}, "
                      f"{_MAX_CANVAS_PX}px)) !important; height: auto !important}}")
+        # A narrow page puts the side column under the canvas: the canvas leaves room for its
+        # first lines (the result and the next action) in the window too.
+        narrow_by_height = f"calc((100vh - {_ROOM_Y_PX + _NARROW_EXTRA_Y_PX}px) * {ratio:.4f})"
         rules.append(f"@media (max-width: 860px) {{.{name} {{width: max(260px, min(calc(100vw - 40px), "
-                     f"{by_height}, {_MAX_CANVAS_PX}px)) !important}}}}")
+                     f"{narrow_by_height}, {_MAX_CANVAS_PX}px)) !important}}}}")
     return "<style>" + "\n".join(dict.fromkeys(rules)) + "</style>"
 
 
@@ -427,7 +432,7 @@ class EpisodeWidget(VBox):
         if self.guidance:
             self.teaching._set_locked(True)
             if self.guidance_arrows:
-                self.teaching.show_guidance(self.optimal[index])
+                self.teaching.show_guidance(self.optimal[index], legend=self.guidance_words)
             if self.guidance_words:
                 # The arrows' legend is under the canvas (legend.py), with every other mark.
                 self.guidance_panel.show(confirmed.action, self.optimal[index], exact=self.exact, legend=False)

@@ -54,6 +54,7 @@ class ReproductionPlayer(VBox):
     def __init__(self, skill, theme=None, fps: float = DEFAULT_FPS, width=None, height=None, css_width=None,
                  action_length=None, target_label: str | None = "goal", show_outcome: bool = True):
         self.skill = skill
+        self.target_label = target_label
         self.show_outcome = as_bool("show_outcome", show_outcome)
         self.fps = float(fps)
         self.view = ArmView(skill, width=width, height=height, theme=theme, action_length=action_length,
@@ -179,11 +180,18 @@ class ReproductionPlayer(VBox):
             self.status.value = (
                 f"<div style='color:white;background:{self.theme.diverged};padding:4px 8px;border-radius:4px'>"
                 f"<b>The learnt skill diverged{when}</b>: the robot left its safe range, so the replay stops "
-                f"there (red cross). The demonstrations did not teach a stable skill.</div>")
+                f"there ({self._named('diverged')}cross). The demonstrations did not teach a stable skill.</div>")
         else:
             distance = self.skill.target.distance(end) if self.skill.target is not None else None
-            extra = "" if distance is None else f", {float(distance):.3g} {units} from the goal"
-            self.status.value = (f"After {trajectory.times[-1]:.1f} s the end-effector is at "
+            goal = "" if self.skill.target is None else self.theme.target_words(self.skill.target, self.target_label)
+            extra = "" if distance is None else f", {float(distance):.3g} {units} from {goal}"
+            self.status.value = (f"After {trajectory.times[-1]:.1f} s the robot's hand is at "
                                  f"({end[0]:.2f}, {end[1]:.2f}) {units}{extra}. "
-                                 + ("The faint dashed path is the target skill's own motion."
-                                    if self.ghost is not None else ""))
+                                 f"Its path is the {self._named('trail')}line"
+                                 + (f"; the faint dashed {self._named('ghost')}line is the skill's own motion."
+                                    if self.ghost is not None else "."))
+
+    def _named(self, role: str) -> str:
+        """The theme's name of a mark's colour and a space ("pink "), or nothing if it has none."""
+        name = self.theme.color_name(role)
+        return f"{name} " if name else ""

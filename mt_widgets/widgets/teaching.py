@@ -146,6 +146,11 @@ class TeachingCanvas(VBox):
         canvas.on_mouse_out(self._on_mouse_up)
         canvas.on_key_down(self._on_key_down)
 
+        self.view.legend.add("user_arrow")
+        # The legend beside the canvas under the controls, where the eyes go from a mark to its
+        # meaning; under the canvas it would push what follows below the fold. (An episode places
+        # ``controls`` and ``view.legend`` in its own side column.)
+        self.view.legend.layout.max_width = "100%"
         self.controls = controls = VBox([
             self.readout,
             HBox([self.confirm_button, self.clear_button]),
@@ -158,8 +163,7 @@ class TeachingCanvas(VBox):
             HTML("<small>Keyboard: click the canvas, then arrow keys move the arrow tip "
                  "(Shift: finer), Enter confirms, Escape clears.</small>"),
         ], layout=Layout(min_width="300px", max_width="380px"))
-        self.view.legend.add("user_arrow")
-        super().__init__([HBox([VBox([canvas, self.view.legend]), controls],
+        super().__init__([HBox([canvas, VBox([controls, self.view.legend], layout=Layout(max_width="400px"))],
                                layout=Layout(flex_flow="row wrap", align_items="flex-start"))])
         self._show_current_state()
 
@@ -236,10 +240,15 @@ class TeachingCanvas(VBox):
         if len(self.demonstrations) == confirmed.index:
             self.demonstrations = self.demonstrations + [[float(a) for a in confirmed.action]]
 
-    def show_guidance(self, optimal_action) -> None:
-        """Draw the optimal arrow (R,) beside the confirmed one at the current state."""
+    def show_guidance(self, optimal_action, legend: bool = True) -> None:
+        """Draw the optimal arrow (R,) beside the confirmed one at the current state.
+
+        ``legend``: name it in the canvas legend too (a replication of the paper shows the
+        arrows and no words).
+        """
         self._guidance = np.array(optimal_action, dtype=float)
-        self.view.legend.add("optimal_arrow")
+        if as_bool("legend", legend):
+            self.view.legend.add("optimal_arrow")
         self._draw_arrows()
 
     def advance(self) -> None:
@@ -308,8 +317,10 @@ class TeachingCanvas(VBox):
         if self.current_state is None:
             self.readout.value = f"<b>All {self.n_states} demonstrations given.</b>"
         elif self.pending_action is None:
-            # "the robot's hand (the dot)": novices and visitors do not know "end-effector".
-            self.readout.value = (f"<b>State {n + 1} of {self.n_states}</b>: press on the robot's hand (the dot) "
+            # "the robot's hand (the yellow dot)": novices and visitors do not know "end-effector";
+            # the colour is the one the theme draws the marker in.
+            marker = self.theme.marker_words(self.view.drawing)
+            self.readout.value = (f"<b>State {n + 1} of {self.n_states}</b>: press on the robot's hand ({marker}) "
                                   f"and drag to draw the action.")
         else:
             self.readout.value = (f"<b>State {n + 1} of {self.n_states}</b>: your arrow "
@@ -354,7 +365,8 @@ class TeachingCanvas(VBox):
         near_tip = (self.pending_action is not None and np.hypot(
             *(pointer - view.transform.action_tip(origin, self.pending_action))) <= self.grab_radius)
         if not (near_origin or near_tip):
-            self.hint.value = "<small>Press on the robot's hand (the dot) to start an arrow.</small>"
+            self.hint.value = (f"<small>Press on the robot's hand ({self.theme.marker_words(self.view.drawing)}) "
+                               f"to start an arrow.</small>")
             return
         self.hint.value = ""
         self._dragging = True

@@ -154,7 +154,7 @@ def fill_words(text: str, **words: str) -> str:
     return text
 
 
-def get_theme(theme: "Theme | str | None") -> Theme:
+def get_theme(theme: Theme | str | None) -> Theme:
     """A Theme from a Theme, a theme name (``"okabe-ito"``, ``"paper"``, ``"paper-uarm"``) or None."""
     if theme is None:
         return DEFAULT_THEME

@@ -20,7 +20,7 @@ from browser_support import BIN, Server, free_port, local_page, voila
 
 PAGES = Path(__file__).parent / "pages"
 DEMO = Path(__file__).resolve().parents[2] / "notebooks" / "demo.ipynb"      # the visitors' page, served as is
-USER_PLANT = Path(__file__).resolve().parents[1] / "user_plant.py"             # tutorial 05's plant, for a page
+USER_PLANT = Path(__file__).resolve().parents[1] / "user_plant.py"             # tutorial 09's plant, for a page
 
 
 def _copy_pages(root: Path) -> None:

@@ -6,6 +6,8 @@ import json
 
 import numpy as np
 
+from mt_widgets.widgets.arrows import side_offset
+
 OKABE = {"yellow": (240, 228, 66), "vermillion": (213, 94, 0), "orange": (230, 159, 0), "blue": (0, 114, 178),
          "black": (0, 0, 0)}
 
@@ -109,3 +111,8 @@ def wait_for_pending(page, expected, tolerance: float) -> dict:
     """
     return wait_for_status(page, f"s.pending !== null && Math.abs(s.pending[0] - {expected[0]}) < {tolerance}"
                                  f" && Math.abs(s.pending[1] - {expected[1]}) < {tolerance}")
+
+
+def draw_arrow_pair_offset(theme) -> float:
+    """The sideways offset ``draw_arrow_pair`` gives an optimal arrow aligned with the user's."""
+    return side_offset(theme.user_arrow, theme.optimal_arrow)

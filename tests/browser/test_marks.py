@@ -12,26 +12,12 @@ import pytest
 
 from browser_support import local_page
 
-from .helpers import OKABE, drag, ee_pixel, reference_episode, wait_for_color, wait_for_status
+from .helpers import OKABE, drag, draw_arrow_pair_offset, ee_pixel, reference_episode, wait_for_color, wait_for_status
 
 pytestmark = pytest.mark.browser
 
 GREEN = (0, 158, 115)          # Okabe-Ito bluish green: the velocity arrow
 ARM = (77, 77, 77)             # the theme's arm grey: links and base
-
-
-def draw_arrow_pair_offset(theme) -> float:
-    """The sideways offset ``draw_arrow_pair`` gives an optimal arrow aligned with the user's."""
-    from mt_widgets.widgets.arrows import draw_arrow_pair
-
-    class Sink:
-        def __getattr__(self, name):
-            return lambda *args, **kwargs: None
-
-        def __setattr__(self, name, value):
-            pass
-
-    return draw_arrow_pair(Sink(), (0, 0), (100, 0), (60, 0), theme.user_arrow, theme.optimal_arrow)
 
 
 def open_page(page, voila_server, name: str = "episode_sim.ipynb"):

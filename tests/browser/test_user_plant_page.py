@@ -1,4 +1,4 @@
-"""Tutorial 05's own plant (a puck) taught on the demo page in Chromium, with real mouse drags.
+"""Tutorial 09's own plant (a puck) taught on the demo page in Chromium, with real mouse drags.
 
 The page (pages/demo_user_plant.ipynb) gives ``DemoPage`` the caller's skills, the puck first.
 Nothing in the views knows the puck: it is drawn from its end-effector alone (a dot with its
@@ -7,11 +7,20 @@ velocity), taught by dragging arrows, learnt, and its reproduction played to the
 
 import numpy as np
 import pytest
-from user_plant import park
 
 from mt_widgets import RidgeLearner, teaching_risk
+from user_plant import park
 
-from .helpers import OKABE, drag, ee_pixel, to_canvas, wait_for_color, wait_for_pending, wait_for_status
+from .helpers import (
+    OKABE,
+    drag,
+    draw_arrow_pair_offset,
+    ee_pixel,
+    to_canvas,
+    wait_for_color,
+    wait_for_pending,
+    wait_for_status,
+)
 
 pytestmark = pytest.mark.browser
 
@@ -24,7 +33,7 @@ def reference_page():
     return DemoPage(skills=[("Puck: park it", park), ("Arm: reach a point", "sim-point")], duration=3.0).episode
 
 
-def test_tutorial_05s_puck_is_taught_with_real_drags_on_the_demo_page(page, voila_server, artifacts):
+def test_the_your_own_skill_tutorials_puck_is_taught_with_real_drags_on_the_demo_page(page, voila_server, artifacts):
     reference = reference_page()
     view = reference.teaching.view
     page.goto(voila_server.url(f"/voila/render/{PAGE}"), timeout=60_000)
@@ -53,11 +62,12 @@ def test_tutorial_05s_puck_is_taught_with_real_drags_on_the_demo_page(page, voil
         wait_for_status(page, f"s.phase === 'guidance' && s.demos.length === {index + 1}")
         if index == 0:
             # Guidance on: the optimal arrow's solid head, in the optimal arrow's colour.
+            # Aimed at its tip, the user's arrow is aligned with it: the optimal one is drawn beside.
             tip = view.transform.action_tip(origin, reference.optimal[0])
-            base = view.transform.to_pixel(origin)
-            head = tip - 6 * (tip - base) / np.hypot(*(tip - base))
+            along = (tip - ee) / np.hypot(*(tip - ee))
+            side = np.array([along[1], -along[0]]) * draw_arrow_pair_offset(view.theme)
             page.screenshot(path=artifacts("guidance"))
-            wait_for_color(page, 0, *head, OKABE["orange"], radius=2, tolerance=60)
+            wait_for_color(page, 0, *(tip + side - 5 * along), OKABE["orange"], radius=2, tolerance=40)
         last = index == len(reference.query_states) - 1
         page.get_by_role("button", name="Finish and watch" if last else "Next state").click()
         if not last:

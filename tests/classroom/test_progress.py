@@ -10,8 +10,18 @@ import numpy as np
 import pytest
 
 from mt_widgets import SKILLS
-from mt_widgets.classroom import (CLASS_FOLDER_ENV, CheckFailed, ClassFolderError, ExerciseChecks, ProgressRecorder,
-                                  create_class_folder, pseudonym, read_class, read_student, summarise)
+from mt_widgets.classroom import (
+    CLASS_FOLDER_ENV,
+    CheckFailed,
+    ClassFolderError,
+    ExerciseChecks,
+    ProgressRecorder,
+    create_class_folder,
+    pseudonym,
+    read_class,
+    read_student,
+    summarise,
+)
 from mt_widgets.widgets import EpisodeWidget
 
 

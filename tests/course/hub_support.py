@@ -176,6 +176,8 @@ class ClassHub:
         ws_url = self.user_url(name, f"/api/kernels/{kernel['id']}/channels").replace("http://", "ws://")
         connection = websocket.create_connection(ws_url, header=[f"Authorization: token {self.token}"],
                                                  timeout=timeout)
+        started = time.perf_counter()
+        stdout, error, replied, idle = [], None, False, False
         try:
             msg_id = uuid.uuid4().hex
             connection.send(json.dumps({
@@ -185,8 +187,6 @@ class ClassHub:
                 "content": {"code": code, "silent": False, "store_history": False, "user_expressions": {},
                             "allow_stdin": False, "stop_on_error": True},
             }))
-            started = time.perf_counter()
-            stdout, error, replied, idle = [], None, False, False
             deadline = time.monotonic() + timeout
             while not (replied and idle):
                 if time.monotonic() > deadline:
@@ -203,10 +203,29 @@ class ClassHub:
                     replied = True
                 elif kind == "status" and message["content"]["execution_state"] == "idle":
                     idle = True
-            return {"stdout": "".join(stdout), "error": error, "kernel_id": kernel["id"],
-                    "seconds": time.perf_counter() - started}
+        except websocket.WebSocketConnectionClosedException:
+            # A server under load can drop a websocket whose pings went unanswered while the
+            # kernel kept running: wait for the kernel through the REST API instead. What it
+            # printed since is lost; callers that need a result read the file the code wrote.
+            self._wait_idle(name, kernel["id"], started + timeout)
+            stdout.append("\n[websocket closed by the server; waited for the kernel through the REST API]\n")
         finally:
             connection.close()
+        return {"stdout": "".join(stdout), "error": error, "kernel_id": kernel["id"],
+                "seconds": time.perf_counter() - started}
+
+    def _wait_idle(self, name: str, kernel_id: str, deadline: float) -> None:
+        time.sleep(1.0)
+        while time.perf_counter() < deadline:
+            if self.server_api(name, "GET", f"/api/kernels/{kernel_id}")["execution_state"] == "idle":
+                return
+            time.sleep(0.5)
+        raise TimeoutError(f"{name}'s kernel {kernel_id} did not become idle in time")
+
+    def read_json(self, name: str, path: str) -> dict:
+        """A JSON file in ``name``'s home, read through their server's contents API."""
+        model = self.server_api(name, "GET", f"/api/contents/{path}", params={"type": "file", "format": "text"})
+        return json.loads(model["content"])
 
     def memory(self, name: str) -> int:
         """Resident bytes of ``name``'s server and its kernels."""
@@ -240,7 +259,8 @@ class ClassHub:
 
 #: What each student's kernel runs: build a skill, then three episodes with guidance whose slips
 #: shrink (a student learning from the arrows), and one exercise check. Printed as one JSON line:
-#: the teaching errors, the feedback latencies and where the numba cache is.
+#: the teaching errors, the feedback latencies and where the numba cache is, also written to
+#: ``episode-result.json`` in the student's home (read back through the contents API).
 EPISODE_CODE = """
 import json
 import os
@@ -273,6 +293,9 @@ try:
     checks.true("teaching-error", {number} % 3 != 0, "E: expected 0.316, got 0.1")
 except CheckFailed:
     pass
-print(json.dumps({{"errors": errors, "latencies_s": latencies, "recorded": str(recorder.path),
-                  "numba_cache": os.environ.get("NUMBA_CACHE_DIR")}}))
+summary = json.dumps({{"errors": errors, "latencies_s": latencies, "recorded": str(recorder.path),
+                      "numba_cache": os.environ.get("NUMBA_CACHE_DIR")}})
+with open("episode-result.json", "w") as file:
+    file.write(summary)
+print(summary)
 """

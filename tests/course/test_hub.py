@@ -7,7 +7,6 @@ Slow (about 2-4 minutes on two cores): a class is a dozen Jupyter servers.
 
 from __future__ import annotations
 
-import json
 import shutil
 import statistics
 import time
@@ -17,7 +16,7 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from browser_support import REPO, local_page
+from browser_support import REPO, artifact_path, local_page
 from mt_widgets.classroom import read_class, summarise
 from tests.browser.helpers import drag, ee_pixel, reference_episode
 
@@ -66,6 +65,8 @@ def hub(tmp_path_factory):
     class_hub.installed_before, class_hub.draw_start = installed_before, draw_start
     yield class_hub
     class_hub.stop()
+    # The hub's log (hub, proxy, every student's server) outlives the temporary folder.
+    shutil.copy(class_hub.log, artifact_path("test_hub", "jupyterhub").replace(".png", ".log"))
 
 
 @pytest.mark.timeout(420)
@@ -81,13 +82,25 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
     spawn_wall = time.perf_counter() - started
     assert sorted(spawn) == STUDENTS
 
+    retried = []
+
+    def teach(item):
+        number, name = item
+        try:
+            return hub.run_in_kernel(name, EPISODE_CODE.format(number=number))
+        except (RuntimeError, TimeoutError) as error:
+            # A kernel lost to the machine's load (its websocket dropped and the kernel is gone)
+            # is not the class's fault: once, in a new kernel, and said so in the output.
+            retried.append(f"{name}: {error}")
+            return hub.run_in_kernel(name, EPISODE_CODE.format(number=number))
+
     with ThreadPoolExecutor(len(STUDENTS)) as pool:
-        runs = dict(zip(STUDENTS, pool.map(
-            lambda item: hub.run_in_kernel(item[1], EPISODE_CODE.format(number=item[0])), enumerate(STUDENTS))))
+        runs = dict(zip(STUDENTS, pool.map(teach, enumerate(STUDENTS))))
+    assert len(retried) <= 1, retried
     results = {}
     for name, run in runs.items():
         assert run["error"] is None, f"{name}: {run['error']}\n{run['stdout']}"
-        results[name] = json.loads(run["stdout"].strip().splitlines()[-1])
+        results[name] = hub.read_json(name, "episode-result.json")
         # Each student's numba cache is their own, in their home.
         assert results[name]["numba_cache"] == str(hub.homes / name / ".cache" / "numba")
     assert max(results["student00"]["errors"]) < 1e-10  # no slip: taught exactly
@@ -147,9 +160,11 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
 
     spawn_times = sorted(spawn.values())
     latencies = sorted(latency for r in results.values() for latency in r["latencies_s"])
-    print(f"\nclass of {len(STUDENTS)}: spawned in {spawn_wall:.1f} s; spawn p50 {statistics.median(spawn_times):.1f} s, "
+    print(f"\nclass of {len(STUDENTS)}: spawned in {spawn_wall:.1f} s; "
+          f"spawn p50 {statistics.median(spawn_times):.1f} s, "
           f"max {spawn_times[-1]:.1f} s; feedback latency p50 {statistics.median(latencies) * 1000:.0f} ms, "
-          f"max {latencies[-1] * 1000:.0f} ms; memory per student {statistics.median(memory.values()) / 2**20:.0f} MiB")
+          f"max {latencies[-1] * 1000:.0f} ms; memory per student {statistics.median(memory.values()) / 2**20:.0f} MiB"
+          + (f"; retried once: {retried}" if retried else ""))
 
 
 @pytest.mark.timeout(300)

@@ -14,8 +14,7 @@ import nbformat
 import pytest
 from nbgrader.api import Gradebook
 
-from .course_support import (ASSIGNMENTS, course_env, copy_course, grade_id, max_points, nbgrader,
-                             source_notebook)
+from .course_support import ASSIGNMENTS, copy_course, course_env, grade_id, max_points, nbgrader, source_notebook
 
 pytestmark = pytest.mark.slow
 

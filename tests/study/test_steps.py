@@ -408,3 +408,17 @@ def test_a_lesson_runs_the_task_without_the_steps_around_it():
         run_to_end_one(session)
     assert kinds[:3] == ["welcome", "consent", "instructions"] and session.completed
     assert not {"video", "information", "eligibility", "demographics", "questionnaire"} & set(kinds)
+
+
+def test_the_experimenter_panel_says_why_a_withdrawn_participant_cannot_be_resumed(tmp_path):
+    path = tmp_path / "steps.toml"
+    path.write_text(_with_steps())
+    first = StudyApp(protocol=str(path), log_folder=tmp_path / "logs")
+    first.start_participant("P01")
+    first.withdraw()
+    again = StudyApp(protocol=str(path), log_folder=tmp_path / "logs")
+    again.experimenter.participant.value = "P01"
+    again.experimenter.resume_button.click()
+    assert again.session is None and again.children == (again.experimenter,)
+    assert "withdrew from the study" in again.experimenter.message.value
+    assert "cannot be resumed" in again.experimenter.message.value

@@ -1,6 +1,6 @@
 """A protocol can name a user's own skill: from a file it points to, or as "module:name".
 
-The skill here is tutorial 05's point mass (``tests/user_plant.py``): a plant the package has
+The skill here is tutorial 09's point mass (``tests/user_plant.py``): a plant the package has
 never seen, with no drawing of its own. A lesson (the episode widget) and a logged study (a
 session in a study folder, reopened from its ``study.json``) of such a protocol run end to end.
 """

@@ -7,8 +7,7 @@ import pytest
 
 from mt_widgets import SKILLS
 from mt_widgets.apps import StudyApp, participant_texts
-from mt_widgets.widgets import (ArmView, EpisodeWidget, ReproductionPlayer, THEMES, Theme, explain_difference,
-                                fill_words)
+from mt_widgets.widgets import THEMES, ArmView, EpisodeWidget, ReproductionPlayer, Theme, explain_difference, fill_words
 
 
 def lab(hex_color: str) -> np.ndarray:
@@ -67,32 +66,85 @@ def test_guidance_never_says_within_0_degrees():
         assert "within" not in text and "Direction: good" in text
 
 
+WORDS_PROTOCOL = """
+format = 1
+name = "words"
+lambda = 0.01
+seed = 3
+[assignment]
+block_size = 2
+seed = 1
+[texts]
+welcome = "Welcome."
+consent = "Consent."
+instructions = "The goal of the robot is {goal}."
+reproduction = "Reproduction."
+thank_you = "Thank you."
+[practice]
+skill = "sim-point"
+duration_s = 0
+text = "Practice."
+[[phases]]
+id = "P1"
+skill = "sim-point"
+episodes = 1
+instructions = "Skill 1: bring the tip of the arm to {goal} and stop there."
+[[phases]]
+id = "P2"
+skill = "sim-line"
+episodes = 1
+instructions = "Skill 2: bring the tip of the arm onto {goal} and stop there."
+"""
+
+
+def test_the_paper_protocols_name_the_goal_through_the_theme_not_a_colour():
+    from mt_widgets.study import load_protocol
+
+    for name in ("paper-sim", "paper-uarm"):
+        protocol = load_protocol(name)
+        for phase in protocol.phases:
+            assert "{goal}" in phase.instructions and not re.search(r"\bred\b", phase.instructions), phase.id
+
+
+def primary_button(app):
+    from ipywidgets import Button
+
+    found, pending = [], list(app.body.children)
+    while pending:
+        widget = pending.pop()
+        if isinstance(widget, Button) and widget.button_style == "primary":
+            found.append(widget)
+        pending += list(getattr(widget, "children", ()))
+    return found[0]
+
+
 @pytest.mark.parametrize("theme, colour", [(None, "red-orange"), ("paper", "red")])
 def test_the_study_pages_words_name_the_goal_as_drawn_in_the_theme_in_use(tmp_path, theme, colour):
-    app = StudyApp(protocol="paper-sim", log_folder=tmp_path / "logs", theme=theme)
+    path = tmp_path / "words.toml"
+    path.write_text(WORDS_PROTOCOL, encoding="utf-8")
+    app = StudyApp(protocol=str(path), log_folder=tmp_path / "logs", theme=theme)
     app.start_lesson("control")
     seen = []
-    for _ in range(400):
+    for _ in range(100):
         step = app.session.current_step()
         seen.append(" ".join(participant_texts(app.participant_view)))
         if step.kind == "phase_intro" and step.phase == "P2":
             break
-        if step.kind in ("welcome", "consent", "instructions", "phase_intro"):
-            next(w for w in app.body.children if hasattr(w, "on_click")).click()
-        elif step.kind == "practice":
-            app._practice_done.disabled = False
-            app._practice_done.click()
-        elif step.kind == "reproduction":
-            app._continue.disabled = False
-            app._continue.click()
-        else:
+        if step.kind in ("demonstration", "episode_end"):
             if app.episode.phase == "guidance":
                 app.episode.next()
             else:
                 app.episode.demonstrate(SKILLS[step.skill].target_actions(step.state[None])[0])
+        elif step.kind == "reproduction":
+            app._continue.disabled = False
+            app._continue.click()
+        else:
+            primary_button(app).click()
     text = " ".join(seen)
-    assert f"the {colour} point marked goal" in text and f"the {colour} vertical line marked goal" in text
-    assert "{goal}" not in text and not re.search(r"\bred (point|line|vertical)", text.replace(f"{colour} ", "@"))
+    assert f"The goal of the robot is the {colour} point marked goal." in text
+    assert f"to the {colour} point marked goal and stop" in text
+    assert f"onto the {colour} vertical line marked goal and stop" in text
+    assert "{goal}" not in text
 
 
 def test_the_teaching_legend_lists_every_mark_the_canvas_draws():
@@ -159,3 +211,21 @@ def test_an_optimal_arrow_aligned_with_the_users_is_drawn_beside_it_and_last(rec
             assert (theme.user_arrow.width + theme.optimal_arrow.width) / 2 < shaft < 8
         else:
             assert abs(sideways[0]) < 0.1, "not aligned: both start at the hand"
+
+
+def test_the_readout_and_the_reproduction_name_marks_in_the_theme_colours():
+    arm = EpisodeWidget("sim-point", seed=0, guidance=False, duration=0.5)
+    assert "press on the robot's hand (the yellow dot)" in arm.teaching.readout.value
+    uarm = EpisodeWidget("uarm-point", seed=0, guidance=False, theme="paper-uarm")
+    assert "press on the robot's hand (the black dot)" in uarm.teaching.readout.value
+    for action in arm.optimal:
+        arm.demonstrate(action)
+    status = arm.player.status.value
+    assert "from the red-orange point marked goal" in status
+    assert "path is the sky-blue line" in status and "faint dashed pink line is the skill's own motion" in status
+    paper = ReproductionPlayer(SKILLS["sim-line"], theme="paper")
+    paper.play(SKILLS["sim-line"].reproduce(SKILLS["sim-line"].theta, duration=0.5))
+    assert "from the red vertical line marked goal" in paper.status.value
+    diverging = ReproductionPlayer(SKILLS["sim-point"])
+    diverging.play(SKILLS["sim-point"].reproduce(-5 * SKILLS["sim-point"].theta, duration=5.0))
+    assert "(red-orange cross)" in diverging.status.value

@@ -1,4 +1,4 @@
-"""Robots draw themselves: a user's plant (tutorial 05's point mass) is taught like the paper's arms.
+"""Robots draw themselves: a user's plant (tutorial 09's point mass) is taught like the paper's arms.
 
 Nothing in the views asks which robot it draws: the plant's drawing and the target's shape say
 it. A plant that only reports its end-effector is drawn as a dot with its velocity.
@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from user_plant import drift, park
 
 from mt_widgets import SKILLS
 from mt_widgets.widgets import ArmView, DemoPage, EpisodeWidget
+from user_plant import drift, park
 
 from .conftest import path_points, pointer
 
@@ -59,7 +59,7 @@ def test_a_plant_without_a_view_is_framed_around_its_query_states():
     assert typical * drawing.action_length == pytest.approx(0.2 * (box.xlim[1] - box.xlim[0]))
 
 
-def test_tutorial_05s_plant_is_taught_with_pointer_drags_in_the_episode_widget(recorder):
+def test_the_your_own_skill_tutorials_plant_is_taught_with_pointer_drags_in_the_episode_widget(recorder):
     episode = EpisodeWidget(park, seed=2, guidance=True)
     view = episode.teaching.view
     for index in range(len(episode.query_states)):
