@@ -1,8 +1,11 @@
 """mt-widgets: teach novices to teach robots, with exact machine-teaching guidance.
 
 The science lives in ``mt_widgets.core`` (no Jupyter dependency); the widgets in
-``mt_widgets.widgets``; the study runner and analysis in ``mt_widgets.study``; the uArm
-Swift Pro connector in ``mt_widgets.hardware``.
+``mt_widgets.widgets``; the study runner (protocol, participants, session, log, export) in
+``mt_widgets.study``; synthetic teachers and in-silico studies in ``mt_widgets.in_silico``;
+statistics, power, figures and the comparison with the paper in ``mt_widgets.analysis``; a
+class's progress files and checks in ``mt_widgets.classroom``; the uArm Swift Pro connector in
+``mt_widgets.hardware``; the pages and kiosks built from them in ``mt_widgets.apps``.
 """
 
 from .core import (

@@ -1,9 +1,11 @@
 """The package's layers, read from its source with ast: who may import whom.
 
-core (science) <- study (the runner) <- in_silico (simulated teachers) <- analysis; the widgets,
-apps and hardware are edges. No import cycle, between modules or between subpackages; no
-import of a package module inside a function (the way cycles get hidden); nothing below the
-widgets imports a widget library.
+core (science) <- study (the runner) <- in_silico (simulated teachers) <- analysis, and
+core <- study <- classroom (a class's progress files). Two edges sit on core side by side and
+never import each other: widgets (the notebook views) and hardware (the uArm). apps (the pages
+and kiosks) is the top: it may use every layer, and no layer imports it. No import cycle,
+between modules or between subpackages; no import of a package module inside a function (the
+way cycles get hidden); nothing below the widgets imports a widget library.
 """
 
 import ast
@@ -149,7 +151,8 @@ def test_the_checker_finds_a_cycle_and_a_function_level_import():
 
 
 def test_the_graph_covers_every_layer():
-    assert {layer(m) for m in GRAPH} >= {"", "core", "study", "in_silico", "analysis", "widgets", "apps", "hardware"}
+    assert {layer(m) for m in GRAPH} >= {"", "core", "study", "in_silico", "analysis", "classroom", "widgets", "apps",
+                                         "hardware"}
     assert "mt_widgets.core.skills" in EDGES["mt_widgets.core.episode_batch"]
 
 
@@ -196,6 +199,7 @@ def test_the_study_runner_imports_only_core():
 @pytest.mark.parametrize("package, allowed", [
     ("in_silico", {"core", "", "study", "in_silico"}),
     ("analysis", {"core", "", "study", "in_silico", "analysis"}),
+    ("classroom", {"core", "", "study", "classroom"}),
 ])
 def test_the_simulation_and_the_analysis_sit_above_the_runner_without_widgets(package, allowed):
     prefix = f"{PACKAGE}.{package}"
@@ -206,8 +210,41 @@ def test_the_simulation_and_the_analysis_sit_above_the_runner_without_widgets(pa
     assert wrong == [] and libraries == []
 
 
-@pytest.mark.parametrize("package", ["core", "study", "in_silico", "analysis", "hardware"])
+@pytest.mark.parametrize("package", ["core", "study", "in_silico", "analysis", "classroom", "hardware"])
 def test_nothing_below_the_widgets_imports_a_widget_library(package):
     libraries = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of(f"{PACKAGE}.{package}")
                  if t.split(".")[0] in WIDGET_LIBRARIES]
     assert libraries == []
+
+
+@pytest.mark.parametrize("package, other", [("widgets", "hardware"), ("hardware", "widgets")])
+def test_the_widgets_and_the_hardware_never_import_each_other(package, other):
+    # Both are edges on core: a view draws any plant, the arm is driven by the apps that join them.
+    wrong = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of(f"{PACKAGE}.{package}") if layer(t) == other]
+    assert wrong == []
+
+
+def test_the_widgets_and_the_hardware_import_only_core():
+    for package in ("widgets", "hardware"):
+        wrong = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of(f"{PACKAGE}.{package}")
+                 if t.startswith(PACKAGE) and layer(t) not in ("core", "", package)]
+        assert wrong == []
+
+
+def test_the_apps_are_the_top_layer_nothing_else_imports():
+    wrong = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of(PACKAGE)
+             if layer(m) != "apps" and t.startswith(PACKAGE) and layer(t) == "apps"]
+    assert wrong == []
+
+
+def test_only_the_apps_import_the_classroom():
+    wrong = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of(PACKAGE)
+             if layer(m) not in ("apps", "classroom") and t.startswith(PACKAGE) and layer(t) == "classroom"]
+    assert wrong == []
+
+
+def test_the_package_docstring_names_every_subpackage():
+    import mt_widgets
+    subpackages = {layer(m) for m in GRAPH} - {""}
+    missing = [name for name in sorted(subpackages) if f"mt_widgets.{name}``" not in mt_widgets.__doc__]
+    assert missing == []

@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from mt_widgets.core import SKILLS, LineTarget
+from mt_widgets.core import SKILLS, Box
 from mt_widgets.core.validation import as_bool
 
 from .statistics import GROUPS, PAPER_CHANGES, episodes_frame, participant_changes, phase_summary
@@ -169,7 +169,8 @@ def plot_changes(episodes, changes=PAPER_CHANGES, seed: int = 0) -> Figure:
 TRAJECTORY_PANELS = (("P3",), ("P1", "P4"), ("P2", "P5"))
 
 
-def learnt_trajectories(episodes, participants, phases, duration: float | None = None, record_every: int = 20):
+def learnt_trajectories(episodes, participants, phases, duration: float | None = None, record_every: int = 20,
+                        skills=None):
     """Rolls out the skill each participant taught in each episode of ``phases``.
 
     Args:
@@ -178,6 +179,8 @@ def learnt_trajectories(episodes, participants, phases, duration: float | None =
         phases: phase ids.
         duration: seconds per rollout (default the plant's).
         record_every: control steps between recorded samples.
+        skills: where the episodes' skill keys are looked up (default the paper's ``SKILLS``; a
+            protocol's ``skills`` for a study of a user's own skills).
 
     Returns:
         {(participant, phase, episode): Trajectory}.
@@ -189,7 +192,8 @@ def learnt_trajectories(episodes, participants, phases, duration: float | None =
     out = {}
     for skill_key, part in rows.groupby("skill", sort=False):
         thetas = np.array([_theta(value) for value in part["theta_hat"]])
-        batch = SKILLS[skill_key].reproduce(thetas, duration=duration, record_every=record_every)
+        skill = (SKILLS if skills is None else skills)[skill_key]
+        batch = skill.reproduce(thetas, duration=duration, record_every=record_every)
         for k, (_, row) in enumerate(part.iterrows()):
             out[(row["participant"], row["phase"], int(row["episode"]))] = batch[k]
     return out
@@ -203,31 +207,32 @@ def _draw_target(ax, skill) -> None:
     target = skill.target
     if target is None:
         return
-    if isinstance(target, LineTarget):
-        box = skill.workspace
-        span = max(box.xlim[1] - box.xlim[0], box.ylim[1] - box.ylim[0])
-        p, d = np.asarray(target.point), np.asarray(target.direction)
-        ends = np.array([p - span * d, p + span * d])
-        ax.plot(ends[:, 0], ends[:, 1], gid="target", label="target", **TARGET_STYLE)
-    else:
-        ax.plot([target.point[0]], [target.point[1]], marker="*", markersize=14, linestyle="none", gid="target",
+    # The target draws itself (Target.shape), any kind of target alike; clipped to a view a
+    # workspace wider on each side than the workspace, so a line runs off the axes.
+    box = skill.workspace
+    span = max(box.xlim[1] - box.xlim[0], box.ylim[1] - box.ylim[0])
+    shape = target.shape(Box((box.xlim[0] - span, box.xlim[1] + span), (box.ylim[0] - span, box.ylim[1] + span)))
+    if shape.is_point:
+        ax.plot(shape.points[:, 0], shape.points[:, 1], marker="*", markersize=14, linestyle="none", gid="target",
                 label="target", color=TARGET_STYLE["color"])
+    elif len(shape.points):
+        ax.plot(shape.points[:, 0], shape.points[:, 1], gid="target", label="target", **TARGET_STYLE)
 
 
 def _zoom_box(skill, trajectories, fraction: float = 0.12):
     """(xlim, ylim) of a square around where the rollouts end near the target (Fig. 5's zoom)."""
     box = skill.workspace
     half = fraction * max(box.xlim[1] - box.xlim[0], box.ylim[1] - box.ylim[0]) / 2
-    if isinstance(skill.target, LineTarget) or skill.target is None:
-        # A line has no single point to zoom on: centre on where the true skill stops on it.
-        centre = trajectories[0].positions[-1]
-    else:
-        centre = np.asarray(skill.target.point, dtype=float)
+    end = np.asarray(trajectories[0].positions[-1], dtype=float)
+    # A point target is where to zoom; a line (or any target with extent) has no single point:
+    # centre on where the true skill stops on it.
+    centre = end if skill.target is None or skill.target.dimension > 0 else skill.target.nearest(end)
     return (centre[0] - half, centre[0] + half), (centre[1] - half, centre[1] + half)
 
 
 def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration: float | None = None,
-                      trajectories: dict | None = None, true_skill: bool = True, zoom: bool = True) -> Figure:
+                      trajectories: dict | None = None, true_skill: bool = True, zoom: bool = True,
+                      skills=None) -> Figure:
     """The skills participants taught, reproduced from the fixed start beside the target (Fig. 5).
 
     Args:
@@ -241,6 +246,7 @@ def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration
             "true/<skill>"), as the paper's Fig. 5 does.
         zoom: add to each panel a zoomed inset around the goal (gid "zoom"), where learnt and
             true rollouts part, as the paper's zoomed panel does.
+        skills: where the episodes' skill keys are looked up (default the paper's ``SKILLS``).
 
     Returns:
         The figure. Each trajectory is a line with ``gid`` "<participant>/<phase>E<episode>"
@@ -253,13 +259,13 @@ def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration
         raise ValueError("participants: expected at least one participant code, got none")
     unknown = sorted(set(participants) - set(frame["participant"]))
     if unknown:
-        raise ValueError(f"participants: no episodes for {unknown}")
+        raise ValueError(f"participants: expected codes with episodes, got {unknown} without any")
     needed = [phase for panel in panels for phase in panel]
     rolled = dict(trajectories or {})
     missing = [p for p in participants if any((p, row.phase, int(row.episode)) not in rolled for row in
                                               frame[(frame.participant == p) & frame.phase.isin(needed)].itertuples())]
     if missing:
-        fresh = learnt_trajectories(frame, missing, needed, duration)
+        fresh = learnt_trajectories(frame, missing, needed, duration, skills=skills)
         rolled.update({k: v for k, v in fresh.items() if k not in rolled})
     groups = frame.groupby("participant")["group"].first()
     figure = Figure(figsize=(3.6 * len(panels), 3.4 * len(participants)), layout="constrained")
@@ -272,7 +278,7 @@ def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration
             if rows.empty:
                 ax.set_axis_off()
                 continue
-            skill = SKILLS[rows["skill"].iloc[0]]
+            skill = (SKILLS if skills is None else skills)[rows["skill"].iloc[0]]
             # Lower right: the start and the goal of the paper's skills lie in the upper half.
             inset = ax.inset_axes([0.62, 0.03, 0.36, 0.36]) if zoom else None
             drawn = []

@@ -19,16 +19,10 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from mt_widgets.core.validation import as_bool
+from mt_widgets.core.validation import as_bool, as_fraction
 from mt_widgets.in_silico.engine import run_many_studies
 
 from .statistics import PAPER_CHANGES, check_alternative, hedges_correction
-
-
-def _check_level(name: str, value: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) or not 0 < value < 1:
-        raise ValueError(f"{name}: expected a number strictly between 0 and 1, got {value!r}")
-    return float(value)
 
 
 def analytic_power(n_per_group: int, effect_size: float, alpha: float = 0.05,
@@ -47,7 +41,7 @@ def analytic_power(n_per_group: int, effect_size: float, alpha: float = 0.05,
     """
     if isinstance(n_per_group, bool) or not isinstance(n_per_group, (int, np.integer)) or n_per_group < 2:
         raise ValueError(f"n_per_group: expected a whole number >= 2, got {n_per_group!r}")
-    alpha = _check_level("alpha", alpha)
+    alpha = as_fraction("alpha", alpha)
     alternative = check_alternative(alternative)
     df = 2 * n_per_group - 2
     noncentrality = float(effect_size) * np.sqrt(n_per_group / 2)
@@ -73,7 +67,7 @@ def sample_size_per_group(effect_size: float, alpha: float = 0.05, power: float 
     Returns:
         n per group (the paper: 16 for d = 0.9, alpha = 0.05, power = 0.8, one-tailed).
     """
-    power = _check_level("power", power)
+    power = as_fraction("power", power)
     if effect_size == 0:
         raise ValueError("effect_size: expected a non-zero effect, got 0 (no sample size detects it)")
     # Power rises monotonically with n, so a doubling search brackets the answer and a
@@ -82,7 +76,8 @@ def sample_size_per_group(effect_size: float, alpha: float = 0.05, power: float 
     while analytic_power(high, effect_size, alpha, alternative) < power:
         low, high = high, high * 2
         if high > max_n:
-            raise ValueError(f"effect_size: {effect_size} needs more than max_n={max_n} per group for power {power}")
+            raise ValueError(f"effect_size: expected an effect detectable with at most max_n={max_n} per group "
+                             f"at power {power}, got {effect_size}")
     while low < high:
         middle = (low + high) // 2
         if analytic_power(middle, effect_size, alpha, alternative) >= power:
@@ -164,7 +159,7 @@ def simulated_power(n_per_group: int = 16, n_studies: int = 1000, alpha: float =
         A ``SimulatedPower``: the power of Student's t-test ("student"), Welch's t-test ("welch")
         and the Mann-Whitney U test ("mannwhitney") on each change.
     """
-    alpha = _check_level("alpha", alpha)
+    alpha = as_fraction("alpha", alpha)
     alternative = check_alternative(alternative)
     share_states = as_bool("share_states", share_states)
     progress = as_bool("progress", progress, allow_none=True)

@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, special, stats
 
+from mt_widgets.core.validation import as_fraction
 from mt_widgets.study.analysis_plan import ALTERNATIVES, PAPER_CHANGES, TESTS, Change  # noqa: F401  (re-exported)
 
 #: The two groups of the between-subjects design, in the order tables and figures use.
@@ -49,12 +50,6 @@ def check_alternative(alternative: str) -> str:
     if alternative not in ALTERNATIVES:
         raise ValueError(f"alternative: expected one of {ALTERNATIVES}, got {alternative!r}")
     return alternative
-
-
-def _check_confidence(confidence: float) -> float:
-    if not isinstance(confidence, (int, float)) or not 0 < confidence < 1:
-        raise ValueError(f"confidence: expected a number strictly between 0 and 1, got {confidence!r}")
-    return float(confidence)
 
 
 def episodes_frame(episodes) -> pd.DataFrame:
@@ -97,7 +92,7 @@ def confidence_interval(values, confidence: float = 0.95) -> tuple[float, float]
     Returns:
         (low, high); (nan, nan) with fewer than two observations.
     """
-    confidence = _check_confidence(confidence)
+    confidence = as_fraction("confidence", confidence)
     values = np.asarray(values, dtype=float)
     if values.size < 2:
         return (float("nan"), float("nan"))
@@ -261,7 +256,7 @@ def hedges_g(x, y, confidence: float = 0.95, method: str = "noncentral-t") -> Ef
     Returns:
         An ``EffectSize``.
     """
-    confidence = _check_confidence(confidence)
+    confidence = as_fraction("confidence", confidence)
     if method not in ("noncentral-t", "normal"):
         raise ValueError(f"method: expected 'noncentral-t' or 'normal', got {method!r}")
     x = np.asarray(x, dtype=float)

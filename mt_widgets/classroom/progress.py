@@ -31,17 +31,9 @@ import secrets
 from collections.abc import Callable
 from pathlib import Path
 
-from mt_widgets.study.log import (
-    LOCK_FOLDER,
-    LogError,
-    LogFolderError,
-    _fsync_folder,
-    _Lock,
-    _write_all,
-    check_folder_writable,
-    to_jsonable,
-    utc_now,
-)
+from mt_widgets.study import jsonl
+from mt_widgets.study.jsonl import Lock, LogError, append_line, encode
+from mt_widgets.study.log import LOCK_FOLDER, LogFolderError, check_folder_writable, to_jsonable, utc_now
 
 #: The environment variable an instructor (or a hub's spawner) sets to the class folder.
 CLASS_FOLDER_ENV = "MT_WIDGETS_CLASS_FOLDER"
@@ -101,11 +93,11 @@ def create_class_folder(folder) -> dict:
     except FileExistsError:
         return read_class_meta(folder)
     try:
-        _write_all(fd, json.dumps(meta).encode())
+        jsonl.write_all(fd, json.dumps(meta).encode())
         os.fsync(fd)
     finally:
         os.close(fd)
-    _fsync_folder(folder)
+    jsonl.fsync_folder(folder)
     return meta
 
 
@@ -186,26 +178,9 @@ class ProgressRecorder:
         event = {"kind": kind, "time": utc_now(), "student": self.student, "kernel": self.kernel, "n": self.count}
         event.update(to_jsonable(fields))
         try:
-            with _Lock(self.folder / LOCK_FOLDER / f"{self.student}.lock", f"student {self.student!r}",
-                       LOCK_TIMEOUT_S):
-                created = not self.path.exists()
-                fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_APPEND, 0o644)
-                try:
-                    size = os.fstat(fd).st_size
-                    prefix = b""
-                    if size and os.pread(fd, 1, size - 1) != b"\n":
-                        # A writer killed mid-line left it torn: end it so this event starts a line
-                        # of its own, keep its bytes (append-only) and say so in this event.
-                        start = os.pread(fd, size, 0).rfind(b"\n") + 1
-                        event["repaired_torn_bytes"] = size - start
-                        prefix = b"\n"
-                    line = prefix + (json.dumps(event, separators=(",", ":"), allow_nan=False) + "\n").encode()
-                    _write_all(fd, line)
-                    os.fsync(fd)
-                finally:
-                    os.close(fd)
-                if created:
-                    _fsync_folder(self.folder)
+            with Lock(self.folder / LOCK_FOLDER / f"{self.student}.lock", f"student {self.student!r}",
+                      LOCK_TIMEOUT_S):
+                append_line(self.path, lambda torn: encode(_repairing(event, torn)))
         except LogError as error:  # the other kernel held the lock for too long
             raise ClassFolderError(f"class folder {self.folder}: {error}") from None
         except OSError as error:
@@ -264,6 +239,13 @@ class ProgressRecorder:
             episode.on_finished(finished, remove=True)
 
         return detach
+
+
+def _repairing(event: dict, torn: int) -> dict:
+    """``event``, saying (in place) that it ends a torn line of ``torn`` bytes a killed writer left."""
+    if torn:
+        event["repaired_torn_bytes"] = torn
+    return event
 
 
 def _name(argument: str, value) -> str:

@@ -8,9 +8,10 @@ folder that cannot be read at all raises.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from mt_widgets.study.jsonl import read_jsonl
 
 from .progress import CLASS_FILE, ClassFolderError, read_class_meta
 
@@ -48,29 +49,22 @@ def read_student(path) -> StudentProgress:
         OSError: the file cannot be read (``read_class`` reports it and goes on).
     """
     path = Path(path)
-    lines = path.read_bytes().split(b"\n")
+    contents = read_jsonl(path)
     progress = StudentProgress(path.stem)
-    # What follows the last newline is empty, or a line still being written (or killed).
-    tail = lines.pop()
-    for number, raw in enumerate(lines, start=1):
-        if not raw.strip():
+    for line in contents.lines:
+        if line.blank:
             continue
-        try:
-            event = json.loads(raw)
-            if not isinstance(event, dict) or "kind" not in event:
-                raise ValueError("not a progress event")
-        except ValueError:
-            progress.torn_lines.append(number)
+        if line.value is None or "kind" not in line.value:
+            progress.torn_lines.append(line.number)
             continue
-        progress.events.append(event)
-    if tail:
-        try:
-            event = json.loads(tail)
-            if not isinstance(event, dict) or "kind" not in event:
-                raise ValueError("not a progress event")
-            progress.events.append(event)  # complete but for its newline
-        except ValueError:
-            progress.torn_tail = len(tail)
+        progress.events.append(line.value)
+    # What follows the last newline is a line still being written (or killed), or an event
+    # complete but for its newline.
+    if contents.tail is not None:
+        if contents.tail.value is not None and "kind" in contents.tail.value:
+            progress.events.append(contents.tail.value)
+        else:
+            progress.torn_tail = len(contents.tail.raw)
     return progress
 
 

@@ -27,7 +27,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from .learner import DEFAULT_LAMBDA
-from .machine_teaching import ActionDifference, action_difference, ridge_operator, teaching_risk
+from .machine_teaching import (
+    ActionDifference,
+    TeachingAnalysis,
+    action_difference,
+    analyse_with,
+    optimal_from,
+    ridge_operator,
+)
 from .skills import Skill
 from .validation import as_float_array, as_positive
 
@@ -133,13 +140,11 @@ class TeachingEpisode:
         self.query_states = _frozen(states)
         self.features = _frozen(skill.features(self.query_states))
         operator = ridge_operator(self.features, self.lam)
+        self._operator = operator
         self._A = operator.matrix()                      # (S, N)
         self._a_norms = np.linalg.norm(self._A, axis=0)  # (N,) ||a_n||
-        # U_bar = pinv(A) Theta^T over the directions Phi spans (see machine_teaching).
-        kept = slice(0, operator.rank)
-        s = operator.singular[kept]
-        self.optimal_actions = _frozen((operator.left[:, kept] * ((s**2 + self.lam) / s))
-                                       @ (operator.right_t[kept] @ skill.theta.T))
+        self.optimal_actions = _frozen(optimal_from(operator, skill.theta))
+        self._analysis = None
         self.rank = operator.rank
         self.exact = bool(operator.exact)
         self.rho1 = operator.rho1()
@@ -231,15 +236,25 @@ class TeachingEpisode:
                                     f"got {len(self.demonstrations)}")
 
     @property
+    def analysis(self) -> TeachingAnalysis:
+        """The complete episode's ``TeachingAnalysis``: ``analyse_demonstrations``' numbers,
+        computed once through the same function (``analyse_with``) from the episode's own SVD."""
+        self._require_complete("analysis")
+        if self._analysis is None:
+            self._analysis = analyse_with(self._operator, self.actions, self.skill.theta)
+        return self._analysis
+
+    @property
     def theta_hat(self) -> np.ndarray:
         """(R, S) the learnt policy, Theta_hat^T = A U."""
         self._require_complete("theta_hat")
-        return (self._A @ self.actions).T
+        return self.analysis.theta_hat
 
     @property
     def error(self) -> float:
         """E = ||vec(Theta_hat) - vec(Theta)||_2, the teaching error."""
-        return teaching_risk(self.theta_hat, self.skill.theta)
+        self._require_complete("error")
+        return self.analysis.risk
 
     @property
     def rho2(self) -> float:

@@ -77,7 +77,13 @@ def _check_theta(theta, n_features: int) -> np.ndarray:
     return theta
 
 
-def _optimal_from(operator: RidgeOperator, theta: np.ndarray) -> np.ndarray:
+def optimal_from(operator: RidgeOperator, theta: np.ndarray) -> np.ndarray:
+    """U_bar (N, R) = pinv(A) Theta^T over the directions Phi spans, from Phi's SVD.
+
+    The one formula of the optimal actions for an operator already decomposed (a
+    ``TeachingEpisode``'s, ``analyse_demonstrations``'); ``optimal_actions`` is its compiled twin
+    for a bare Phi.
+    """
     kept = slice(0, operator.rank)
     s = operator.singular[kept]
     inverse_gains = (s**2 + operator.lam) / s
@@ -162,8 +168,14 @@ def analyse_demonstrations(Phi, U, theta, lam) -> TeachingAnalysis:
     theta = _check_theta(theta, operator.n_features)
     if U.shape[1] != theta.shape[0]:
         raise ValueError(f"U: expected {theta.shape[0]} action components per row to match theta, got {U.shape[1]}")
+    return analyse_with(operator, U, theta)
+
+
+def analyse_with(operator: RidgeOperator, U: np.ndarray, theta: np.ndarray) -> TeachingAnalysis:
+    """``analyse_demonstrations`` for a Phi already decomposed and checked inputs: U (N, R),
+    theta (R, S). A ``TeachingEpisode`` analyses its demonstrations through this, with its own SVD."""
     A = operator.matrix()
-    optimal = _optimal_from(operator, theta)
+    optimal = optimal_from(operator, theta)
     theta_hat = (A @ U).T
     gap = U - optimal
     return TeachingAnalysis(

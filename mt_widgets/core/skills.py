@@ -18,7 +18,7 @@ from .features import EndEffectorFeatures, FeatureMap, PositionFeatures
 from .query_states import sample_query_states
 from .targets import LineTarget, PointTarget, Target
 from .uarm_plant import UArmPlant
-from .validation import as_bool, as_count, as_float_array, as_positive
+from .validation import UnknownKeyError, as_bool, as_count, as_float_array, as_positive
 
 
 @dataclass(frozen=True, eq=False)
@@ -259,8 +259,8 @@ class SkillRegistry(Mapping):
         try:
             return self._skills[key]
         except (KeyError, TypeError):
-            raise KeyError(f"skill {key!r} is not registered; known skills: {', '.join(sorted(self._skills))}") \
-                from None
+            raise UnknownKeyError(f"skill: expected one of the known skills ({', '.join(sorted(self._skills))}), "
+                                  f"got {key!r}") from None
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._skills)

@@ -39,19 +39,6 @@ class Trajectory:
     def final_position(self) -> np.ndarray:
         return self.positions[-1]
 
-    def resampled(self, frame_rate: float) -> "Trajectory":
-        """The samples nearest to a regular grid of ``frame_rate`` per second (for animation)."""
-        if not frame_rate > 0:
-            raise ValueError(f"frame_rate: expected a positive number of frames per second, got {frame_rate!r}")
-        if len(self.times) < 2:
-            return self
-        grid = np.arange(self.times[0], self.times[-1] + 0.5 / frame_rate, 1.0 / frame_rate)
-        index = np.unique(np.clip(np.searchsorted(self.times, grid - 1e-9), 0, len(self.times) - 1))
-        if index[-1] != len(self.times) - 1:
-            index = np.append(index, len(self.times) - 1)
-        return Trajectory(self.times[index], self.states[index], self.positions[index], self.velocities[index],
-                          self.actions[index], self.diverged, self.diverged_at, self.units)
-
 
 @dataclass(frozen=True)
 class TrajectoryBatch:

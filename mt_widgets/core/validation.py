@@ -11,6 +11,19 @@ import numbers
 import numpy as np
 
 
+class UnknownKeyError(KeyError):
+    """A ``KeyError`` whose message reads as written: ``str(KeyError("x"))`` would quote it."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
+def is_real(value) -> bool:
+    """Whether ``value`` is a real number: int, float, numpy floats and ints, ... but not a
+    ``bool`` (``True`` is an int to Python, never a quantity to us) nor a string."""
+    return isinstance(value, (numbers.Real, np.floating, np.integer)) and not isinstance(value, bool)
+
+
 def _describe(value) -> str:
     if isinstance(value, np.ndarray):
         return f"an array of shape {value.shape} and dtype {value.dtype}"
@@ -52,9 +65,26 @@ def as_float_array(name: str, value, *, ndim=None, shape=None, finite: bool = Tr
     return array
 
 
+def as_finite(name: str, value) -> float:
+    """Checks a finite real scalar (not a bool, NaN or infinity)."""
+    if not is_real(value):
+        raise ValueError(f"{name}: expected a real number, got {_describe(value)}")
+    number = float(value)
+    if not np.isfinite(number):
+        raise ValueError(f"{name}: expected a finite number, got {number!r}")
+    return number
+
+
+def as_fraction(name: str, value) -> float:
+    """Checks a number strictly between 0 and 1 (a significance level, a power, a confidence)."""
+    if not is_real(value) or not 0 < float(value) < 1:
+        raise ValueError(f"{name}: expected a number strictly between 0 and 1, got {_describe(value)}")
+    return float(value)
+
+
 def as_positive(name: str, value, *, allow_zero: bool = False) -> float:
     """Checks a real scalar that must be positive (or non-negative with ``allow_zero``)."""
-    if isinstance(value, bool) or not isinstance(value, (numbers.Real, np.floating, np.integer)):
+    if not is_real(value):
         raise ValueError(f"{name}: expected a real number, got {_describe(value)}")
     number = float(value)
     if not np.isfinite(number) or number < 0 or (number == 0 and not allow_zero):

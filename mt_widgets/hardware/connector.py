@@ -24,11 +24,11 @@ from collections.abc import Callable
 
 from serial.tools import list_ports
 
-from mt_widgets.core.validation import as_bool, as_count, as_positive
+from mt_widgets.core.validation import as_bool, as_count, as_positive, is_real
 
 from . import protocol
 from .dialects import Dialect, dialect_for
-from .envelope import TEACHING_HEIGHT_MM, SafetyEnvelope, is_real
+from .envelope import TEACHING_HEIGHT_MM, SafetyEnvelope
 from .errors import SwiftProError, SwiftProNotFound, SwiftProTimeout
 from .link import SerialLink
 from .motion import MotionPolicy

@@ -18,12 +18,12 @@ the arm across the table in one go.
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass
 
 import numpy as np
 
 from mt_widgets.core.uarm_plant import UARM_WORKSPACE_CM
+from mt_widgets.core.validation import is_real
 
 from .errors import UnsafeMoveError
 
@@ -35,13 +35,9 @@ TEACHING_RADIUS_MM = (10.0 * UARM_WORKSPACE_CM.r_min, 10.0 * UARM_WORKSPACE_CM.r
 TEACHING_MAX_YAW_DEG = UARM_WORKSPACE_CM.max_yaw_deg
 
 
-def is_real(value) -> bool:
-    """Whether ``value`` is a real number: int, float, numpy floats and ints, ... but not a
-    ``bool`` (``True`` is an int to Python, never a coordinate to us) nor a string."""
-    return isinstance(value, numbers.Real) and not isinstance(value, bool)
-
-
 def _finite(name: str, value, expected: str) -> float:
+    # The check is core.validation's; the error is the envelope's own UnsafeMoveError, with the
+    # coordinate and limit a caller of a refused move needs.
     if not is_real(value):
         raise UnsafeMoveError(f"{name}: expected {expected}, got {value!r} ({type(value).__name__})",
                               coordinate=name, value=math.nan, limit=None)

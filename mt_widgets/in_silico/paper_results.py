@@ -67,10 +67,6 @@ PAPER_RESULTS = {
     },
 }
 
-#: The simulation experiment alone (kept for code that read it before the physical rows came).
-PAPER_SIMULATION_RESULTS = {"simulation": PAPER_RESULTS["simulation"]}
-
-
 def paper_results() -> dict:
     """The paper's reported results of both experiments (a fresh copy: changes, % reductions)."""
     return json.loads(json.dumps(PAPER_RESULTS))

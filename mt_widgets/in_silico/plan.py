@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mt_widgets.core import LineTarget, SeedSchedule, UArmPlant
+from mt_widgets.core import SeedSchedule, UArmPlant
 from mt_widgets.study.protocol import Protocol, load_protocol
 
 from .teachers import PAPER_FIT, PAPER_FIT_UARM, TeacherParameters
@@ -71,16 +71,16 @@ def imagined_line_target(protocol, phase_index: int):
     """
     phase = protocol.phases[phase_index]
     skill = protocol.skill(phase.skill)
-    if not isinstance(skill.target, LineTarget):
+    if skill.target is None or skill.target.dimension == 0:
         return None
     before = [protocol.practice.skill] if protocol.practice.duration_s > 0 else []
     before += [p.skill for p in protocol.phases[:phase_index]]
     anchor = None
     for key in before:
         other = protocol.skill(key)
-        if type(other.plant) is type(skill.plant) and other.target is not None \
-                and not isinstance(other.target, LineTarget):
-            anchor = np.asarray(other.target.point, dtype=float)
+        if type(other.plant) is type(skill.plant) and other.target is not None and other.target.dimension == 0:
+            # A point target's nearest point to anywhere is the point itself.
+            anchor = np.asarray(other.target.nearest(np.zeros(2)), dtype=float)
     return anchor
 
 

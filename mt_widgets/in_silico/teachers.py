@@ -65,7 +65,7 @@ from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
-from mt_widgets.core import LineTarget
+from mt_widgets.core.validation import as_positive
 
 #: Standard-normal draws kept per demonstration: direction slip, magnitude slip, the time to
 #: the first input and the drawing time.
@@ -115,11 +115,7 @@ class TeacherParameters:
 
     def __post_init__(self):
         for f in fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) or not np.isfinite(value):
-                raise ValueError(f"{f.name}: expected a finite number, got {value!r}")
-            if value < 0:
-                raise ValueError(f"{f.name}: expected a number >= 0, got {value}")
+            as_positive(f.name, getattr(self, f.name), allow_zero=True)
         for name in ("retention", "transfer", "initial_understanding", "line_as_point"):
             if getattr(self, name) > 1:
                 raise ValueError(f"{name}: expected a share in [0, 1], got {getattr(self, name)}")
@@ -173,11 +169,6 @@ PAPER_FIT_UARM = TeacherParameters(
     transfer=0.9691, line_as_point=0.78953,
 )
 
-#: The fields ``fit_to_paper`` fitted for ``PAPER_FIT_UARM`` (``magnitude_spread`` held, above).
-UARM_FITTED_FIELDS = ("magnitude", "exploration", "learning_rate", "learning_spread", "reproduction_learning",
-                      "retention", "transfer", "line_as_point")
-
-
 #: A teacher who already knows the skill and draws without slips: the machine-teaching optimum.
 OPTIMAL_TEACHER = TeacherParameters(magnitude=1.0, magnitude_spread=0.0, direction_noise=0.0, magnitude_noise=0.0,
                                     exploration=0.0, learning_rate=0.0, learning_spread=0.0, retention=1.0,
@@ -200,25 +191,18 @@ def naive_offsets(positions: np.ndarray, target) -> np.ndarray:
 
     Args:
         positions: (..., 2) in the skill's units.
-        target: a ``PointTarget`` (towards the point) or ``LineTarget`` (perpendicular onto the
-            line).
+        target: a ``Target`` (towards a point, perpendicular onto a line, or onto the nearest
+            point of a user's own target).
 
     Returns:
         (..., 2) offsets in the positions' units (zero on the target).
     """
     positions = np.asarray(positions, dtype=float)
-    point = np.asarray(target.point, dtype=float)
-    if isinstance(target, LineTarget):
-        along = np.asarray(target.direction, dtype=float)
-        offset = positions - point
-        nearest = point + (offset @ along)[..., None] * along
-    else:
-        nearest = np.broadcast_to(point, positions.shape)
-    return nearest - positions
+    return target.nearest(positions) - positions
 
 
 def line_foot(point, target) -> np.ndarray:
-    """The foot of ``point`` (2,) on a ``LineTarget``: the nearest point of the line to it."""
+    """The foot of ``point`` (2,) on a target of extent (a line): its nearest point of the target."""
     return np.asarray(point, dtype=float) + naive_offsets(np.asarray(point, dtype=float), target)
 
 
@@ -227,14 +211,15 @@ def along_line_offsets(positions: np.ndarray, target, anchor) -> np.ndarray:
 
     Args:
         positions: (..., 2) end-effector positions in the skill's units.
-        target: the skill's target; only a ``LineTarget`` has a direction to move along.
+        target: the skill's target; only a target of extent (``dimension`` >= 1, a line) has
+            somewhere to move along.
         anchor: (2,) the point the teacher takes for the line's target, or None.
 
     Returns:
         (..., 2) offsets along the line; zeros for a point target or without an anchor.
     """
     positions = np.asarray(positions, dtype=float)
-    if anchor is None or not isinstance(target, LineTarget):
+    if anchor is None or target.dimension == 0:
         return np.zeros_like(positions)
     anchor = np.asarray(anchor, dtype=float)
     if anchor.shape != (2,) or not np.all(np.isfinite(anchor)):

@@ -33,20 +33,19 @@ Events are JSON objects with at least ``seq`` (0-based, consecutive), ``type``, 
 from __future__ import annotations
 
 import datetime as _dt
-import errno
-import fcntl
 import json
 import math
 import os
 import secrets
 import shutil
-import time
 from pathlib import Path
 
 import numpy as np
 
 import mt_widgets
 
+from . import jsonl
+from .jsonl import Lock, LogError, append_line, encode, read_jsonl
 from .participants import block_assignment, validate_participant_id
 from .protocol import Protocol, protocol_from_data
 
@@ -62,10 +61,6 @@ LOCK_FOLDER = ".locks"
 #: Refuse to start a participant with less free space than this in the log folder (bytes): a
 #: participant's log is about 50 kB, so this leaves room for hundreds.
 MIN_FREE_BYTES = 20 * 1024 * 1024
-
-
-class LogError(RuntimeError):
-    """A log or study folder that cannot be used as asked (in use, corrupt, mismatched)."""
 
 
 class LogFolderError(LogError):
@@ -98,57 +93,6 @@ def to_jsonable(value):
                     f"got {type(value).__name__}")
 
 
-def _write_all(fd: int, data: bytes) -> None:
-    """Writes every byte (regular files take it in one call; the loop covers signals)."""
-    view = memoryview(data)
-    while view:
-        written = os.write(fd, view)
-        view = view[written:]
-
-
-def _fsync_folder(folder: Path) -> None:
-    # A new file's directory entry is only durable once the directory itself is synced.
-    fd = os.open(folder, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-class _Lock:
-    """An exclusive ``flock`` on ``path``, waiting up to ``timeout_s`` seconds."""
-
-    def __init__(self, path: Path, what: str, timeout_s: float = 0.0):
-        path.parent.mkdir(exist_ok=True)
-        self.path = path
-        self.fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-        deadline = time.monotonic() + timeout_s
-        while True:
-            try:
-                fcntl.flock(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                return
-            except OSError as error:
-                if error.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
-                    os.close(self.fd)
-                    raise
-                if time.monotonic() >= deadline:
-                    os.close(self.fd)
-                    raise LogError(f"{what} is in use by another session (a second tab, kernel or process); "
-                                   f"close it first, or wait for it to end") from None
-                time.sleep(0.05)
-
-    def release(self) -> None:
-        if self.fd is not None:
-            os.close(self.fd)  # closing the descriptor releases the flock
-            self.fd = None
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.release()
-
-
 # -- reading --------------------------------------------------------------------------------------
 
 def read_events(path) -> tuple[list[dict], dict]:
@@ -167,23 +111,16 @@ def read_events(path) -> tuple[list[dict], dict]:
             or events out of sequence; naming the file and the line.
     """
     path = Path(path)
-    data = path.read_bytes()
-    lines = data.split(b"\n")
-    # The last element is what follows the final newline: empty, or a torn line.
-    torn_tail = len(lines[-1])
-    complete = lines[:-1]
+    contents = read_jsonl(path)
+    complete = contents.lines
+    torn_tail = len(contents.tail.raw) if contents.tail is not None else 0
     events: list[dict] = []
     pending_bad: list[int] = []
     repaired: list[int] = []
-    for number, raw in enumerate(complete, start=1):
-        if not raw.strip():
-            pending_bad.append(number)  # an empty line can only come from a repaired tear
-            continue
-        try:
-            event = json.loads(raw)
-            if not isinstance(event, dict):
-                raise ValueError("not an object")
-        except ValueError:
+    for line in complete:
+        number, event = line.number, line.value
+        if event is None:
+            # Blank (only a repaired tear leaves one) or not a JSON object.
             pending_bad.append(number)
             continue
         if pending_bad:
@@ -200,18 +137,15 @@ def read_events(path) -> tuple[list[dict], dict]:
     if torn_tail:
         # Every byte but the final newline reached the disk: the event is complete, keep it
         # (its writer had not returned yet, so nothing after it can depend on it either way).
-        try:
-            event = json.loads(lines[-1])
-        except ValueError:
-            event = None
-        if isinstance(event, dict) and event.get("seq") == len(events) and not pending_bad:
+        event = contents.tail.value
+        if event is not None and event.get("seq") == len(events) and not pending_bad:
             events.append(event)
             return events, {"torn_tail": 0, "unterminated": True, "repaired_lines": repaired}
     if pending_bad:
         # A torn line already ended with a newline by a resume that crashed before logging.
         if len(pending_bad) > 1 or pending_bad[0] != len(complete):
             raise LogError(f"{path}, line {pending_bad[0]}: not a JSON event; the log is damaged")
-        torn_tail += len(complete[-1]) + 1
+        torn_tail += len(complete[-1].raw) + 1
     return events, {"torn_tail": torn_tail, "unterminated": False, "repaired_lines": repaired}
 
 
@@ -244,8 +178,8 @@ class ParticipantLog:
         self._size = os.fstat(fd).st_size
 
     @staticmethod
-    def _lock(path: Path, timeout_s: float) -> _Lock:
-        return _Lock(path.parent / LOCK_FOLDER / (path.stem + ".lock"), f"participant {path.stem!r}", timeout_s)
+    def _lock(path: Path, timeout_s: float) -> Lock:
+        return Lock(path.parent / LOCK_FOLDER / (path.stem + ".lock"), f"participant {path.stem!r}", timeout_s)
 
     @classmethod
     def create(cls, path, study: str, lock_timeout_s: float = 5.0) -> ParticipantLog:
@@ -257,7 +191,7 @@ class ParticipantLog:
             except FileExistsError:
                 raise LogError(f"participant {path.stem!r} already has a log at {path}; resume them instead "
                                f"(a log is never overwritten)") from None
-            _fsync_folder(path.parent)
+            jsonl.fsync_folder(path.parent)
             log = cls(path, fd, lock.path, [], 0, lock_timeout_s)
         log.study = study
         return log
@@ -275,7 +209,7 @@ class ParticipantLog:
             if (torn or info["unterminated"]) and not path.read_bytes().endswith(b"\n"):
                 # End the torn line so the next event starts a line of its own; its bytes stay
                 # (append-only) and the session_resumed event records the repair.
-                _write_all(fd, b"\n")
+                jsonl.write_all(fd, b"\n")
                 os.fsync(fd)
             return cls(path, fd, lock.path, events, torn, lock_timeout_s)
 
@@ -299,12 +233,12 @@ class ParticipantLog:
                  "participant": self.participant, "study": self.study}
         event.update(to_jsonable(fields))
         line = (json.dumps(event, separators=(",", ":"), allow_nan=False, ensure_ascii=True) + "\n").encode("ascii")
-        with _Lock(self._lock_path, f"participant {self.participant!r}", self.lock_timeout_s):
+        with Lock(self._lock_path, f"participant {self.participant!r}", self.lock_timeout_s):
             if os.fstat(self._fd).st_size != self._size:
                 raise LogError(f"participant {self.participant!r} was continued by another session (a reloaded "
                                f"page or a second tab) since this one last wrote; this one stops here, nothing "
                                f"was written")
-            _write_all(self._fd, line)
+            jsonl.write_all(self._fd, line)
             os.fsync(self._fd)
             self._size += len(line)
         self.events.append(event)
@@ -378,7 +312,7 @@ def check_folder_writable(folder) -> Path:
     try:
         fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
         try:
-            _write_all(fd, b"probe\n")
+            jsonl.write_all(fd, b"probe\n")
             os.fsync(fd)
         finally:
             os.close(fd)
@@ -462,11 +396,11 @@ class StudyFolder:
                                f"use a new folder for a different protocol") from None
             return study
         try:
-            _write_all(fd, text.encode())
+            jsonl.write_all(fd, text.encode())
             os.fsync(fd)
         finally:
             os.close(fd)
-        _fsync_folder(folder)
+        jsonl.fsync_folder(folder)
         return cls(folder)
 
     # -- participants ---------------------------------------------------------------------------
@@ -489,20 +423,14 @@ class StudyFolder:
         path = self.folder / ENROLMENT_FILE
         if not path.exists():
             return [], 0
-        # The last element is what follows the final newline: empty, or a record killed mid-write.
-        lines = path.read_bytes().split(b"\n")
+        contents = read_jsonl(path)
         records: list[dict] = []
         pending: list[tuple[int, int]] = []  # (line number, bytes) of lines that do not parse
-        for number, raw in enumerate(lines, start=1):
-            is_tail = number == len(lines)
-            if is_tail and not raw:
-                break
-            try:
-                record = json.loads(raw)
-                if not isinstance(record, dict) or "participant" not in record:
-                    raise ValueError("not an enrolment record")
-            except ValueError:
-                pending.append((number, len(raw) + (0 if is_tail else 1)))
+        # The tail (after the last newline) is a record killed mid-write, or complete but for its newline.
+        for line in contents.lines + ([contents.tail] if contents.tail is not None else []):
+            record = line.value
+            if record is None or "participant" not in record:
+                pending.append((line.number, len(line.raw) + (0 if line is contents.tail else 1)))
                 continue
             if pending and not record.get("repaired_torn_line"):
                 raise LogError(f"{path}, line {pending[0][0]}: not an enrolment record, and the next record does "
@@ -538,7 +466,7 @@ class StudyFolder:
         if group is not None and group not in self.protocol.groups:
             raise ValueError(f"group: expected None (randomised) or one of {list(self.protocol.groups)}, "
                              f"got {group!r}")
-        with _Lock(self.folder / LOCK_FOLDER / "_study.lock", f"study folder {self.folder}", timeout_s=10.0):
+        with Lock(self.folder / LOCK_FOLDER / "_study.lock", f"study folder {self.folder}", timeout_s=10.0):
             records, damaged = self._read_enrolments()
             existing = [r["participant"] for r in records]
             existing += [p.stem for p in self.folder.glob("*.jsonl") if not p.name.startswith("_")]
@@ -566,19 +494,9 @@ class StudyFolder:
                 # The last enrolment was killed mid-write: its bytes stay (append-only), and this
                 # record says it repairs them, so only such lines are tolerated mid-file.
                 record["repaired_torn_line"] = damaged
-            path = self.folder / ENROLMENT_FILE
-            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_APPEND, 0o644)
-            try:
-                line = (json.dumps(record, separators=(",", ":")) + "\n").encode()
-                size = os.fstat(fd).st_size
-                if size and os.pread(fd, 1, size - 1) != b"\n":
-                    # End a torn (or newline-less) last line first, as ParticipantLog.open does, so
-                    # this record never gets glued onto it.
-                    line = b"\n" + line
-                _write_all(fd, line)
-                os.fsync(fd)
-            finally:
-                os.close(fd)
+            # append_line ends a torn (or newline-less) last line first, as ParticipantLog.open
+            # does, so this record never gets glued onto it.
+            append_line(self.folder / ENROLMENT_FILE, encode(record))
         return record
 
     def status(self) -> list[dict]:
@@ -632,16 +550,11 @@ class StudyFolder:
         enrolment = self.enrolment(participant_id)
         record = {"participant": participant_id, "group": enrolment["group"], "method": enrolment["method"],
                   "outcome": outcome, "at": utc_now(), **to_jsonable(fields)}
-        with _Lock(self.folder / LOCK_FOLDER / "_study.lock", f"study folder {self.folder}", timeout_s=10.0):
+        with Lock(self.folder / LOCK_FOLDER / "_study.lock", f"study folder {self.folder}", timeout_s=10.0):
             if participant_id in self.outcomes():
                 raise LogError(f"participant_id: {participant_id!r} already left the study "
                                f"({self.outcomes()[participant_id]['outcome']})")
-            fd = os.open(self.folder / OUTCOME_FILE, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
-            try:
-                _write_all(fd, (json.dumps(record, separators=(",", ":")) + "\n").encode())
-                os.fsync(fd)
-            finally:
-                os.close(fd)
+            append_line(self.folder / OUTCOME_FILE, encode(record))
         return record
 
     def mark_dropped_out(self, participant_id: str, reason: str = "") -> dict:

@@ -75,7 +75,6 @@ Event types (besides ``seq``, ``type``, ``time``, ``participant``, ``study``):
 from __future__ import annotations
 
 import datetime as _dt
-import math
 import platform
 import time
 from collections.abc import Mapping
@@ -85,12 +84,12 @@ import numpy as np
 
 import mt_widgets
 from mt_widgets.core import SeedSchedule, TeachingEpisode
+from mt_widgets.core.validation import as_positive
 
 from .log import LogError, MemoryLog, ParticipantLog, StudyFolder, to_jsonable
 from .protocol import Phase, Protocol
 from .steps import StudyStep
 
-TEXT_STEPS = ("welcome", "consent", "instructions", "phase_intro", "reproduction", "thank_you")
 #: Timing keys ``submit_demonstration`` reads (seconds, None when unknown).
 TIMING_KEYS = ("time_to_first_input_s", "drawing_duration_s")
 
@@ -230,12 +229,8 @@ def _parse_time(stamp: str) -> float:
 
 
 def _check_seconds(name: str, value):
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) \
-            or not math.isfinite(value) or value < 0:
-        raise ValueError(f"timings[{name!r}]: expected None or a non-negative number of seconds, got {value!r}")
-    return float(value)
+    """A duration in seconds (>= 0), or None for "not measured"."""
+    return None if value is None else as_positive(name, value, allow_zero=True)
 
 
 class Session:
@@ -655,7 +650,7 @@ class Session:
         """
         self._expect("finish_practice", "practice")
         measured = time.monotonic() - self._entered_at
-        duration_s = measured if duration_s is None else _check_seconds("duration_s", duration_s)
+        duration_s = measured if duration_s is None else as_positive("duration_s", duration_s, allow_zero=True)
         self.log.append("practice_finished", duration_s=duration_s)
         self._complete()
         return self.current_step()
@@ -692,7 +687,7 @@ class Session:
             raise ValueError(f"timings: expected a mapping (e.g. {{'time_to_first_input_s': 1.2, "
                              f"'drawing_duration_s': 0.8}}) or None, got {type(timings).__name__} {timings!r}")
         timings = dict(timings)
-        measured = {key_: _check_seconds(key_, timings.pop(key_, None)) for key_ in TIMING_KEYS}
+        measured = {key_: _check_seconds(f"timings[{key_!r}]", timings.pop(key_, None)) for key_ in TIMING_KEYS}
         for name, value in timings.items():  # refused here, by name, rather than inside the log write
             try:
                 to_jsonable(value)

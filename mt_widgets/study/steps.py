@@ -171,7 +171,8 @@ class StudyStep:
             raise ValueError(f"answers: expected a dict {{item id: answer}}, got {type(answers).__name__}")
         unknown = sorted(set(answers) - {item.id for item in self.items})
         if unknown:
-            raise ValueError(f"answers: unknown items {unknown}; step {self.id!r} asks {[i.id for i in self.items]}")
+            raise ValueError(f"answers: expected the items of step {self.id!r} ({[i.id for i in self.items]}), "
+                             f"got unknown items {unknown}")
         return {item.id: item.check(answers.get(item.id)) for item in self.items}
 
 

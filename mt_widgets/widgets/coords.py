@@ -16,12 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-
-def _as_points(name: str, value) -> np.ndarray:
-    array = np.asarray(value, dtype=float)
-    if array.shape[-1:] != (2,):
-        raise ValueError(f"{name}: expected an array of shape (..., 2), got shape {array.shape}")
-    return array
+from mt_widgets.core.validation import as_float_array
 
 
 @dataclass(frozen=True)
@@ -80,7 +75,7 @@ class ViewTransform:
 
     def to_pixel(self, points) -> np.ndarray:
         """World points (..., 2) -> canvas pixels (..., 2)."""
-        points = _as_points("points", points)
+        points = as_float_array("points", points, shape=(2,), finite=False)
         left, top = self._origin
         scale = self.pixels_per_unit
         px = left + (points[..., 0] - self.xlim[0]) * scale
@@ -89,7 +84,7 @@ class ViewTransform:
 
     def to_world(self, pixels) -> np.ndarray:
         """Canvas pixels (..., 2) -> world points (..., 2)."""
-        pixels = _as_points("pixels", pixels)
+        pixels = as_float_array("pixels", pixels, shape=(2,), finite=False)
         left, top = self._origin
         scale = self.pixels_per_unit
         x = self.xlim[0] + (pixels[..., 0] - left) / scale
@@ -98,7 +93,7 @@ class ViewTransform:
 
     def action_tip(self, origin_world, action) -> np.ndarray:
         """Pixel of the tip of the arrow drawing ``action`` (..., 2) from ``origin_world``."""
-        action = _as_points("action", action)
+        action = as_float_array("action", action, shape=(2,), finite=False)
         base = self.to_pixel(origin_world)
         scale = self.pixels_per_action
         return base + np.stack([action[..., 0] * scale, -action[..., 1] * scale], axis=-1)
@@ -106,7 +101,7 @@ class ViewTransform:
     def action_from_drag(self, origin_world, pointer_pixel) -> np.ndarray:
         """The action (2,) whose arrow from ``origin_world`` ends at ``pointer_pixel``."""
         base = self.to_pixel(origin_world)
-        pointer = _as_points("pointer_pixel", pointer_pixel)
+        pointer = as_float_array("pointer_pixel", pointer_pixel, shape=(2,), finite=False)
         delta = pointer - base
         return np.array([delta[0], -delta[1]]) / self.pixels_per_action
 

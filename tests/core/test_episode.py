@@ -6,7 +6,7 @@ import gc
 import numpy as np
 import pytest
 
-from mt_widgets import SKILLS, RidgeLearner, optimal_actions, teaching_risk
+from mt_widgets import SKILLS, RidgeLearner, analyse_demonstrations, optimal_actions, teaching_risk
 from mt_widgets.core import DEFAULT_LAMBDA, EpisodeStateError, Skill, TeachingEpisode, UnderdeterminedTeachingWarning
 from mt_widgets.core import episode as episode_module
 
@@ -203,3 +203,19 @@ def test_the_ghost_is_the_skills_own_motion_even_when_an_id_is_reused_and_dies_w
     del slow, fast, skill
     gc.collect()
     assert len(episode_module._TARGET_ROLLOUTS) == before - 2, "the cache keeps ghosts of skills that are gone"
+
+
+@pytest.mark.parametrize("n_states", [3, 5])
+def test_the_episode_and_analyse_demonstrations_compute_through_one_path(n_states):
+    # The same numbers to the last bit: one formula for U_bar and the result, not two that agree.
+    skill = SKILLS["sim-point"]
+    states = skill.query_states(seed=2)[:n_states]
+    episode = TeachingEpisode(skill, states)
+    U = episode.optimal_actions + np.random.default_rng(n_states).normal(size=episode.optimal_actions.shape)
+    episode.restore(U)
+    reference = analyse_demonstrations(skill.features(states), U, skill.theta, episode.lam)
+    assert np.array_equal(episode.optimal_actions, reference.optimal)
+    for field in dataclasses.fields(reference):
+        assert np.array_equal(getattr(episode.analysis, field.name), getattr(reference, field.name)), field.name
+    assert episode.theta_hat is episode.analysis.theta_hat and episode.error == reference.risk
+    assert episode.exact == reference.exact and episode.rho1 == reference.rho1

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from mt_widgets.study import LogError, Session, StudyFolder, read_events
-from mt_widgets.study import log as log_module
+from mt_widgets.study import jsonl as jsonl_module
 
 from .scripted import demonstrations, run, short_protocol
 
@@ -25,7 +25,7 @@ def _child(folder, participant, kill_at, mode):
     status = 1
     try:
         if kill_at is not None:
-            real_write = log_module._write_all
+            real_write = jsonl_module.write_all
             count = [0]
 
             def dying_write(fd, data):
@@ -37,7 +37,7 @@ def _child(folder, participant, kill_at, mode):
                         real_write(fd, data)
                     os.kill(os.getpid(), signal.SIGKILL)
                 real_write(fd, data)
-            log_module._write_all = dying_write
+            jsonl_module.write_all = dying_write
         study = StudyFolder(folder)
         if study.log_path(participant).exists() or participant in study.participant_ids():
             session = Session.resume(study, participant, lock_timeout_s=5.0)
@@ -123,7 +123,7 @@ def _enrol_and_die(folder, participant, mode):
     pid = os.fork()
     if pid == 0:
         try:
-            real_write = log_module._write_all
+            real_write = jsonl_module.write_all
 
             def dying_write(fd, data):
                 if b'"participant"' not in data:  # the folder's write probe, not the record
@@ -133,7 +133,7 @@ def _enrol_and_die(folder, participant, mode):
                 elif mode == "unterminated":
                     real_write(fd, data[:-1])  # every byte but the newline
                 os.kill(os.getpid(), signal.SIGKILL)
-            log_module._write_all = dying_write
+            jsonl_module.write_all = dying_write
             StudyFolder(folder).enrol(participant)
         finally:
             os._exit(1)

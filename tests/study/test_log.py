@@ -54,10 +54,11 @@ def test_two_sessions_never_interleave_in_one_log_the_newer_one_takes_over(study
 
 
 def test_a_writer_holding_the_participants_lock_makes_others_wait_then_fail(study):
-    from mt_widgets.study.log import LOCK_FOLDER, _Lock
+    from mt_widgets.study.jsonl import Lock
+    from mt_widgets.study.log import LOCK_FOLDER
     session = Session.start(study, "P01")
     session.log.lock_timeout_s = 0.2
-    with _Lock(study.folder / LOCK_FOLDER / "P01.lock", "participant 'P01'"):
+    with Lock(study.folder / LOCK_FOLDER / "P01.lock", "participant 'P01'"):
         with pytest.raises(LogError, match="in use by another session"):
             session.advance()
     session.advance()

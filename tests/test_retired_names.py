@@ -1,0 +1,22 @@
+"""Names nothing used any more are gone, not kept as dead weight a reader must puzzle over."""
+
+import importlib
+
+import pytest
+
+RETIRED = [
+    ("mt_widgets.core.trajectory", "Trajectory.resampled"),
+    ("mt_widgets.in_silico.paper_results", "PAPER_SIMULATION_RESULTS"),
+    ("mt_widgets.in_silico.teachers", "UARM_FITTED_FIELDS"),
+    ("mt_widgets.study.session", "TEXT_STEPS"),
+]
+
+
+@pytest.mark.parametrize(("module", "name"), RETIRED)
+def test_a_retired_name_is_gone(module, name):
+    owner = importlib.import_module(module)
+    for part in name.split("."):
+        if not hasattr(owner, part):
+            return
+        owner = getattr(owner, part)
+    pytest.fail(f"{module}.{name} still exists")

@@ -1,0 +1,76 @@
+"""One validation module (mt_widgets/core/validation.py) serves every layer, with one message
+style, "name: expected ..., got ...": the layers call it instead of keeping checks of their own."""
+
+import ast
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mt_widgets import SKILLS
+from mt_widgets.analysis.power import analytic_power, sample_size_per_group
+from mt_widgets.core.validation import UnknownKeyError, as_finite, as_fraction, is_real
+from mt_widgets.hardware.envelope import SafetyEnvelope
+from mt_widgets.hardware.errors import UnsafeMoveError
+from mt_widgets.in_silico.teachers import TeacherParameters
+from mt_widgets.widgets.coords import ViewTransform
+
+PACKAGE = Path(__file__).resolve().parents[2] / "mt_widgets"
+
+#: Private checks that once lived beside their callers, each a copy of a core.validation check.
+RETIRED_CHECKS = {"is_real", "_check_level", "_check_confidence", "_as_points"}
+
+
+def test_no_layer_keeps_its_own_copy_of_a_shared_check():
+    for path in PACKAGE.rglob("*.py"):
+        if path.name == "validation.py":
+            continue
+        defined = {node.name for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+                   if isinstance(node, ast.FunctionDef)}
+        assert not defined & RETIRED_CHECKS, f"{path.relative_to(PACKAGE)} defines {defined & RETIRED_CHECKS}"
+
+
+def test_a_real_number_is_never_a_bool_nor_a_string():
+    assert is_real(1) and is_real(2.5) and is_real(np.float32(1)) and is_real(np.int64(3))
+    assert not is_real(True) and not is_real("1") and not is_real(None)
+    assert as_finite("x", np.float32(1.5)) == 1.5
+    for value, message in ((np.nan, "expected a finite number"), (True, "expected a real number")):
+        with pytest.raises(ValueError, match=rf"^x: {message}, got "):
+            as_finite("x", value)
+
+
+@pytest.mark.parametrize("value", [0, 1, 1.5, -0.1, True, "0.05", np.nan])
+def test_levels_and_confidences_are_fractions_checked_in_one_place(value):
+    message = r": expected a number strictly between 0 and 1, got "
+    with pytest.raises(ValueError, match="^alpha" + message):
+        as_fraction("alpha", value)
+    with pytest.raises(ValueError, match="^alpha" + message):
+        analytic_power(16, 0.8, alpha=value)
+    with pytest.raises(ValueError, match="^power" + message):
+        sample_size_per_group(0.8, power=value)
+    assert as_fraction("alpha", np.float64(0.05)) == 0.05
+
+
+def test_the_envelope_checks_coordinates_with_the_shared_predicate_and_its_own_safety_error():
+    envelope = SafetyEnvelope()
+    # A numpy float is a coordinate (the shared is_real), a bool is not; the envelope's message
+    # and error type are its own.
+    envelope.check_point(np.float32(200.0), np.float64(0.0), np.int64(80))
+    with pytest.raises(UnsafeMoveError, match=r"^z: expected a finite real number of mm \(arm frame\), got True"):
+        envelope.check_point(200.0, 0.0, True)
+
+
+def test_view_points_teacher_parameters_and_unknown_skills_are_refused_in_the_one_style():
+    transform = ViewTransform((0.0, 1.0), (0.0, 1.0), 100, 100)
+    with pytest.raises(ValueError, match=r"^points: expected shape \(2\) \(trailing axes\), got \(3,\)"):
+        transform.to_pixel([1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match=r"^retention: expected a non-negative finite number, got -0.5"):
+        TeacherParameters(retention=-0.5)
+    with pytest.raises(ValueError, match=r"^drawing_s: expected a real number, got bool True"):
+        TeacherParameters(drawing_s=True)
+    with pytest.raises(UnknownKeyError) as error:
+        SKILLS["nope"]
+    # Readable as written (a plain KeyError would print it in quotes), and still a KeyError.
+    assert isinstance(error.value, KeyError)
+    assert str(error.value) == ("skill: expected one of the known skills (sim-line, sim-point, uarm-line, "
+                                "uarm-point), got 'nope'")
