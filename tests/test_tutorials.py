@@ -98,3 +98,30 @@ def test_the_capstone_replaces_the_phase_notebooks():
     # The student's own run is logged in a study folder that tutorial 11 reads.
     assert "start_participant" in capstone and "read_study(folder)" in capstone
     assert "read_study(folder)" in "\n".join(cells(TUTORIALS / "11_reading_the_results.ipynb", "code"))
+
+
+@pytest.mark.parametrize("path", [p for p in NOTEBOOKS if p.stem[:2].isdigit() and p.stem[:2] != "00"],
+                         ids=lambda p: p.stem)
+def test_tutorial_records_the_students_progress_for_the_class_view(path):
+    # Issue 12: a student's lessons feed the instructor's class view (when a class folder is set).
+    code = "\n".join(cells(path, "code"))
+    assert f'progress.lesson("{path.stem}")' in code, f"{path.name}: does not record that the lesson was opened"
+    # The episode a student teaches is named ``episode``; other widgets are code-driven checks.
+    if re.search(r"^episode = EpisodeWidget\(", code, flags=re.M):
+        assert f'progress.attach(episode, "{path.stem}")' in code, \
+            f"{path.name}: the student's episode is not followed by the class progress recorder"
+
+
+def test_a_tutorials_episode_reaches_the_class_folder(tmp_path, monkeypatch):
+    # Run tutorial 08's first code cells as a student would, with the instructor's class folder set.
+    from mt_widgets.classroom import read_class
+
+    monkeypatch.setenv("MT_WIDGETS_CLASS_FOLDER", str(tmp_path))
+    monkeypatch.setenv("MT_WIDGETS_STUDENT", "ada")
+    namespace: dict = {}
+    for source in cells(TUTORIALS / "08_one_full_episode.ipynb", "code")[:3]:
+        exec(compile(source, "08_one_full_episode", "exec"), namespace)
+    (student,) = read_class(tmp_path).students.values()
+    kinds = [event["kind"] for event in student.events]
+    assert kinds[0] == "lesson" and kinds.count("demonstration") == 5 and kinds[-1] == "episode"
+    assert student.events[-1]["error"] == pytest.approx(namespace["result"].error)
