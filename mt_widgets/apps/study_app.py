@@ -143,7 +143,8 @@ class StudyApp(VBox):
         self._practice_round = 0
         self._timer = None
         self.heading = HTML()
-        self.body = VBox(layout=Layout(max_width="1000px"))
+        # Wide enough for an episode's canvas and its side column side by side (widgets/episode.py).
+        self.body = VBox(layout=Layout(max_width="1280px"))
         self.withdraw_button = Button(description="Withdraw from the study", icon="sign-out",
                                       layout=Layout(width="auto", margin="24px 0 0 0", align_self="flex-start"))
         self.withdraw_button.on_click(lambda _: self._safely(self._ask_withdraw))
