@@ -97,7 +97,8 @@ def main():
     started = time.perf_counter()
     skill.reproduce(skill.theta, duration=0.01)
     skill.reproduce(np.repeat(skill.theta[None], 16, axis=0), duration=0.01)
-    print(f"numba compile or cache load of the rollout kernels: {time.perf_counter() - started:.2f} s (once per process)")
+    print(f"numba compile or cache load of the rollout kernels: {time.perf_counter() - started:.2f} s "
+          "(once per process)")
 
     difference = check_agreement(skill)
     print(f"agreement with MuJoCo (RK4, 1 ms, qfrc_applied = held tau_k), 10 s of sim-point: "
@@ -135,7 +136,9 @@ def main():
     mujoco.mj_getState(models[0], probe, initial, spec)
     initial = np.repeat(initial[None], 1000, axis=0)
     with mujoco.rollout.Rollout(nthread=n_threads) as pool:
-        run = lambda: pool.rollout(models, datas, initial, nstep=1000)
+        def run():
+            return pool.rollout(models, datas, initial, nstep=1000)
+
         run()
         theirs = 1e6 / best_of(run, repeat=3)
     ours = 1e6 / best_of(lambda: skill.reproduce(thetas, duration=1.0), repeat=3)
@@ -156,7 +159,7 @@ def main():
     print(f"\nfit + optimal_actions (5 x 5): median {statistics.median(samples) * 1e6:.1f} us "
           f"(target below 100 us: {'met' if statistics.median(samples) < 1e-4 else 'NOT met'})")
     for key in ("sim-point", "uarm-point"):
-        cost = best_of(lambda: [SKILLS[key].query_states(seed=s) for s in range(100)], repeat=3) / 100
+        cost = best_of(lambda key=key: [SKILLS[key].query_states(seed=s) for s in range(100)], repeat=3) / 100
         print(f"query-state sampler, {key}: {cost * 1e3:.2f} ms per set of {SKILLS[key].n_features} states")
 
 

@@ -218,7 +218,8 @@ def main() -> None:
     pointer = np.array(browser["pointer_ms"])
     # No target was set for the pointer; 100 ms is the usual limit for a reaction to feel
     # instantaneous (Nielsen 1993, Usability Engineering, ch. 5), used here as the reference.
-    note = f"  ({len(pointer)} moves" + (f", {browser['pointer_skipped']} skipped" if browser["pointer_skipped"] else "")
+    skipped = f", {browser['pointer_skipped']} skipped" if browser["pointer_skipped"] else ""
+    note = f"  ({len(pointer)} moves{skipped}"
     _row("pointer-to-arrow latency, median", float(np.median(pointer)), "ms", 100.0, "<=", note + ")")
     _row("pointer-to-arrow latency, p95", float(np.percentile(pointer, 95)), "ms", 100.0, "<=",
          "  (rAF-sampled: includes up to one 16.7 ms frame)")

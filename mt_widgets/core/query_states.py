@@ -137,5 +137,8 @@ class SeedSchedule:
         """The seed for one episode: phase and episode are 0-based indices of the protocol."""
         phase = as_count("phase", phase, minimum=0)
         episode = as_count("episode", episode, minimum=0)
-        key = (phase, episode) if participant is None else (phase, episode, as_count("participant", participant, minimum=0))
+        if participant is None:
+            key = (phase, episode)
+        else:
+            key = (phase, episode, as_count("participant", participant, minimum=0))
         return np.random.SeedSequence(self.study_seed, spawn_key=key)

@@ -65,7 +65,8 @@ def wait_for_status(page, predicate: str, timeout: float = 10_000) -> dict:
 def _wait_status(page, predicate, timeout):
     page.wait_for_function(
         """(pred) => {
-            const el = Array.from(document.querySelectorAll('.widget-label')).find(e => e.textContent.startsWith('STATUS '));
+            const el = Array.from(document.querySelectorAll('.widget-label'))
+                .find(e => e.textContent.startsWith('STATUS '));
             if (!el) return false;
             const s = JSON.parse(el.textContent.slice(7));
             return eval(pred);

@@ -5,8 +5,17 @@ import time
 import numpy as np
 import pytest
 
-from .helpers import (OKABE, drag, ee_pixel, reference_episode, to_canvas, to_page, wait_for_color,
-                      wait_for_pending, wait_for_status)
+from .helpers import (
+    OKABE,
+    drag,
+    ee_pixel,
+    reference_episode,
+    to_canvas,
+    to_page,
+    wait_for_color,
+    wait_for_pending,
+    wait_for_status,
+)
 
 pytestmark = pytest.mark.browser
 

@@ -12,10 +12,10 @@ import time
 import numpy as np
 import pytest
 
+from browser_support import artifact_path
+from mt_widgets import SKILLS
 from mt_widgets.study import read_events, read_study
 from mt_widgets.widgets import ArmView
-from mt_widgets import SKILLS
-from browser_support import artifact_path
 
 pytestmark = pytest.mark.browser
 

@@ -82,7 +82,8 @@ def test_paper_mass_matrix_is_the_design_formula():
     arm = TwoLinkArm()
     q = np.array([[0.1, 0.0], [0.4, 1.1], [-2.0, 2.9]])
     c2 = np.cos(q[:, 1])
-    expected = np.stack([np.stack([5 / 3 + c2, 1 / 3 + c2 / 2], -1), np.stack([1 / 3 + c2 / 2, np.full(3, 1 / 3)], -1)], -2)
+    expected = np.stack([np.stack([5 / 3 + c2, 1 / 3 + c2 / 2], -1),
+                         np.stack([1 / 3 + c2 / 2, np.full(3, 1 / 3)], -1)], -2)
     np.testing.assert_allclose(arm.mass_matrix(q), expected, rtol=1e-14)
 
 
