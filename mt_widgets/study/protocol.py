@@ -68,7 +68,6 @@ import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import MappingProxyType
 from typing import Any
 
 from mt_widgets.core import SKILLS, Skill, SkillRegistry
@@ -168,6 +167,26 @@ class Practice:
     reproduction: bool = True
 
 
+class ProtocolSkills(Mapping):
+    """The skills a protocol names, by name: read-only, and picklable (unlike a ``MappingProxyType``),
+    since in-silico studies send the protocol to worker processes."""
+
+    def __init__(self, skills: Mapping[str, Skill]):
+        self._skills = dict(skills)
+
+    def __getitem__(self, name: str) -> Skill:
+        return self._skills[name]
+
+    def __iter__(self):
+        return iter(self._skills)
+
+    def __len__(self) -> int:
+        return len(self._skills)
+
+    def __repr__(self) -> str:
+        return f"ProtocolSkills({sorted(self._skills)})"
+
+
 @dataclass(frozen=True)
 class Protocol:
     """A validated protocol. Build it with ``load_protocol`` or ``parse_protocol``.
@@ -192,7 +211,7 @@ class Protocol:
     source_text: str = field(default="", repr=False, compare=False)
     source: str = field(default="<string>", compare=False)
     #: The skills its phases name, by name (see ``resolve_protocol_skills``).
-    skills: Mapping[str, Skill] = field(default_factory=lambda: MappingProxyType({**SKILLS, **PRACTICE_SKILLS}),
+    skills: Mapping[str, Skill] = field(default_factory=lambda: ProtocolSkills({**SKILLS, **PRACTICE_SKILLS}),
                                         repr=False, compare=False)
     guidance_modality: str = "arrows+words"
     before: tuple[StudyStep, ...] = ()
@@ -485,7 +504,7 @@ def resolve_protocol_skills(raw: dict, check: _Checker, source: str) -> tuple[Ma
         if not isinstance(value, Skill):
             check.fail(path, f"expected a Skill at {reference!r}, got {type(value).__name__}")
         skills[reference] = value
-    return MappingProxyType(skills), table
+    return ProtocolSkills(skills), table
 
 
 def parse_protocol(text: str, source: str = "<string>", kind: str | None = None, check_files: bool = True) -> Protocol:

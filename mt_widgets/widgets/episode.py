@@ -105,8 +105,9 @@ class EpisodeResult:
 #: at 1400 x 1000 the whole reproduction is on screen without scrolling; the side column's
 #: width; the widest a canvas grows.
 _ROOM_Y_PX, _SIDE_PX, _MAX_CANVAS_PX = 350, 420, 760
-#: On a narrow page (a tablet upright) the side column is under the canvas: room for its top.
-_NARROW_EXTRA_Y_PX = 220
+#: On a narrow page (a tablet upright) the side column is under the canvas, after the replay line
+#: and the reproduction's words: room for those and for the result and the next action.
+_NARROW_EXTRA_Y_PX = 360
 
 
 def _canvas_class(view) -> str:

@@ -116,3 +116,14 @@ def test_states_from_reuses_an_earlier_phases_query_states_only_when_compatible(
 def test_a_missing_file_names_the_shipped_protocols(tmp_path):
     with pytest.raises(FileNotFoundError, match="paper-sim"):
         load_protocol(tmp_path / "nope.toml")
+
+
+def test_a_protocol_pickles_for_worker_processes():
+    # In-silico studies send the protocol to a process pool (mt_widgets/in_silico/engine.py).
+    import pickle
+
+    protocol = load_protocol("paper-sim")
+    copy = pickle.loads(pickle.dumps(protocol))
+    assert copy.skills["sim-point"].key == "sim-point" and set(copy.skills) == set(protocol.skills)
+    with pytest.raises(TypeError):
+        protocol.skills["sim-point"] = None

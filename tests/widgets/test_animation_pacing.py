@@ -24,6 +24,10 @@ def kernel_like(monkeypatch):
         except RuntimeError:
             return None
     monkeypatch.setattr(animation, "kernel_loop", running_loop)
+    # Each test stands for a fresh page: the estimate of the browser's queue starts empty, not
+    # behind the animations earlier tests of the run sent (a whole study app's would push every
+    # chunk here minutes into the future).
+    monkeypatch.setattr(animation._Queue, "free_at", 0.0)
 
 
 def run_in_a_kernel_like_loop(scenario):
@@ -43,6 +47,8 @@ def run_in_a_kernel_like_loop(scenario):
     thread = threading.Thread(target=run)
     thread.start()
     thread.join(60)
+    if thread.is_alive():
+        pytest.fail("the scenario did not finish within 60 s")
     if "error" in outcome:
         raise outcome["error"]
     return outcome["value"]
