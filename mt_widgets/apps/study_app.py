@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 from ipywidgets import HTML, Button, Combobox, Dropdown, HBox, Layout, RadioButtons, Text, Textarea, VBox
 
-from mt_widgets.core import running_under_test
+from mt_widgets.core import TeachingEpisode, running_under_test
 from mt_widgets.study import (
     BUILTIN_PROTOCOLS,
     LogError,
@@ -464,16 +464,20 @@ class StudyApp(VBox):
         self.show_step()
 
     # -- episodes --------------------------------------------------------------------------------------------
-    def _episode_widget(self, skill: str, states, guidance: bool, index: int, total: int,
+    def _episode_widget(self, skill, states, guidance: bool, index: int, total: int,
                         on_demonstration=None, on_finished=None, guidance_modality: str = "none") -> EpisodeWidget:
+        """``skill``: a skill key (with ``states``), or the session's ``TeachingEpisode`` (``states``
+        None), so the episode the participant teaches is the one the log records."""
         protocol = self.session.protocol
         # ghost=False: the target skill's own motion would show the participant the answer.
         # Blinding: no group word on the canvas ("target" names a group), and neither the skill's
         # formula (the answer), the target skill's ghost, nor the teaching error and distance to the
         # goal, none of which the paper's participants saw.
-        episode = EpisodeWidget(protocol.skill(skill), query_states=states, guidance=guidance,
-                                guidance_modality=guidance_modality, lam=protocol.lam, theme=self.theme,
-                                duration=protocol.reproduction_duration_s, ghost=False, target_label="goal",
+        shown = skill if isinstance(skill, TeachingEpisode) else protocol.skill(skill)
+        own = dict(lam=protocol.lam, duration=protocol.reproduction_duration_s, query_states=states) \
+            if states is not None else {}
+        episode = EpisodeWidget(shown, guidance=guidance, guidance_modality=guidance_modality, theme=self.theme,
+                                ghost=False, target_label="goal", **own,
                                 show_description=False, show_outcome=False,
                                 episode_index=index, episodes_total=total, on_demonstration=on_demonstration,
                                 on_finished=on_finished, title="")
@@ -500,7 +504,9 @@ class StudyApp(VBox):
                                   f"{len(self.session.protocol.phases)}, round {step.episode} of "
                                   f"{step.n_episodes}</h3>")
             instructions = HTML(self._text(self.session.protocol.phase(step.phase).instructions, step.skill))
-            self.episode = self._episode_widget(step.skill, step.query_states, step.guidance,
+            # The session's episode: one TeachingEpisode (one SVD, one rollout) per study episode,
+            # which the widget demonstrates into and the session then records.
+            self.episode = self._episode_widget(step.teaching_episode, None, step.guidance,
                                                 step.episode - 1, step.n_episodes, self._on_demonstration,
                                                 self._on_episode_finished, step.guidance_modality)
             self.body.children = [instructions, self.episode]

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from mt_widgets.core.episode import TeachingEpisode
 from mt_widgets.core.validation import as_bool
 from mt_widgets.study.log import StudyFolder
 from mt_widgets.study.session import Session
@@ -92,7 +91,8 @@ class SessionTeacher:
             # What the teacher works from for this episode: where the target is from each tip
             # position, and the optimal arrows its understanding blends in.
             positions, _ = skill.end_effector(step.query_states)
-            optimal = TeachingEpisode(skill, step.query_states, lam=self.protocol.lam).optimal_actions
+            # The session's own episode: no second TeachingEpisode (and SVD) per study episode.
+            optimal = step.teaching_episode.optimal_actions
             anchor = imagined_line_target(self.protocol, step.phase_index)
             along = None if anchor is None else along_line_offsets(positions, skill.target, anchor)
             self._episode = (e, naive_offsets(positions, skill.target), optimal, along)

@@ -201,6 +201,11 @@ class Step:
         guidance_modality: how guidance is shown ("arrows", "arrows+words", "words", "none").
         practice_reproduction: whether practice rounds end with a reproduction.
         ended: why the session ended early ("declined", "ineligible", "withdrawn"), else None.
+        teaching_episode: the step's ``TeachingEpisode`` (demonstration, episode end and
+            reproduction steps): the one object a view shows and the log records, so an episode
+            is built (one SVD) and rolled out once. A view demonstrates into it (after a resume
+            it first restores the step's ``actions``); without a view the session records the
+            logged actions into it when it finishes the episode.
     """
 
     kind: str
@@ -222,6 +227,7 @@ class Step:
     guidance_modality: str = "arrows+words"
     practice_reproduction: bool = True
     ended: str | None = None
+    teaching_episode: TeachingEpisode | None = field(default=None, repr=False, compare=False)
 
 
 def _parse_time(stamp: str) -> float:
@@ -436,6 +442,8 @@ class Session:
             exact=teaching.exact,
             seed={"study_seed": self.protocol.seed, "spawn_key": list(seed.spawn_key)})
         self._episodes[(phase.index, slot.episode)] = event
+        # Kept: the step's view shows this episode and the log records it (one per episode).
+        self._teaching_episodes[(phase.index, slot.episode)] = teaching
 
     # -- reading the state ----------------------------------------------------------------------------
     @property
@@ -495,7 +503,8 @@ class Session:
         states = np.asarray(started["query_states"], dtype=float)
         actions = tuple(self._actions.get(key, []))
         common.update(episode=slot.episode, query_states=states, actions=actions, guidance=started["guidance"],
-                      guidance_modality=started.get("guidance_modality", "arrows+words"))
+                      guidance_modality=started.get("guidance_modality", "arrows+words"),
+                      teaching_episode=self._teaching_episode(key))
         if slot.kind == "demonstration":
             return Step("demonstration", **common, index=slot.index, state=states[slot.index])
         if slot.kind == "episode_end":
@@ -508,13 +517,21 @@ class Session:
                                             duration=self.protocol.reproduction_duration_s)
 
     def _teaching_episode(self, key) -> TeachingEpisode:
-        """The recorded episode; after a resume, rebuilt from the log's states and actions."""
+        """The episode's one ``TeachingEpisode`` (after a resume, rebuilt from the log). Never
+        changed here: a view may be demonstrating into it, each action after it is logged."""
         if key not in self._teaching_episodes:
-            started = self._episodes[key]
-            self._teaching_episodes[key] = self._new_teaching_episode(
-                self.protocol.skills[started["skill"]], np.asarray(started["query_states"], dtype=float),
-                np.asarray(self._actions[key], dtype=float))
+            self._teaching_episodes[key] = self._episode_from_log(key)
         return self._teaching_episodes[key]
+
+    def _episode_from_log(self, key) -> TeachingEpisode:
+        """A finished episode with its logged actions; an unfinished one empty, on the logged
+        states: the view that continues it restores the logged actions into it (the step's
+        ``actions``), or ``finish_episode`` does."""
+        started = self._episodes[key]
+        actions = self._actions.get(key, []) if key in self._finished_episodes else []
+        return self._new_teaching_episode(self.protocol.skills[started["skill"]],
+                                          np.asarray(started["query_states"], dtype=float),
+                                          np.asarray(actions, dtype=float))
 
     def _result(self, key) -> EpisodeResult:
         event = self._finished_episodes[key]
@@ -722,6 +739,8 @@ class Session:
         if episode is not None:
             self._check_recorded(episode, started, key)
             self._teaching_episodes[key] = episode
+        else:
+            self._record_logged_actions(key)
         teaching = self._teaching_episode(key)
         trajectory = teaching.reproduction
         self.log.append(
@@ -736,6 +755,17 @@ class Session:
         self._finished_episodes[key] = self.log.events[-1]
         self._complete()
         return self._result(key)
+
+    def _record_logged_actions(self, key) -> None:
+        """Brings the episode up to the logged actions (no view demonstrated into it: a script);
+        an episode holding other actions than the log is replaced by the log's (the log is the truth)."""
+        teaching = self._teaching_episode(key)
+        logged = np.asarray(self._actions.get(key, []), dtype=float).reshape(-1, teaching.action_dim)
+        held = teaching.actions.reshape(-1, teaching.action_dim)
+        if len(held) <= len(logged) and np.array_equal(held, logged[:len(held)]):
+            teaching.restore(logged[len(held):])
+        else:
+            self._teaching_episodes[key] = self._episode_from_log(key)
 
     def _check_recorded(self, episode, started: dict, key) -> None:
         """Refuses an episode that is not the one this step logged (other states, actions, lambda...)."""

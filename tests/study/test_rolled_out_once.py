@@ -9,7 +9,7 @@ import pytest
 
 from mt_widgets import SKILLS
 from mt_widgets.apps import StudyApp
-from mt_widgets.core import Plant, Skill
+from mt_widgets.core import Plant, Skill, TeachingEpisode, machine_teaching
 from mt_widgets.study import Session, read_events
 from mt_widgets.widgets import EpisodeWidget
 
@@ -58,6 +58,26 @@ def plant_rollouts(monkeypatch):
         if "rollout" in vars(cls):
             monkeypatch.setattr(cls, "rollout", counting(vars(cls)["rollout"]))
     return calls
+
+
+@pytest.fixture
+def built(monkeypatch):
+    """Every ``TeachingEpisode`` built, as its query states, and the number of SVDs of Phi taken
+    for a learner (``ridge_operator``), whoever makes them."""
+    episodes, svds = [], [0]
+    original_init, original_svd = TeachingEpisode.__init__, machine_teaching.svd_with_rank
+
+    def init(self, skill, query_states=None, **kwargs):
+        original_init(self, skill, query_states, **kwargs)
+        episodes.append(np.array(self.query_states))
+
+    def svd(Phi):
+        svds[0] += 1
+        return original_svd(Phi)
+
+    monkeypatch.setattr(TeachingEpisode, "__init__", init)
+    monkeypatch.setattr(machine_teaching, "svd_with_rank", svd)
+    return episodes, svds
 
 
 def _is_a_skills_own(theta) -> bool:
@@ -112,7 +132,7 @@ def test_an_episode_shown_by_the_widget_and_logged_by_the_session_is_rolled_out_
     assert finished == short_protocol().n_episodes
 
 
-def test_the_study_app_rolls_out_each_logged_episode_once(tmp_path, rollouts, plant_rollouts):
+def test_the_study_app_rolls_out_each_logged_episode_once(tmp_path, rollouts, plant_rollouts, built):
     protocol_file = tmp_path / "short.toml"
     protocol_file.write_text(SHORT_PROTOCOL)
     app = StudyApp(protocol=str(protocol_file), log_folder=tmp_path / "logs")
@@ -133,3 +153,11 @@ def test_the_study_app_rolls_out_each_logged_episode_once(tmp_path, rollouts, pl
     assert len(plant_rollouts) == len(logged), f"the plants rolled out {len(plant_rollouts)} times for {len(logged)}"
     for event, theta in zip(logged, plant_rollouts):
         np.testing.assert_allclose(theta.reshape(np.shape(event["theta_hat"])), event["theta_hat"], atol=1e-12)
+    # One TeachingEpisode per study episode, shared by the session (the log) and the widget (the
+    # page), and so one SVD of its features.
+    episodes, svds = built
+    for started in (event for event in events if event["type"] == "episode_started"):
+        states = np.asarray(started["query_states"])
+        copies = sum(1 for built_states in episodes if np.array_equal(built_states, states))
+        assert copies == 1, f"episode {started['phase']}E{started['episode']} was built {copies} times"
+    assert svds[0] == len(episodes), f"{svds[0]} SVDs for {len(episodes)} episodes"
