@@ -27,7 +27,7 @@ from traitlets import Float, Int, List, Unicode
 
 from mt_widgets.core import DEFAULT_LAMBDA, SKILLS, Skill, TeachingEpisode
 from mt_widgets.core.guidance import guidance_parts
-from mt_widgets.core.validation import as_bool, as_float_array, as_positive
+from mt_widgets.core.validation import as_bool, as_count, as_float_array, as_positive
 
 from .callbacks import Callbacks
 from .guidance import GuidancePanel
@@ -169,7 +169,8 @@ class EpisodeWidget(VBox):
         guidance_modality: what guidance shows: "arrows+words" (the optimal arrow beside the
             user's, and words on how they differ), "arrows" (the arrows only, as in the paper's
             study), "words" (the words only) or "none" (``mt_widgets.core.guidance``).
-        lam: The learner's ridge parameter (also used for the optimal actions).
+        lam: The learner's ridge parameter (also used for the optimal actions); default
+            ``DEFAULT_LAMBDA``, or the shown ``TeachingEpisode``'s own (any other is refused).
         theme: A ``Theme`` or theme name ("okabe-ito", "paper", "paper-uarm").
         duration: Reproduction length in seconds (default ``skill.default_duration``).
         ghost: Draw the target skill's own motion faintly during the reproduction.
@@ -194,7 +195,7 @@ class EpisodeWidget(VBox):
     error = Float(None, allow_none=True, help="Teaching error once the episode is finished.")
 
     def __init__(self, skill="sim-point", query_states=None, seed: int | None = 0, guidance: bool = True,
-                 lam: float = DEFAULT_LAMBDA, theme=None, duration: float | None = None, ghost: bool = True,
+                 lam: float | None = None, theme=None, duration: float | None = None, ghost: bool = True,
                  demonstrations=None, episode_index: int = 0, episodes_total: int = 1,
                  on_demonstration: Callable | None = None, on_finished: Callable | None = None,
                  title: str | None = None, fps: float = 60.0, width=None, height=None, css_width=None,
@@ -207,20 +208,20 @@ class EpisodeWidget(VBox):
                 if value is not None:
                     raise ValueError(f"{name}: expected None when a TeachingEpisode is shown (it has its own), "
                                      f"got {value!r}"[:200])
-            lam = as_positive("lam", lam, allow_zero=True)
-            if lam not in (DEFAULT_LAMBDA, skill.lam):
-                raise ValueError(f"lam: expected the shown TeachingEpisode's own ({skill.lam}), got {lam}")
+            if lam is not None and as_positive("lam", lam, allow_zero=True) != skill.lam:
+                raise ValueError(f"lam: expected None or the shown TeachingEpisode's own ({skill.lam}), got {lam}")
             episode = skill
         else:
             episode = TeachingEpisode(_resolve_skill(skill), query_states,
-                                      seed=None if query_states is not None else seed, lam=lam, duration=duration)
+                                      seed=None if query_states is not None else seed,
+                                      lam=DEFAULT_LAMBDA if lam is None else lam, duration=duration)
         #: The ``TeachingEpisode`` shown: the science of this episode lives there.
         self.episode = episode
         # Guidance that shows nothing is no guidance: the episode does not stop after each arrow.
         self.guidance = as_bool("guidance", guidance) and (self.guidance_arrows or self.guidance_words)
         self.show_ghost = as_bool("ghost", ghost)
         show_description = as_bool("show_description", show_description)
-        self.episode_index = int(episode_index)
+        self.episode_index = as_count("episode_index", episode_index, minimum=0)
         self.result: EpisodeResult | None = None
         self.records: list[DemonstrationRecord] = []
         # Errors in callbacks propagate (ipywidgets' dispatcher would swallow them): a
