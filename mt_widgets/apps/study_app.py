@@ -79,6 +79,10 @@ def _kernel_loop():
     return loop if loop.is_running() else None
 
 
+#: The group dropdown's value for "randomised": a Dropdown whose value is None shows nothing.
+RANDOMISED = "randomised"
+
+
 def _paragraphs(text: str) -> str:
     """Protocol text (paragraphs separated by blank lines) as escaped HTML paragraphs."""
     blocks = [" ".join(block.split()) for block in text.strip().split("\n\n") if block.strip()]
@@ -96,7 +100,8 @@ class ExperimenterPanel(VBox):
         self.log_folder = Text(value=str(log_folder), description="Log folder", layout=Layout(width="520px"))
         self.participant = Text(value="", description="Participant", placeholder="pseudonymous code, e.g. P07",
                                 layout=Layout(width="320px"))
-        self.group = Dropdown(options=group_options, value=None, description="Group", layout=Layout(width="320px"))
+        self.group = Dropdown(options=group_options, value=RANDOMISED, description="Group",
+                              layout=Layout(width="320px"))
         wide = dict(width="auto")
         self.start_button = Button(description="Start new participant", button_style="primary", icon="play",
                                    layout=Layout(**wide))
@@ -150,7 +155,7 @@ class StudyApp(VBox):
         self.withdraw_button.on_click(lambda _: self._safely(self._ask_withdraw))
         self.withdraw_box = VBox([self.withdraw_button])
         self.participant_view = VBox([self.heading, self.body, self.withdraw_box], layout=Layout(padding="4px"))
-        groups = [("randomised (block randomisation)", None)]
+        groups = [("randomised (block randomisation)", RANDOMISED)]
         self.experimenter = ExperimenterPanel(protocol, log_folder if log_folder is not None
                                               else default_log_folder(protocol if protocol in BUILTIN_PROTOCOLS
                                                                       else "custom"), groups)
@@ -175,9 +180,9 @@ class StudyApp(VBox):
         except (ProtocolError, FileNotFoundError, ValueError) as error:
             self.experimenter.say(str(error), error=True)
             return
-        self.experimenter.group.options = [("randomised (block randomisation)", None)] + \
+        self.experimenter.group.options = [("randomised (block randomisation)", RANDOMISED)] + \
                                           [(g, g) for g in protocol.groups]
-        self.experimenter.group.value = None
+        self.experimenter.group.value = RANDOMISED
         self.experimenter.say(f"Protocol {protocol.name!r}: {len(protocol.phases)} phases, "
                               f"{protocol.n_episodes} episodes.")
 
@@ -186,14 +191,22 @@ class StudyApp(VBox):
         # Refuses an unwritable folder (and one running another protocol) before anyone starts.
         return StudyFolder.create(self.experimenter.log_folder.value.strip(), protocol)
 
+    def _chosen_group(self) -> str | None:
+        choice = self.experimenter.group.value
+        return None if choice == RANDOMISED else choice
+
     def _start_from_panel(self) -> None:
-        self.start_participant(self.experimenter.participant.value, group=self.experimenter.group.value)
+        session = self.start_participant(self.experimenter.participant.value, group=self._chosen_group())
+        # The panel leaves the page while the participant works (single blind); what the start did
+        # waits in it for the experimenter, beside the participant list.
+        how = "by block randomisation" if self._chosen_group() is None else "as chosen"
+        self.experimenter.say(f"{session.participant}: assigned to the {session.group} group {how}.")
 
     def _resume_from_panel(self) -> None:
         self.resume_participant(self.experimenter.participant.value)
 
     def _lesson_from_panel(self) -> None:
-        self.start_lesson(self.experimenter.group.value)
+        self.start_lesson(self._chosen_group())
 
     def _list_participants(self) -> None:
         study = self._study()

@@ -160,7 +160,11 @@ def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resum
     protocol_path.write_text(PROTOCOL)
     participant = "B01"
     open_and_fill(page, voila_study, protocol_path, participant)
-    page.get_by_label("Group").select_option(label="target")
+    # Issue 10 bug 3: the dropdown shows the default choice instead of a blank box.
+    group = page.get_by_label("Group")
+    shown = group.evaluate("s => s.selectedIndex < 0 ? '' : s.options[s.selectedIndex].text")
+    assert shown.replace("\xa0", " ") == "randomised (block randomisation)"   # ipywidgets shows spaces as nbsp
+    group.select_option(label="target")
     page.screenshot(path=shot("experimenter"))
     button(page, "Start new participant").click()
 

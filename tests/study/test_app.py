@@ -165,3 +165,18 @@ def test_a_demonstration_the_session_refuses_stops_the_page_with_a_call_for_the_
     resumed.resume_participant("P01")
     step = resumed.session.current_step()
     assert (step.kind, step.index) == ("demonstration", 1) and resumed.episode.state_index == 1
+
+
+def test_the_group_dropdown_shows_randomised_and_the_panel_says_what_the_start_did(tmp_path, protocol_file):
+    # Issue 10 bug 3: a Dropdown whose value is None shows a blank box.
+    app = StudyApp(str(protocol_file), log_folder=tmp_path / "logs")
+    panel = app.experimenter
+    assert panel.group.label == "randomised (block randomisation)" and panel.group.index == 0
+    panel.participant.value = "P01"
+    panel.start_button.click()
+    group = app.session.group
+    assert group in ("target", "control")
+    assert f"P01: assigned to the {group} group by block randomisation" in panel.message.value
+    # Switching the protocol keeps the choice visible.
+    panel.protocol.value = str(protocol_file)
+    assert panel.group.label == "randomised (block randomisation)"
