@@ -18,8 +18,11 @@ def readout(page, index: int) -> str:
     ("02_ridge_regression", 0, 2, "0.00316", "lambda 0.00316: E ="),            # lambda 10^-2 -> 10^-2.5
 ])
 def test_moving_a_slider_redraws_the_figure(page, tutorial_server, artifacts, name, slider, presses, expected, printed):
-    page.goto(tutorial_server.url(f"/voila/render/{name}.ipynb"), timeout=120_000)
-    page.wait_for_selector(".widget-interact img", timeout=120_000)
+    # Voila runs the whole tutorial before the page loads: generous limits for a loaded machine.
+    page.goto(tutorial_server.url(f"/voila/render/{name}.ipynb"), timeout=240_000)
+    # The first drawing settles into exactly one figure (waited for, not sampled at one instant).
+    page.wait_for_function("() => document.querySelectorAll('.widget-interact img').length == 1",
+                           timeout=120_000)
     before = figure_sources(page)
     assert len(before) == 1
     page.locator(".widget-interact").first.scroll_into_view_if_needed()
