@@ -66,34 +66,8 @@ A later session's log is ``<ID>.ses-<session>.jsonl`` beside ``<ID>.jsonl`` (the
 the same event types; its ``session_started`` adds ``session``, and when the arrival was
 checked against a window, ``window`` (``WindowCheck.as_dict()``) and ``arrived_at``.
 
-Event types (besides ``seq``, ``type``, ``time``, ``participant``, ``study``):
-
-- ``session_started``: software_version, protocol_hash, protocol_name, group, enrolment
-  (the enrolment record), lam, numpy_version, python_version.
-- ``session_resumed``: software_version, protocol_hash, at (the step resumed at),
-  repaired_torn_line (bytes of a torn last line ended by this resume; 0 if none).
-- ``screen_done``: screen (welcome, instructions, phase_intro, reproduction), phase_index,
-  phase, episode (where they apply).
-- ``consent_given``: step (the consent step's id, absent for the default consent);
-  ``consent_declined``: step.
-- ``step_done``: step (id), kind, and by kind: answers {item: value} (eligibility adds
-  eligible (bool)); watched_to_end (bool) and plays (int) for a video.
-- ``screened_out``: step, answers (the eligibility answers that ended the session).
-- ``withdrawn``: reason, data ("exclude" or "delete", the protocol's policy), at (the step).
-- ``practice_started``: skill, duration_s; ``practice_finished``: duration_s (as measured
-  by the caller, seconds).
-- ``episode_started``: phase, phase_index, episode (1-based), skill, guidance (bool),
-  n_demonstrations, query_states (N x state_dim), features (N x S), theta (R x S), lam,
-  optimal (N x R), exact (bool), guidance_modality, seed {study_seed, spawn_key}.
-- ``demonstration``: phase, phase_index, episode, index (0-based), state, action, optimal,
-  guidance_shown (bool), time_to_first_input_s, drawing_duration_s, response_time_s (from
-  the state's appearance to the submission, measured by the engine), input (method, redraws,
-  ... as given by the caller).
-- ``episode_finished``: phase, phase_index, episode, skill, guidance, actions (N x R),
-  optimal, theta_hat (R x S), teaching_error, rho1, rho2, bound, residual, contributions
-  (N,), exact, reproduction {diverged, diverged_at, final_position, duration_s}, started_at,
-  duration_s (wall clock from episode_started, interruptions included).
-- ``session_finished``.
+The events it writes, the schema version they carry and the migration of older logs:
+``mt_widgets.study.schema``.
 """
 
 from __future__ import annotations
@@ -110,10 +84,12 @@ import mt_widgets
 from mt_widgets.core import SeedSchedule, TeachingEpisode
 from mt_widgets.core.validation import as_bool, as_positive
 
-from .log import LogError, MemoryLog, ParticipantLog, StudyFolder, read_events, to_jsonable
+from .log import LogError, MemoryLog, ParticipantLog, read_events, to_jsonable
 from .protocol import Phase, Protocol
+from .schema import LOG_FORMAT, migrate_events
 from .session_plan import as_utc
 from .steps import StudyStep
+from .study_folder import StudyFolder
 
 #: Timing keys ``submit_demonstration`` reads (seconds, None when unknown).
 TIMING_KEYS = ("time_to_first_input_s", "drawing_duration_s")
@@ -307,7 +283,7 @@ class Session:
         self._teaching_episodes: dict[tuple[int, int], TeachingEpisode] = {}
         self._ended: str | None = None
         self._entered_at = time.monotonic()
-        self._replay(log.events)
+        self._replay(migrate_events(log.events, protocol.sessions[0].id, str(log.path or "<memory>")))
 
     # -- construction -----------------------------------------------------------------------------
     @classmethod
@@ -366,7 +342,8 @@ class Session:
                            f"({study.protocol.hash[:19]}...); it will not be continued")
         session_ = cls(study.protocol, log, first["group"], enrolment, study, session=session)
         session_.window = first.get("window")
-        log.append("session_resumed", software_version=mt_widgets.__version__, protocol_hash=study.protocol.hash,
+        log.append("session_resumed", format=LOG_FORMAT, software_version=mt_widgets.__version__,
+                   protocol_hash=study.protocol.hash,
                    at=session_._describe(session_._slot), repaired_torn_line=log.repaired_torn_bytes)
         session_._enter()
         return session_
@@ -451,13 +428,12 @@ class Session:
                arrived_at=None) -> Session:
         plan = study.protocol.session(session)
         extra = {}
-        if len(study.protocol.sessions) > 1 or session is not None:
-            extra["session"] = plan.id
         if window is not None:
             extra.update(window=window, arrived_at=as_utc(arrived_at).isoformat(timespec="milliseconds")
                          .replace("+00:00", "Z"))
-        log.append("session_started", software_version=mt_widgets.__version__, protocol_hash=study.protocol.hash,
-                   protocol_name=study.protocol.name, group=enrolment["group"], enrolment=enrolment,
+        log.append("session_started", format=LOG_FORMAT, session=plan.id, software_version=mt_widgets.__version__,
+                   protocol_hash=study.protocol.hash, protocol_name=study.protocol.name, group=enrolment["group"],
+                   enrolment=enrolment,
                    lam=study.protocol.lam, numpy_version=np.__version__, python_version=platform.python_version(),
                    **extra)
         session_ = cls(study.protocol, log, enrolment["group"], enrolment, study, session=plan.id)
@@ -482,8 +458,9 @@ class Session:
             raise ValueError(f"group: expected one of {list(protocol.groups)}, got {group!r}")
         log = MemoryLog(participant, protocol.name)
         enrolment = {"participant": participant, "index": 0, "group": group, "method": "lesson"}
-        log.append("session_started", software_version=mt_widgets.__version__, protocol_hash=protocol.hash,
-                   protocol_name=protocol.name, group=group, enrolment=enrolment, lam=protocol.lam,
+        log.append("session_started", format=LOG_FORMAT, session=protocol.sessions[0].id,
+                   software_version=mt_widgets.__version__, protocol_hash=protocol.hash, protocol_name=protocol.name,
+                   group=group, enrolment=enrolment, lam=protocol.lam,
                    numpy_version=np.__version__, python_version=platform.python_version())
         # A lesson is the task only: the study's video, forms and questionnaires are for participants.
         session = cls(protocol, log, group, enrolment, around_task=False)
@@ -650,7 +627,7 @@ class Session:
         states = np.asarray(started["query_states"], dtype=float)
         actions = tuple(self._actions.get(key, []))
         common.update(episode=slot.episode, query_states=states, actions=actions, guidance=started["guidance"],
-                      guidance_modality=started.get("guidance_modality", "arrows+words"),
+                      guidance_modality=started["guidance_modality"],
                       teaching_episode=self._teaching_episode(key))
         if slot.kind == "demonstration":
             return Step("demonstration", **common, index=slot.index, state=states[slot.index])
@@ -866,7 +843,7 @@ class Session:
         self._actions.setdefault(key, []).append(action)
         self._complete()
         return Feedback(slot.index, started["guidance"], optimal.copy() if started["guidance"] else None, action,
-                        started.get("guidance_modality", "arrows+words"))
+                        started["guidance_modality"])
 
     def finish_episode(self, episode: TeachingEpisode | None = None) -> EpisodeResult:
         """Records the finished episode (what was learnt, its error and its reproduction) in the log.
