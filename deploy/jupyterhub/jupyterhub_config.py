@@ -163,11 +163,12 @@ if os.environ.get("MT_HUB_COURSE"):
 
 
 def _prepare_account(login: str, log=None) -> None:
-    """``login``'s system user, home and progress files (every roster login has them, so that no
-    student can take a classmate's progress file name first)."""
+    """``login``'s system user, home and, for a student, progress files (every student on the roster
+    has them from the hub's start, so that no student can take a classmate's file name first; the
+    class view lists a student who has not started yet with no events)."""
     entry = read_roster(ROSTER).entry(login)
     class_hub.ensure_system_user(login, HOMES / login, INSTRUCTORS, entry.is_admin)
-    if CLASS_FOLDER is not None:
+    if CLASS_FOLDER is not None and not entry.is_admin:
         class_hub.ensure_progress_files(CLASS_FOLDER, login, INSTRUCTORS_GID, log)
 
 

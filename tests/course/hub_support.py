@@ -51,7 +51,8 @@ def warm_numba_template(folder: Path) -> Path:
     """A numba cache warmed by deploy/jupyterhub/warm_numba_cache.py (what an install step does once)."""
     if not folder.exists():
         env = dict(os.environ, NUMBA_CACHE_DIR=str(folder), PYTHONPATH=str(REPO))
-        subprocess.run([sys.executable, str(REPO / "deploy" / "jupyterhub" / "warm_numba_cache.py")], env=env,
+        python = STUDENT_PYTHON if STUDENT_PYTHON.exists() else Path(sys.executable)  # the students' numba
+        subprocess.run([str(python), str(REPO / "deploy" / "jupyterhub" / "warm_numba_cache.py")], env=env,
                        check=True, capture_output=True, timeout=600)
     return folder
 
