@@ -49,7 +49,8 @@ from mt_widgets.study import (
     StudyFolder,
     load_protocol,
 )
-from mt_widgets.widgets import EpisodeWidget, TeachingCanvas, fill_words, get_theme, stop_animations
+from mt_widgets.widgets import EpisodeWidget, TeachingCanvas, get_theme, stop_animations
+from mt_widgets.widgets.theme import fill_words
 
 _log = logging.getLogger(__name__)
 
