@@ -1,9 +1,5 @@
-"""Shared test settings."""
-
-import os
-
-# Notebooks run by nbval inherit this: the one documented switch that shortens long work.
-os.environ.setdefault("MT_WIDGETS_FAST", "1")
+"""Shared test settings: the tiers' marks, the browser. A notebook's shortening under test is the
+root conftest.py's (tests/notebook_parameters.py)."""
 
 # Pages that browser tests serve through Voila or JupyterLab: they are driven by a browser,
 # not executed by nbval.
