@@ -337,7 +337,8 @@ class SwiftPro:
 
         The stop command never waits for a request slot. 4.5+ sends ``S1100`` (clears the
         planner); 4.0-4.4 ``S1000 V0`` (pause: nothing more moves until :meth:`resume`);
-        3.x ``G2203``. Whether the firmware ever answers the cut move is UNCERTAIN, so its
+        3.x ``M2000`` (clears the command queue, quick-stops the steppers; ``G2203`` only waits
+        for the end of motion). Whether the firmware ever answers the cut move is UNCERTAIN, so its
         number is retired here. The :attr:`stop_switch` stays held until :meth:`resume`.
         """
         self._motion.stop()

@@ -45,7 +45,7 @@ class Dialect:
         return name[1:] if name.startswith("VSwift") else name
 
 
-FIRMWARE_3 = Dialect("3.x", "G0", 60.0, True, ("G2203",), False, None)
+FIRMWARE_3 = Dialect("3.x", "G0", 60.0, True, ("M2000",), False, None)
 FIRMWARE_4_0 = Dialect("4.0-4.4", "G1", 1.0, False, ("S1000", ("V", 0)), True, ("S1000", ("V", 1)))
 FIRMWARE_4_5 = Dialect("4.5+", "G1", 1.0, False, ("S1100",), False, None)
 
