@@ -805,7 +805,8 @@ class SimulatedSwiftPro:
         """The 4.x command table: uarm_protocol.c's G/M/P/S switches (docs/uarm-protocol.md)."""
         self._moves_4x = {
             "G0": self._g0_g1, "G1": self._g0_g1,
-            "G2201": lambda c, t: self._fixed_move("S f R f H f F f", c, self._polar_target, True),
+            "G2201": lambda c, t: self._fixed_move(
+                "S f R f H f F f", c, lambda s, r, h, f: self._polar_target(s, r, h), True),
             "G2202": lambda c, t: self._fixed_move("N d V f F f", c, self._g2202_target, False),
             "G2204": lambda c, t: self._fixed_move(
                 "X f Y f Z f F f", c, lambda x, y, z, f: tuple(
