@@ -376,8 +376,13 @@ class SwiftPro:
         self._request("M2210", ("F", frequency_hz), ("T", duration_ms), timeout=self.timeout + duration_ms / 1000)
 
     def attach(self) -> None:
-        """Power all motors (M17)."""
+        """Power all motors (M17) and make the firmware re-read where the arm is (the
+        dialect's ``refresh_position``: after a move by hand, 3.x would otherwise plan from
+        where it believes the arm still is)."""
         self._request("M17")
+        refresh = self.dialect.refresh_position
+        if refresh is not None:
+            self._request(refresh[0], *refresh[1:])
         self._motion.forget_position()
 
     def detach(self) -> None:
