@@ -304,6 +304,12 @@ class UArmBridge:
         with self._busy:
             self._travel_to(target, self._job_generation())
 
+    def return_to(self, state_cm) -> None:
+        """Bring the arm to a query state from wherever it is (e.g. where a hand left it):
+        into the envelope first if it is outside (:meth:`home_if_outside`), then there."""
+        self.home_if_outside()
+        self.show_state(state_cm)
+
     def execute(self, trajectory, on_step: Callable[[int, tuple[float, float]], None] | None = None
                 ) -> ExecutionReport:
         """Play a reproduction on the arm, one plant step per move; never raises a connector error.
