@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from mt_widgets.core.validation import as_bool
-from mt_widgets.study.log import StudyFolder
 from mt_widgets.study.session import Session
+from mt_widgets.study.study_folder import StudyFolder
 
 from .plan import default_parameters, episode_plan, imagined_line_target, participant_id, resolve_protocol, teacher_seed
 from .progress import Progress

@@ -18,9 +18,9 @@ from mt_widgets.study import (
     read_events,
     read_study,
 )
-from mt_widgets.study.log import OUTCOME_FILE
 from mt_widgets.study.protocol import PROTOCOL_FOLDER
 from mt_widgets.study.session import timeline
+from mt_widgets.study.study_folder import OUTCOME_FILE
 
 from .scripted import SHORT_PROTOCOL, scripted_action
 
