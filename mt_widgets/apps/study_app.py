@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 from ipywidgets import HTML, Button, Combobox, Dropdown, HBox, Layout, RadioButtons, Text, Textarea, VBox
 
-from mt_widgets.core import TeachingEpisode, running_under_test
+from mt_widgets.core import TeachingEpisode
 from mt_widgets.study import (
     BUILTIN_PROTOCOLS,
     LogError,
@@ -49,7 +49,8 @@ from mt_widgets.study import (
     StudyFolder,
     load_protocol,
 )
-from mt_widgets.widgets import EpisodeWidget, TeachingCanvas, fill_words, get_theme, stop_animations
+from mt_widgets.widgets import EpisodeWidget, TeachingCanvas, get_theme, stop_animations
+from mt_widgets.widgets.theme import fill_words
 
 _log = logging.getLogger(__name__)
 
@@ -705,4 +706,4 @@ def participant_texts(widget) -> list[str]:
 
 
 __all__ = ["ExperimenterPanel", "LOG_FOLDER_VARIABLE", "QuestionForm", "StudyApp", "VideoStep", "default_log_folder",
-           "participant_texts", "running_under_test"]
+           "participant_texts"]

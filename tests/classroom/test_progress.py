@@ -114,6 +114,7 @@ def _write_many(folder, count, barrier):
         recorder.record("demonstration", lesson="04", index=number, payload="x" * 3000)
 
 
+@pytest.mark.slow
 def test_two_kernels_of_one_student_writing_at_once_lose_nothing(tmp_path):
     create_class_folder(tmp_path)
     context = multiprocessing.get_context("fork")

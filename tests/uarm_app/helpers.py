@@ -30,7 +30,7 @@ def is_move(line: str) -> bool:
 
 
 def is_stop(line: str) -> bool:
-    return re.match(r"^#\d+ (S1100|S1000 V0|G2203)\b", line) is not None
+    return re.match(r"^#\d+ (S1100|S1000 V0|M2000)\b", line) is not None
 
 
 __all__ = ["arm_is_moving", "device_of", "is_move", "is_stop", "moves", "parse_fields", "received", "sim_url",
