@@ -127,7 +127,7 @@ if os.environ.get("MT_HUB_API_TOKEN"):
         "scopes": ["admin:users", "admin:servers", "tokens", "access:servers", "read:users"],
         "services": ["class-admin"],
     })
-CULL_IDLE_S = int(os.environ.get("MT_HUB_CULL_IDLE_SECONDS", "3600"))
+CULL_IDLE_S = int(os.environ.get("MT_HUB_CULL_IDLE_SECONDS", str(class_hub.DEFAULT_CULL_IDLE_S)))
 if CULL_IDLE_S > 0:
     # Stops servers idle that long; a student's saved notebooks and progress stay in their home.
     c.JupyterHub.services.append({
@@ -144,8 +144,8 @@ if CULL_IDLE_S > 0:
 # -- limits ----------------------------------------------------------------------------------------
 LIMITS = None
 if os.environ.get("MT_HUB_LIMITS", "on") != "off":
-    LIMITS = CgroupLimits(class_hub.parse_bytes(os.environ.get("MT_HUB_MEM_LIMIT", "1G")),
-                          float(os.environ.get("MT_HUB_CPU_LIMIT", "1.0")),
+    LIMITS = CgroupLimits(class_hub.parse_bytes(os.environ.get("MT_HUB_MEM_LIMIT", class_hub.DEFAULT_MEM_LIMIT)),
+                          float(os.environ.get("MT_HUB_CPU_LIMIT", class_hub.DEFAULT_CPU_LIMIT)),
                           parent=os.environ.get("MT_HUB_CGROUP", "mt-hub"))
     _problem = LIMITS.problem()
     if _problem:
@@ -179,7 +179,8 @@ for _entry in roster.entries:
 
 
 class ClassSpawner(LocalProcessSpawner):
-    """A student's server as their own system user, inside their cgroups, with umask 027."""
+    """A student's server as their own system user, inside their cgroups (umask 027 comes from
+    student-config/jupyter_server_config.py, which Zero to JupyterHub's pods load too)."""
 
     def make_preexec_fn(self, name):
         drop_root = super().make_preexec_fn(name)
@@ -188,7 +189,6 @@ class ClassSpawner(LocalProcessSpawner):
         def preexec():
             if join is not None:
                 join()  # while still root: the group's files are root's
-            os.umask(class_hub.STUDENT_UMASK)
             drop_root()
 
         return preexec
