@@ -201,7 +201,9 @@ c.Spawner.start_timeout = 180
 c.Spawner.http_timeout = 180
 
 # Passed on from the hub's environment: the class folder, the exchange, and (tests) the checkout.
-_passed_on = ("MT_WIDGETS_CLASS_FOLDER", "MT_WIDGETS_EXCHANGE", "MT_WIDGETS_FAST", "PYTHONPATH")
+_passed_on = ("MT_WIDGETS_CLASS_FOLDER", "MT_WIDGETS_EXCHANGE", "MT_WIDGETS_FAST")
+# student-site/ first: it leaves out a package that costs every server seconds at start (its docstring).
+_python_path = os.pathsep.join([str(HERE / "student-site"), *filter(None, [os.environ.get("PYTHONPATH")])])
 c.Spawner.environment = {
     # numba's compiled rollouts go to each student's home, never into the shared installation.
     "NUMBA_CACHE_DIR": lambda spawner: str(HOMES / spawner.user.name / ".cache" / "numba"),
@@ -211,6 +213,7 @@ c.Spawner.environment = {
     # nbgrader's student side and the server's settings (IPC kernels, extensions) come from here.
     "JUPYTER_CONFIG_PATH": str(HERE / "student-config"),
     "MT_HUB_ROLE": lambda spawner: "instructor" if spawner.user.admin else "student",
+    "PYTHONPATH": _python_path,
     **{name: os.environ[name] for name in _passed_on if os.environ.get(name)},
 }
 

@@ -162,6 +162,7 @@ def test_each_students_caches_and_runtime_are_their_own_and_nothing_writes_into_
     assert environment["NUMBA_CACHE_DIR"](spawner) == str(setting.tmp / "homes" / ANN / ".cache" / "numba")
     assert environment["JUPYTER_RUNTIME_DIR"](spawner) == str(Path("/tmp", setting.cgroup, ANN))
     assert environment["PYTHONDONTWRITEBYTECODE"] == "1"
+    assert environment["PYTHONPATH"].split(os.pathsep)[0] == str(HUB / "student-site")
     assert environment["MT_WIDGETS_CLASS_FOLDER"] == str(setting.tmp / "class")
     assert environment["MT_WIDGETS_EXCHANGE"] == "/srv/exchange"
     assert environment["MT_HUB_ROLE"](spawner) == "student"
@@ -218,3 +219,13 @@ def test_the_zero_to_jupyterhub_values_carry_the_same_authenticator_roster_isola
     dockerfile = (HUB / "z2jh" / "Dockerfile").read_text()
     assert f"COPY deploy/jupyterhub/student-config {single['extraEnv']['JUPYTER_CONFIG_PATH']}" in dockerfile
     assert "roster_authenticator.py" in dockerfile and "AS hub" in dockerfile and "AS singleuser" in dockerfile
+
+
+def test_students_servers_leave_out_the_package_that_costs_seconds_at_every_start():
+    code = ("import sys, jsonschema, jupyter_events\n"
+            "jsonschema.validate({'a': 1}, {'type': 'object', 'properties': {'a': {'type': 'integer'}}})\n"
+            "print('rfc3987_syntax' in sys.modules)")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(HUB / "student-site"), str(REPO)]))
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "False"
