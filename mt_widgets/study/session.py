@@ -1,13 +1,8 @@
 """The session engine: a headless state machine that runs one participant through a protocol.
 
-The engine knows nothing of the paper beyond the protocol file. A protocol unrolls into a
-fixed timeline of steps::
-
-    welcome -> the protocol's [[before]] steps (consent right after the welcome when they
-    have none) -> instructions -> practice (if duration_s > 0)
-    -> for each phase: phase_intro
-         -> for each episode: demonstration x N -> episode_end -> reproduction
-    -> the protocol's [[after]] steps -> thank_you
+The engine knows nothing of the paper beyond the protocol file. A protocol session unrolls
+into a fixed timeline of steps (``mt_widgets.study.timeline``, which also draws each episode's
+query states); the log is replayed against it (``mt_widgets.study.replay``).
 
 A session can also end early: consent declined, screened out by an eligibility step, or
 withdrawn (``withdraw``, at any step). Then ``finished`` is True, ``ended`` names why, the
@@ -81,15 +76,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import mt_widgets
-from mt_widgets.core import SeedSchedule, TeachingEpisode
+from mt_widgets.core import TeachingEpisode
 from mt_widgets.core.validation import as_bool, as_positive
 
 from .log import LogError, MemoryLog, ParticipantLog, read_events, to_jsonable
 from .protocol import Phase, Protocol
+from .replay import describe, replay
 from .schema import LOG_FORMAT, migrate_events
 from .session_plan import as_utc
 from .steps import StudyStep
 from .study_folder import StudyFolder
+from .timeline import ENDING_EVENTS, Slot, StepKind, episode_query_states, timeline  # noqa: F401 (ENDING_EVENTS: public here since format 1)
 
 #: Timing keys ``submit_demonstration`` reads (seconds, None when unknown).
 TIMING_KEYS = ("time_to_first_input_s", "drawing_duration_s")
@@ -111,50 +108,6 @@ class WindowError(LogError):
     def __init__(self, check, session: str):
         self.check, self.session, self.message = check, session, check.message
         super().__init__(check.message)
-
-
-@dataclass(frozen=True)
-class _Slot:
-    kind: str
-    phase_index: int | None = None
-    episode: int | None = None   # 1-based within the phase
-    index: int | None = None     # 0-based demonstration within the episode
-
-
-#: Events that end a session before the thank-you, and the text key each ends with.
-ENDING_EVENTS = {"consent_declined": "declined", "screened_out": "ineligible", "withdrawn": "withdrawn"}
-
-
-def timeline(protocol: Protocol, around_task: bool = True, session: str | None = None) -> list[_Slot]:
-    """One session of the protocol unrolled into the steps a participant goes through, in order.
-
-    A step of the session's ``before`` / ``after`` lists is ``_Slot("step", index=i)`` with i
-    its index in the session's ``steps``. ``around_task=False`` leaves those steps out (a lesson
-    runs the task only: welcome, the default consent, instructions, practice, the phases).
-
-    Args:
-        protocol: the ``Protocol``.
-        around_task: whether the protocol's steps around the task are included.
-        session: the id of one of ``protocol.sessions`` (None: the first).
-    """
-    plan = protocol.session(session)
-    before = plan.before if around_task else ()
-    slots = [_Slot("welcome")]
-    if plan.default_consent and not any(step.kind == "consent" for step in before):
-        slots.append(_Slot("consent"))
-    slots += [_Slot("step", index=i) for i in range(len(before))]
-    slots.append(_Slot("instructions"))
-    if plan.practice and protocol.practice.duration_s > 0:
-        slots.append(_Slot("practice"))
-    for phase in plan.phases:
-        slots.append(_Slot("phase_intro", phase.index))
-        for episode in range(1, phase.episodes + 1):
-            slots += [_Slot("demonstration", phase.index, episode, i) for i in range(phase.demonstrations)]
-            slots += [_Slot("episode_end", phase.index, episode), _Slot("reproduction", phase.index, episode)]
-    if around_task:
-        slots += [_Slot("step", index=len(plan.before) + j) for j in range(len(plan.after))]
-    slots.append(_Slot("thank_you"))
-    return slots
 
 
 @dataclass(frozen=True)
@@ -276,14 +229,15 @@ class Session:
         #: Where the arrival fell in the session's window (``WindowCheck.as_dict()``), or None.
         self.window: dict | None = None
         self._slots = timeline(protocol, around_task, self.plan.id)
-        self._position = 0
-        self._episodes: dict[tuple[int, int], dict] = {}
-        self._actions: dict[tuple[int, int], list[np.ndarray]] = {}
-        self._finished_episodes: dict[tuple[int, int], dict] = {}
+        replayed = replay(migrate_events(log.events, protocol.sessions[0].id, str(log.path or "<memory>")),
+                          self._slots, self.plan)
+        self._position = replayed.position
+        self._episodes: dict[tuple[int, int], dict] = replayed.episodes
+        self._actions: dict[tuple[int, int], list[np.ndarray]] = replayed.actions
+        self._finished_episodes: dict[tuple[int, int], dict] = replayed.finished
         self._teaching_episodes: dict[tuple[int, int], TeachingEpisode] = {}
-        self._ended: str | None = None
+        self._ended: str | None = replayed.ended
         self._entered_at = time.monotonic()
-        self._replay(migrate_events(log.events, protocol.sessions[0].id, str(log.path or "<memory>")))
 
     # -- construction -----------------------------------------------------------------------------
     @classmethod
@@ -467,92 +421,34 @@ class Session:
         session._enter()
         return session
 
-    # -- replay --------------------------------------------------------------------------------------
-    def _completes(self, event: dict) -> _Slot | None:
-        kind = event["type"]
-        if kind == "screen_done":
-            return _Slot(event["screen"], event.get("phase_index"), event.get("episode"))
-        if kind == "consent_given":
-            return self._step_slot(event["step"]) if event.get("step") else _Slot("consent")
-        if kind == "step_done":
-            return self._step_slot(event["step"])
-        if kind == "practice_finished":
-            return _Slot("practice")
-        if kind == "demonstration":
-            return _Slot("demonstration", event["phase_index"], event["episode"], event["index"])
-        if kind == "episode_finished":
-            return _Slot("episode_end", event["phase_index"], event["episode"])
-        return None
-
-    def _step_slot(self, step_id: str) -> _Slot:
-        ids = [step.id for step in self.plan.steps]
-        if step_id not in ids:
-            raise LogError(f"step {step_id!r} in the log is not a step of this protocol ({ids})")
-        return _Slot("step", index=ids.index(step_id))
-
-    def _replay(self, events: list[dict]) -> None:
-        for event in events:
-            if event["type"] in ENDING_EVENTS:
-                self._ended = ENDING_EVENTS[event["type"]]
-                continue
-            slot = self._completes(event)
-            if event["type"] == "episode_started":
-                self._episodes[(event["phase_index"], event["episode"])] = event
-                continue
-            if slot is None:
-                continue
-            expected = self._slots[self._position] if self._position < len(self._slots) else None
-            if slot != expected:
-                raise LogError(f"event seq {event['seq']} ({event['type']}) completes {self._describe(slot)}, "
-                               f"but the protocol expects {self._describe(expected)} next; the log does not match "
-                               f"this protocol or holds a duplicate")
-            if slot.kind == "demonstration":
-                self._actions.setdefault((slot.phase_index, slot.episode), []).append(np.asarray(event["action"]))
-            if slot.kind == "episode_end":
-                self._finished_episodes[(slot.phase_index, slot.episode)] = event
-            self._position += 1
-
-    def _describe(self, slot: _Slot | None) -> str:
-        if slot is None:
-            return "the end of the protocol"
-        if slot.kind == "step":
-            step = self.plan.steps[slot.index]
-            return f"{step.kind} step {step.id!r}"
-        where = []
-        if slot.phase_index is not None:
-            where.append(self.plan.phases[slot.phase_index].id)
-        if slot.episode is not None:
-            where.append(f"episode {slot.episode}")
-        if slot.index is not None:
-            where.append(f"demonstration {slot.index + 1}")
-        return slot.kind + (f" ({', '.join(where)})" if where else "")
+    def _describe(self, slot: Slot | None) -> str:
+        return describe(slot, self.plan)
 
     # -- entering a step ----------------------------------------------------------------------------
     @property
-    def _slot(self) -> _Slot:
+    def _slot(self) -> Slot:
         return self._slots[self._position]
 
-    def _phase(self, slot: _Slot) -> Phase:
+    def _phase(self, slot: Slot) -> Phase:
         return self.plan.phases[slot.phase_index]
 
     def _enter(self) -> None:
         """Logs what a step needs before it is shown (query states, practice start, the end)."""
         slot = self._slot
         self._entered_at = time.monotonic()
-        if slot.kind == "demonstration" and (slot.phase_index, slot.episode) not in self._episodes:
+        if slot.kind == StepKind.DEMONSTRATION and (slot.phase_index, slot.episode) not in self._episodes:
             self._start_episode(slot)
-        elif slot.kind == "practice":
+        elif slot.kind == StepKind.PRACTICE:
             self.log.append("practice_started", skill=self.protocol.practice.skill,
                             duration_s=self.protocol.practice.duration_s)
-        elif slot.kind == "thank_you" and not any(e["type"] == "session_finished" for e in self.log.events):
+        elif slot.kind == StepKind.THANK_YOU and not any(e["type"] == "session_finished" for e in self.log.events):
             self.log.append("session_finished")
 
-    def _start_episode(self, slot: _Slot) -> None:
+    def _start_episode(self, slot: Slot) -> None:
         phase = self._phase(slot)
         skill = self.protocol.skills[phase.skill]
-        participant = self.enrolment["index"] if self.protocol.query_states == "per-participant" else None
-        seed = SeedSchedule(self.protocol.seed).seed(phase.states_index, slot.episode - 1, participant)
-        states = skill.query_states(seed=seed, n=phase.demonstrations)
+        states, seed = episode_query_states(self.protocol, phase.states_index, slot.episode, phase.demonstrations,
+                                            phase.skill, participant=self.enrolment["index"])
         teaching = self._new_teaching_episode(skill, states)
         event = self.log.append(
             "episode_started", phase=phase.id, phase_index=phase.index, episode=slot.episode, skill=phase.skill,
@@ -574,12 +470,12 @@ class Session:
     def finished(self) -> bool:
         """True when nothing is left to do: at the thank-you step (every step of the protocol is
         logged), or once the session ended early (``ended``)."""
-        return self._ended is not None or self._slot.kind == "thank_you"
+        return self._ended is not None or self._slot.kind == StepKind.THANK_YOU
 
     @property
     def completed(self) -> bool:
         """True at the thank-you step of a session that did not end early."""
-        return self._ended is None and self._slot.kind == "thank_you"
+        return self._ended is None and self._slot.kind == StepKind.THANK_YOU
 
     @property
     def ended(self) -> str | None:
@@ -604,23 +500,23 @@ class Session:
         texts = self.plan.texts
         if self._ended is not None:
             return Step("ended", texts[self._ended], ended=self._ended)
-        if slot.kind == "thank_you" and self.plan.index + 1 < len(self.protocol.sessions):
+        if slot.kind == StepKind.THANK_YOU and self.plan.index + 1 < len(self.protocol.sessions):
             upcoming = self.protocol.sessions[self.plan.index + 1]
             return Step("thank_you", texts["thank_you"], reentry_code=self.enrolment.get("reentry_code"),
                         next_session={"id": upcoming.id, "window": upcoming.window.describe()})
         if slot.kind in ("welcome", "consent", "instructions", "thank_you"):
             return Step(slot.kind, texts[slot.kind])
-        if slot.kind == "step":
+        if slot.kind == StepKind.STEP:
             step = self.plan.steps[slot.index]
             return Step(step.kind, step.text, study_step=step)
-        if slot.kind == "practice":
+        if slot.kind == StepKind.PRACTICE:
             practice = self.protocol.practice
             return Step("practice", practice.text, skill=practice.skill, duration_s=practice.duration_s,
                         practice_reproduction=practice.reproduction)
         phase = self._phase(slot)
         common = dict(phase=phase.id, phase_index=phase.index, n_episodes=phase.episodes,
                       n_demonstrations=phase.demonstrations, skill=phase.skill)
-        if slot.kind == "phase_intro":
+        if slot.kind == StepKind.PHASE_INTRO:
             return Step("phase_intro", phase.instructions, **common)
         key = (slot.phase_index, slot.episode)
         started = self._episodes[key]
@@ -629,9 +525,9 @@ class Session:
         common.update(episode=slot.episode, query_states=states, actions=actions, guidance=started["guidance"],
                       guidance_modality=started["guidance_modality"],
                       teaching_episode=self._teaching_episode(key))
-        if slot.kind == "demonstration":
+        if slot.kind == StepKind.DEMONSTRATION:
             return Step("demonstration", **common, index=slot.index, state=states[slot.index])
-        if slot.kind == "episode_end":
+        if slot.kind == StepKind.EPISODE_END:
             return Step("episode_end", **common)
         return Step("reproduction", texts["reproduction"], **common, result=self._result(key))
 
@@ -664,11 +560,11 @@ class Session:
                              event["reproduction"]["diverged"], self._teaching_episode(key))
 
     # -- driving --------------------------------------------------------------------------------------
-    def _expect(self, call: str, *kinds: str) -> _Slot:
+    def _expect(self, call: str, *kinds: str) -> Slot:
         slot = self._slot
         if self._ended is not None:
             raise SessionStateError(f"{call}: the session ended ({self._ended}); nothing more is recorded")
-        kind = self.plan.steps[slot.index].kind if slot.kind == "step" else slot.kind
+        kind = self.plan.steps[slot.index].kind if slot.kind == StepKind.STEP else slot.kind
         if kind not in kinds:
             raise SessionStateError(f"{call}: expected the current step to be {' or '.join(kinds)}, it is "
                                     f"{self._describe(slot)}")
@@ -686,13 +582,13 @@ class Session:
         """
         slot = self._expect("advance", "welcome", "consent", "instructions", "phase_intro", "reproduction", "text",
                             "information")
-        if slot.kind == "step":
+        if slot.kind == StepKind.STEP:
             step = self.plan.steps[slot.index]
             if step.kind == "consent":
                 self.log.append("consent_given", step=step.id)
             else:
                 self.log.append("step_done", step=step.id, kind=step.kind)
-        elif slot.kind == "consent":
+        elif slot.kind == StepKind.CONSENT:
             self.log.append("consent_given")
         else:
             fields = {}
@@ -707,7 +603,7 @@ class Session:
     def decline_consent(self) -> Step:
         """"I do not agree": ends the session (logged; the participant is kept out of the analysis)."""
         slot = self._expect("decline_consent", "consent")
-        step_id = self.plan.steps[slot.index].id if slot.kind == "step" else None
+        step_id = self.plan.steps[slot.index].id if slot.kind == StepKind.STEP else None
         self.log.append("consent_declined", step=step_id)
         self._end("declined", step=step_id)
         return self.current_step()
