@@ -43,10 +43,11 @@ from pathlib import Path
 import numpy as np
 
 import mt_widgets
+from mt_widgets.core.validation import as_bool
 
 from . import jsonl
 from .jsonl import Lock, LogError, append_line, encode, read_jsonl
-from .participants import block_assignment, validate_participant_id
+from .participants import block_assignment, new_reentry_code, normalise_reentry_code, validate_participant_id
 from .protocol import Protocol, protocol_from_data
 
 STUDY_FILE = "study.json"
@@ -172,7 +173,8 @@ class ParticipantLog:
         self.path, self._fd, self._lock_path = path, fd, lock_path
         self.events = events
         self.repaired_torn_bytes = repaired_torn_bytes
-        self.participant = path.stem
+        # "P07.jsonl" or a later session's "P07.ses-followup.jsonl": IDs hold no ".".
+        self.participant = path.name.split(".")[0]
         self.study = events[0]["study"] if events else None
         self.lock_timeout_s = lock_timeout_s
         self._size = os.fstat(fd).st_size
@@ -404,8 +406,57 @@ class StudyFolder:
         return cls(folder)
 
     # -- participants ---------------------------------------------------------------------------
-    def log_path(self, participant_id: str) -> Path:
-        return self.folder / f"{participant_id}.jsonl"
+    def log_path(self, participant_id: str, session: str | None = None) -> Path:
+        """The log of a participant's session: ``<ID>.jsonl`` for the first session, and
+        ``<ID>.ses-<session>.jsonl`` for a later one (an ID holds no ".", so none collides)."""
+        if session is None or session == self.protocol.sessions[0].id:
+            return self.folder / f"{participant_id}.jsonl"
+        self.protocol.session(session)  # refuses an unknown session
+        return self.folder / f"{participant_id}.ses-{session}.jsonl"
+
+    def participant_for_code(self, reentry_code: str) -> str:
+        """The participant a re-entry code belongs to (``normalise_reentry_code`` reads what was typed).
+
+        Raises:
+            TypeError, ValueError: not a code of that form.
+            LogError: no participant of this study has it.
+        """
+        code = normalise_reentry_code(reentry_code)
+        for record in self.enrolments():
+            if record.get("reentry_code") == code:
+                return record["participant"]
+        raise LogError("reentry_code: no participant of this study has this code; check it and type it again")
+
+    def participants(self, blinded: bool = True) -> list[dict]:
+        """Who is enrolled and how far they are, for a caller that must not see groups.
+
+        Args:
+            blinded: True (the default): rows hold participant, state and each session's state
+                ("not started", "in progress", "completed") and nothing of the assignment (no
+                group, method, block slot, enrolment number or re-entry code). False: the
+                experimenter's rows of ``status`` with the sessions added.
+        """
+        blinded = as_bool("blinded", blinded)
+        rows = []
+        for row in self.status():
+            sessions = {}
+            for session in self.protocol.sessions:
+                path = self.log_path(row["participant"], session.id)
+                if not path.exists():
+                    sessions[session.id] = "not started"
+                    continue
+                try:
+                    events, _ = read_events(path)
+                except LogError:
+                    sessions[session.id] = "damaged"
+                    continue
+                done = any(e["type"] == "session_finished" for e in events)
+                sessions[session.id] = "completed" if done else "in progress"
+            if blinded:
+                rows.append({"participant": row["participant"], "state": row["state"], "sessions": sessions})
+            else:
+                rows.append({**row, "sessions": sessions})
+        return rows
 
     def enrolments(self) -> list[dict]:
         """Every enrolment record, in enrolment order.
@@ -451,16 +502,19 @@ class StudyFolder:
     def participant_ids(self) -> list[str]:
         return [record["participant"] for record in self.enrolments()]
 
-    def enrol(self, participant_id: str, group: str | None = None) -> dict:
+    def enrol(self, participant_id: str, group: str | None = None, parameters: dict | None = None) -> dict:
         """Enrols a new participant and assigns their group, under the study lock.
 
         Args:
             participant_id: a new pseudonymous ID.
             group: None for the protocol's block randomisation, or a group chosen by the
                 experimenter (recorded as such).
+            parameters: identifying URL parameters to record (an online participant's
+                STUDY_ID and SESSION_ID), or None.
 
         Returns:
-            The enrolment record: participant, index, group, method, enrolled_at.
+            The enrolment record: participant, index, group, method, enrolled_at (and
+            reentry_code for a protocol of several sessions, url_parameters when given).
         """
         check_folder_writable(self.folder)
         if group is not None and group not in self.protocol.groups:
@@ -490,6 +544,14 @@ class StudyFolder:
                       "protocol_hash": self.protocol.hash}
             if replaces is not None:
                 record["replaces"] = replaces["participant"]
+            if len(self.protocol.sessions) > 1:
+                taken_codes = {r.get("reentry_code") for r in records}
+                code = new_reentry_code()
+                while code in taken_codes:
+                    code = new_reentry_code()
+                record["reentry_code"] = code
+            if parameters:
+                record["url_parameters"] = dict(parameters)
             if damaged:
                 # The last enrolment was killed mid-write: its bytes stay (append-only), and this
                 # record says it repairs them, so only such lines are tolerated mid-file.
@@ -500,8 +562,9 @@ class StudyFolder:
         return record
 
     def status(self) -> list[dict]:
-        """For the experimenter: each participant with group, whether their log is complete, and
-        their outcome ("completed", "in progress", or one of ``LOST_OUTCOMES``)."""
+        """For the experimenter: each participant with group, whether their (first session's) log
+        is complete, and their outcome ("completed" once their last session is, "in progress",
+        or one of ``LOST_OUTCOMES``). Holds the groups: ``participants()`` is the blinded list."""
         rows = []
         outcomes = self.outcomes()
         for record in self.enrolments():
@@ -514,8 +577,16 @@ class StudyFolder:
                     finished = any(e["type"] == "session_finished" for e in events)
                 except LogError:
                     n_events = -1
+            last = self.log_path(record["participant"], self.protocol.sessions[-1].id)
+            if last != path:  # several sessions: completed once the last one is
+                try:
+                    completed = last.exists() and any(e["type"] == "session_finished" for e in read_events(last)[0])
+                except LogError:
+                    completed = False
+            else:
+                completed = finished
             outcome = outcomes.get(record["participant"], {}).get("outcome")
-            state = outcome or ("completed" if finished else "in progress")
+            state = outcome or ("completed" if completed else "in progress")
             rows.append({**record, "events": n_events, "finished": finished, "state": state})
         return rows
 

@@ -84,7 +84,9 @@ from mt_widgets.core.guidance import GUIDANCE_MODALITIES
 from mt_widgets.core.validation import as_bool
 
 from .analysis_plan import ALTERNATIVES, PAPER_CHANGES, TESTS, AnalysisPlan, Change
+from .online import OnlineSettings, parse_online
 from .practice import PRACTICE_SKILLS
+from .session_plan import ProtocolSession, bids_label, parse_window
 from .steps import WITHDRAWAL_POLICIES, StudyStep, parse_steps
 
 FORMAT_VERSION = 1
@@ -131,8 +133,9 @@ class Phase:
         demonstrations: demonstrations per episode (>= 1).
         guidance: groups that see guidance after each demonstration.
         instructions: text shown before the phase, the same for every group.
-        states_index: index of the phase whose query-state seeds this phase uses (itself
-            unless ``states_from`` names another).
+        states_index: the seed position of this phase's query states: its position among every
+            session's phases, or that of the phase ``states_from`` names.
+        session: the id of the protocol session it belongs to ("main").
     """
 
     id: str
@@ -143,6 +146,7 @@ class Phase:
     guidance: tuple[str, ...]
     instructions: str
     states_index: int
+    session: str = "main"
 
     def guidance_for(self, group: str) -> bool:
         return group in self.guidance
@@ -218,6 +222,37 @@ class Protocol:
     after: tuple[StudyStep, ...] = ()
     withdrawal: str = "exclude"
     analysis: AnalysisPlan = AnalysisPlan()
+    #: The protocol's sessions in order (``ProtocolSession``); the first holds ``phases``,
+    #: ``before`` and ``after``. One unless the protocol has ``[[sessions]]``.
+    sessions: tuple = ()
+    #: The ``[online]`` table (``mt_widgets.study.online.OnlineSettings``), or None.
+    online: OnlineSettings | None = None
+
+    def __post_init__(self):
+        if not self.sessions:  # built by hand (tests, in-silico copies): one session of its phases
+            object.__setattr__(self, "sessions", (ProtocolSession("main", 0, self.phases, self.before, self.after,
+                                                                  self.texts, None),))
+
+    def session(self, session_id: str | None = None) -> ProtocolSession:
+        """The ``ProtocolSession`` with this id (None: the first)."""
+        if session_id is None:
+            return self.sessions[0]
+        for session in self.sessions:
+            if session.id == session_id:
+                return session
+        raise KeyError(f"session_id: expected one of {[s.id for s in self.sessions]}, got {session_id!r}")
+
+    @property
+    def all_phases(self) -> tuple[Phase, ...]:
+        """Every session's phases, in order (``phases`` is the first session's)."""
+        return tuple(phase for session in self.sessions for phase in session.phases)
+
+    def any_phase(self, phase_id: str) -> Phase:
+        """A phase of any session, by id."""
+        for phase in self.all_phases:
+            if phase.id == phase_id:
+                return phase
+        raise KeyError(f"phase_id: expected one of {[p.id for p in self.all_phases]}, got {phase_id!r}")
 
     @property
     def steps(self) -> tuple[StudyStep, ...]:
@@ -225,10 +260,11 @@ class Protocol:
         return self.before + self.after
 
     def step(self, step_id: str) -> StudyStep:
-        for step in self.steps:
+        for step in (step for session in self.sessions for step in session.steps):
             if step.id == step_id:
                 return step
-        raise KeyError(f"step_id: expected one of {[s.id for s in self.steps]}, got {step_id!r}")
+        raise KeyError(f"step_id: expected one of {[s.id for ses in self.sessions for s in ses.steps]}, "
+                       f"got {step_id!r}")
 
     def skill(self, key: str) -> Skill:
         """The ``Skill`` a phase or the practice names (``skills``: the paper's, the neutral
@@ -547,7 +583,7 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
 
     top_keys = ("format", "name", "title", "groups", "lambda", "seed", "query_states", "reproduction_duration_s",
                 "assignment", "texts", "practice", "phases", "skills", "guidance_modality", "withdrawal", "before",
-                "after", "analysis")
+                "after", "analysis", "session", "sessions", "online")
     check.unknown(raw, (), top_keys)
     version = check.get(raw, ("format",), "integer")
     if version != FORMAT_VERSION:
@@ -607,42 +643,14 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
     phases_raw = raw.get("phases")
     if not isinstance(phases_raw, list) or not phases_raw:
         check.fail(("phases",), "missing required field: expected at least one [[phases]] table")
-    phases, ids = [], {}
-    for i, entry in enumerate(phases_raw):
-        path = ("phases", i)
-        if not isinstance(entry, dict):
-            check.fail(path, f"expected a table, got {type(entry).__name__}")
-        check.unknown(entry, path, ("id", "skill", "episodes", "demonstrations", "guidance", "instructions",
-                                    "states_from"))
-        phase_id = check.get(entry, path + ("id",), "text", name=True)
-        if phase_id in ids:
-            check.fail(path + ("id",), f"expected a unique phase id, got {phase_id!r} again")
-        skill = check.get(entry, path + ("skill",), "text")
-        if skill not in skills:
-            check.fail(path + ("skill",), f"unknown skill {skill!r}; expected one of {sorted(skills)}")
-        episodes = check.get(entry, path + ("episodes",), "count", minimum=1, maximum=1000)
-        demonstrations = check.get(entry, path + ("demonstrations",), "count",
-                                   default=skills[skill].n_features, minimum=1, maximum=1000)
-        guidance = entry.get("guidance", [])
-        if not isinstance(guidance, list) or any(g not in groups for g in guidance):
-            check.fail(path + ("guidance",), f"expected a list of groups from {groups}, got {guidance!r}")
-        instructions = check.get(entry, path + ("instructions",), "text", nonempty=True)
-        states_index = i
-        if "states_from" in entry:
-            source_id = check.get(entry, path + ("states_from",), "text")
-            if source_id not in ids:
-                check.fail(path + ("states_from",), f"expected the id of an earlier phase ({list(ids)}), "
-                                                    f"got {source_id!r}")
-            earlier = phases[ids[source_id]]
-            if (earlier.skill, earlier.demonstrations) != (skill, demonstrations) or earlier.episodes < episodes:
-                check.fail(path + ("states_from",), f"phase {source_id!r} must have the same skill, the same number "
-                                                    f"of demonstrations and at least as many episodes to lend its "
-                                                    f"query states, got skill {earlier.skill!r}, "
-                                                    f"{earlier.demonstrations} demonstrations, {earlier.episodes} "
-                                                    f"episodes")
-            states_index = earlier.states_index
-        ids[phase_id] = i
-        phases.append(Phase(phase_id, i, skill, episodes, demonstrations, tuple(guidance), instructions, states_index))
+    first_id = check.get(raw, ("session",), "text", name=True, default="main")
+    phase_ids: dict[str, Phase] = {}
+    phases = _parse_phases(check, phases_raw, (), groups, skills, phase_ids, first_id)
+    main = ProtocolSession(first_id, 0, phases, before, after, texts, None, practice=True, default_consent=True)
+    sessions = [main] + _parse_sessions(check, raw, groups, skills, phase_ids, step_ids, folder, check_files,
+                                        texts, first_id)
+    online = parse_online(check, raw)
+    _check_changes(check, plan, phase_ids)
 
     data = copy.deepcopy(raw)
     if skills_table is not None:
@@ -659,9 +667,116 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
     for phase, entry in zip(phases, data["phases"]):
         entry.setdefault("demonstrations", phase.demonstrations)
         entry.setdefault("guidance", [])
+    for session, entry in zip(sessions[1:], data.get("sessions", [])):
+        for phase, phase_entry in zip(session.phases, entry["phases"]):
+            phase_entry.setdefault("demonstrations", phase.demonstrations)
+            phase_entry.setdefault("guidance", [])
     return Protocol(name, title, tuple(groups), lam, seed, query_states, duration, block_size, assignment_seed,
                     texts, practice, tuple(phases), data, text, source, skills, guidance_modality=modality,
-                    before=before, after=after, withdrawal=withdrawal, analysis=plan)
+                    before=before, after=after, withdrawal=withdrawal, analysis=plan, sessions=tuple(sessions),
+                    online=online)
+
+
+_PHASE_KEYS = ("id", "skill", "episodes", "demonstrations", "guidance", "instructions", "states_from")
+
+
+def _parse_phases(check, entries, prefix: tuple, groups, skills, ids: dict, session_id: str) -> tuple[Phase, ...]:
+    """The phases of one session; ``ids`` (phase id -> Phase, every session's so far) is updated.
+
+    A phase's ``states_index`` (the seed position of its query states) counts the phases of
+    every session before it, so a later session never reuses a seed unless ``states_from`` says so.
+    """
+    phases = []
+    offset = len(ids)
+    for i, entry in enumerate(entries):
+        path = prefix + ("phases", i)
+        if not isinstance(entry, dict):
+            check.fail(path, f"expected a table, got {type(entry).__name__}")
+        check.unknown(entry, path, _PHASE_KEYS)
+        phase_id = check.get(entry, path + ("id",), "text", name=True)
+        if phase_id in ids:
+            check.fail(path + ("id",), f"expected a unique phase id, got {phase_id!r} again")
+        skill = check.get(entry, path + ("skill",), "text")
+        if skill not in skills:
+            check.fail(path + ("skill",), f"unknown skill {skill!r}; expected one of {sorted(skills)}")
+        episodes = check.get(entry, path + ("episodes",), "count", minimum=1, maximum=1000)
+        demonstrations = check.get(entry, path + ("demonstrations",), "count",
+                                   default=skills[skill].n_features, minimum=1, maximum=1000)
+        guidance = entry.get("guidance", [])
+        if not isinstance(guidance, list) or any(g not in groups for g in guidance):
+            check.fail(path + ("guidance",), f"expected a list of groups from {groups}, got {guidance!r}")
+        instructions = check.get(entry, path + ("instructions",), "text", nonempty=True)
+        states_index = offset + i
+        if "states_from" in entry:
+            source_id = check.get(entry, path + ("states_from",), "text")
+            if source_id not in ids:
+                check.fail(path + ("states_from",), f"expected the id of an earlier phase ({list(ids)}), "
+                                                    f"got {source_id!r}")
+            earlier = ids[source_id]
+            if (earlier.skill, earlier.demonstrations) != (skill, demonstrations) or earlier.episodes < episodes:
+                check.fail(path + ("states_from",), f"phase {source_id!r} must have the same skill, the same number "
+                                                    f"of demonstrations and at least as many episodes to lend its "
+                                                    f"query states, got skill {earlier.skill!r}, "
+                                                    f"{earlier.demonstrations} demonstrations, {earlier.episodes} "
+                                                    f"episodes")
+            states_index = earlier.states_index
+        phase = Phase(phase_id, i, skill, episodes, demonstrations, tuple(guidance), instructions, states_index,
+                      session_id)
+        ids[phase_id] = phase
+        phases.append(phase)
+    return tuple(phases)
+
+
+_SESSION_KEYS = ("id", "welcome", "instructions", "reproduction", "thank_you", "window", "phases", "before", "after")
+
+
+def _parse_sessions(check, raw, groups, skills, phase_ids, step_ids, folder, check_files, texts,
+                    first_id) -> list[ProtocolSession]:
+    """The ``[[sessions]]`` after the first (see ``mt_widgets.study.session_plan``)."""
+    entries = raw.get("sessions", [])
+    if not isinstance(entries, list) or any(not isinstance(e, dict) for e in entries):
+        check.fail(("sessions",), f"expected a list of [[sessions]] tables, got {type(entries).__name__}")
+    sessions, labels = [], {bids_label(first_id): first_id}
+    for i, entry in enumerate(entries):
+        path = ("sessions", i)
+        check.unknown(entry, path, _SESSION_KEYS)
+        session_id = check.get(entry, path + ("id",), "text", name=True)
+        label = bids_label(session_id)
+        if not label or label in labels:
+            check.fail(path + ("id",), f"expected a session id of its own (ids compare without '-' and '_', as "
+                                       f"BIDS writes them), got {session_id!r}"
+                                       + (f", like {labels[label]!r}" if label in labels else ""))
+        labels[label] = session_id
+        own = {key: check.get(entry, path + (key,), "text", nonempty=True) for key in
+               ("welcome", "instructions", "thank_you")}
+        own["reproduction"] = check.get(entry, path + ("reproduction",), "text", nonempty=True,
+                                        default=texts["reproduction"])
+        session_texts = {**texts, **own}
+        window_table = check.get(entry, path + ("window",), "table")
+        window = parse_window(check, window_table, path + ("window",))
+        phases_raw = entry.get("phases")
+        if not isinstance(phases_raw, list) or not phases_raw:
+            check.fail(path + ("phases",), "missing required field: expected at least one [[sessions.phases]] table")
+        phases = _parse_phases(check, phases_raw, path, groups, skills, phase_ids, session_id)
+        before = parse_steps(check, entry, "before", folder, step_ids, check_files, prefix=path)
+        after = parse_steps(check, entry, "after", folder, step_ids, check_files, prefix=path)
+        sessions.append(ProtocolSession(session_id, i + 1, phases, before, after, session_texts, window,
+                                        practice=False, default_consent=False))
+    return sessions
+
+
+def _check_changes(check, plan: AnalysisPlan, phase_ids: dict) -> None:
+    """The analysis plan compares episodes that exist (phases of any session, episodes in range)."""
+    if plan.changes is PAPER_CHANGES and not all(c in phase_ids for c in ("P1", "P2", "P3", "P4", "P5")):
+        return  # the paper's default plan, for a protocol of other phases: the analysis says so itself
+    for i, change in enumerate(plan.changes):
+        for phase_id, episode in (change.before, change.after):
+            if phase_id not in phase_ids:
+                check.fail(("analysis", "changes"), f"expected changes[{i}] to name phases of the protocol "
+                                                    f"({list(phase_ids)}), got {phase_id!r}")
+            if episode is not None and not 1 <= episode <= phase_ids[phase_id].episodes:
+                check.fail(("analysis", "changes"), f"expected changes[{i}]'s episode of {phase_id!r} between 1 and "
+                                                    f"{phase_ids[phase_id].episodes}, got {episode}")
 
 
 def _parse_analysis(check, raw: dict) -> AnalysisPlan:

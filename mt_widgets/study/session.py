@@ -42,6 +42,30 @@ Driver API (the widget app, scripts and synthetic teachers all use this)::
 
 ``Session.lesson(protocol, group=...)`` runs the same engine unlogged, in memory, for lessons.
 
+Sessions and returning participants (a protocol with ``[[sessions]]``,
+``mt_widgets.study.session_plan``)::
+
+    session = Session.arrive(study, "P07", now=now)          # or reentry_code="K7QM-3XRD"
+    # a new ID: enrolled and started on the first session; an unfinished session: resumed;
+    # a finished one followed by another: the next one if ``now`` is in its window, else the
+    # protocol's rule: WindowError (.message, .check.opens_at) or started and flagged
+    # (session.window["status"] == "late"). session.plan is the ProtocolSession shown.
+    step = session.current_step()                             # at the end: step.kind == "thank_you",
+    step.reentry_code, step.next_session                      # the code to come back with
+
+    study.participants()                                      # blinded rows: no group, no code
+
+Online participants (``[online]``, ``mt_widgets.study.online``)::
+
+    arrival = protocol.online.participant_from_url(query)     # ParticipantIdError: nothing written
+    session = Session.arrive(study, arrival.participant_id, parameters=arrival.parameters)
+    ...
+    protocol.online.completion_url(outcome_of(session))       # completed / screened_out / ...
+
+A later session's log is ``<ID>.ses-<session>.jsonl`` beside ``<ID>.jsonl`` (the first), with
+the same event types; its ``session_started`` adds ``session``, and when the arrival was
+checked against a window, ``window`` (``WindowCheck.as_dict()``) and ``arrived_at``.
+
 Event types (besides ``seq``, ``type``, ``time``, ``participant``, ``study``):
 
 - ``session_started``: software_version, protocol_hash, protocol_name, group, enrolment
@@ -84,10 +108,11 @@ import numpy as np
 
 import mt_widgets
 from mt_widgets.core import SeedSchedule, TeachingEpisode
-from mt_widgets.core.validation import as_positive
+from mt_widgets.core.validation import as_bool, as_positive
 
-from .log import LogError, MemoryLog, ParticipantLog, StudyFolder, to_jsonable
+from .log import LogError, MemoryLog, ParticipantLog, StudyFolder, read_events, to_jsonable
 from .protocol import Phase, Protocol
+from .session_plan import as_utc
 from .steps import StudyStep
 
 #: Timing keys ``submit_demonstration`` reads (seconds, None when unknown).
@@ -96,6 +121,20 @@ TIMING_KEYS = ("time_to_first_input_s", "drawing_duration_s")
 
 class SessionStateError(RuntimeError):
     """A driver call that does not fit the current step (e.g. a second submission)."""
+
+
+class WindowError(LogError):
+    """A participant who came back outside their next session's window, where the protocol refuses.
+
+    Attributes:
+        check: the ``WindowCheck`` (status "early" or "late", opens_at, closes_at, delay_s).
+        session: the id of the session refused.
+        message: the words for the participant (the protocol's too_early_text / too_late_text).
+    """
+
+    def __init__(self, check, session: str):
+        self.check, self.session, self.message = check, session, check.message
+        super().__init__(check.message)
 
 
 @dataclass(frozen=True)
@@ -110,28 +149,34 @@ class _Slot:
 ENDING_EVENTS = {"consent_declined": "declined", "screened_out": "ineligible", "withdrawn": "withdrawn"}
 
 
-def timeline(protocol: Protocol, around_task: bool = True) -> list[_Slot]:
-    """The protocol unrolled into the steps a participant goes through, in order.
+def timeline(protocol: Protocol, around_task: bool = True, session: str | None = None) -> list[_Slot]:
+    """One session of the protocol unrolled into the steps a participant goes through, in order.
 
-    A step of the protocol's ``before`` / ``after`` lists is ``_Slot("step", index=i)`` with i
-    its index in ``protocol.steps``. ``around_task=False`` leaves those steps out (a lesson
+    A step of the session's ``before`` / ``after`` lists is ``_Slot("step", index=i)`` with i
+    its index in the session's ``steps``. ``around_task=False`` leaves those steps out (a lesson
     runs the task only: welcome, the default consent, instructions, practice, the phases).
+
+    Args:
+        protocol: the ``Protocol``.
+        around_task: whether the protocol's steps around the task are included.
+        session: the id of one of ``protocol.sessions`` (None: the first).
     """
-    before = protocol.before if around_task else ()
+    plan = protocol.session(session)
+    before = plan.before if around_task else ()
     slots = [_Slot("welcome")]
-    if not any(step.kind == "consent" for step in before):
+    if plan.default_consent and not any(step.kind == "consent" for step in before):
         slots.append(_Slot("consent"))
     slots += [_Slot("step", index=i) for i in range(len(before))]
     slots.append(_Slot("instructions"))
-    if protocol.practice.duration_s > 0:
+    if plan.practice and protocol.practice.duration_s > 0:
         slots.append(_Slot("practice"))
-    for phase in protocol.phases:
+    for phase in plan.phases:
         slots.append(_Slot("phase_intro", phase.index))
         for episode in range(1, phase.episodes + 1):
             slots += [_Slot("demonstration", phase.index, episode, i) for i in range(phase.demonstrations)]
             slots += [_Slot("episode_end", phase.index, episode), _Slot("reproduction", phase.index, episode)]
     if around_task:
-        slots += [_Slot("step", index=len(protocol.before) + j) for j in range(len(protocol.after))]
+        slots += [_Slot("step", index=len(plan.before) + j) for j in range(len(plan.after))]
     slots.append(_Slot("thank_you"))
     return slots
 
@@ -206,6 +251,9 @@ class Step:
             is built (one SVD) and rolled out once. A view demonstrates into it (after a resume
             it first restores the step's ``actions``); without a view the session records the
             logged actions into it when it finishes the episode.
+        reentry_code: at the thank-you of a session that another follows, the code the
+            participant notes to come back with (their ID works too); None otherwise.
+        next_session: there too, {"id": the next session, "window": when, in words}.
     """
 
     kind: str
@@ -228,6 +276,8 @@ class Step:
     practice_reproduction: bool = True
     ended: str | None = None
     teaching_episode: TeachingEpisode | None = field(default=None, repr=False, compare=False)
+    reentry_code: str | None = None
+    next_session: dict | None = None
 
 
 def _parse_time(stamp: str) -> float:
@@ -243,9 +293,13 @@ class Session:
     """One participant's run through a protocol. Build with ``start``, ``resume`` or ``lesson``."""
 
     def __init__(self, protocol: Protocol, log, group: str, enrolment: dict, folder: StudyFolder | None = None,
-                 around_task: bool = True):
+                 around_task: bool = True, session: str | None = None):
         self.protocol, self.log, self.group, self.enrolment, self.folder = protocol, log, group, enrolment, folder
-        self._slots = timeline(protocol, around_task)
+        #: The ``ProtocolSession`` this engine runs (the participant sees this session only).
+        self.plan = protocol.session(session)
+        #: Where the arrival fell in the session's window (``WindowCheck.as_dict()``), or None.
+        self.window: dict | None = None
+        self._slots = timeline(protocol, around_task, self.plan.id)
         self._position = 0
         self._episodes: dict[tuple[int, int], dict] = {}
         self._actions: dict[tuple[int, int], list[np.ndarray]] = {}
@@ -257,22 +311,26 @@ class Session:
 
     # -- construction -----------------------------------------------------------------------------
     @classmethod
-    def start(cls, study: StudyFolder, participant_id: str, group: str | None = None) -> Session:
-        """Enrols a new participant (validating the ID, assigning the group) and starts their log.
+    def start(cls, study: StudyFolder, participant_id: str, group: str | None = None,
+              parameters: dict | None = None) -> Session:
+        """Enrols a new participant (validating the ID, assigning the group) and starts their log
+        of the protocol's first session.
 
         Args:
             study: the study folder.
             participant_id: a new pseudonymous ID.
             group: None for the protocol's block randomisation, or the experimenter's choice.
+            parameters: identifying URL parameters to record with the enrolment (online).
         """
         if not isinstance(study, StudyFolder):
             raise ValueError(f"study: expected a StudyFolder, got {type(study).__name__}")
-        enrolment = study.enrol(participant_id, group)
+        enrolment = study.enrol(participant_id, group, parameters=parameters)
         log = ParticipantLog.create(study.log_path(participant_id), study.meta["study"])
         return cls._begin(study, log, enrolment)
 
     @classmethod
-    def resume(cls, study: StudyFolder, participant_id: str, lock_timeout_s: float = 3.0) -> Session:
+    def resume(cls, study: StudyFolder, participant_id: str, lock_timeout_s: float = 3.0,
+               session: str | None = None) -> Session:
         """Continues an enrolled participant at the first step their log does not record.
 
         Args:
@@ -281,46 +339,131 @@ class Session:
             lock_timeout_s: how long to wait for the participant's lock, which a writer holds
                 only while it writes one event. An older session of the same participant (a
                 reloaded page's kernel still alive) is taken over: its next write is refused.
+            session: which protocol session (None: the latest one the participant started).
         """
         if not isinstance(study, StudyFolder):
             raise ValueError(f"study: expected a StudyFolder, got {type(study).__name__}")
         enrolment = study.enrolment(participant_id)
+        cls._refuse_lost(study, participant_id)
+        if session is None:
+            started = [s.id for s in study.protocol.sessions if study.log_path(participant_id, s.id).exists()]
+            session = started[-1] if started else study.protocol.sessions[0].id
+        path = study.log_path(participant_id, session)
+        try:
+            log = ParticipantLog.open(path, lock_timeout_s=lock_timeout_s)
+        except LogError:
+            if path.exists() or session != study.protocol.sessions[0].id:
+                raise
+            # Enrolled, then stopped before the log was created: start the log now.
+            log = ParticipantLog.create(path, study.meta["study"], lock_timeout_s=lock_timeout_s)
+        log.study = study.meta["study"]
+        if not log.events:
+            return cls._begin(study, log, enrolment, session)
+        first = log.events[0]
+        if first.get("type") != "session_started" or first.get("protocol_hash") != study.protocol.hash:
+            log.close()
+            raise LogError(f"participant {participant_id!r}: the log was not started with this study's protocol "
+                           f"({study.protocol.hash[:19]}...); it will not be continued")
+        session_ = cls(study.protocol, log, first["group"], enrolment, study, session=session)
+        session_.window = first.get("window")
+        log.append("session_resumed", software_version=mt_widgets.__version__, protocol_hash=study.protocol.hash,
+                   at=session_._describe(session_._slot), repaired_torn_line=log.repaired_torn_bytes)
+        session_._enter()
+        return session_
+
+    @staticmethod
+    def _refuse_lost(study: StudyFolder, participant_id: str) -> None:
         left = study.outcomes().get(participant_id)
         if left is not None:
             what = {"withdrawn": "withdrew from the study", "declined": "declined consent",
                     "ineligible": "was screened out as ineligible", "dropped_out": "was marked as dropped out"}
             raise LogError(f"participant_id: {participant_id!r} {what[left['outcome']]} ({left['at']}); their "
                            f"session cannot be resumed. Enrol a new participant ID for a new person.")
-        path = study.log_path(participant_id)
-        try:
-            log = ParticipantLog.open(path, lock_timeout_s=lock_timeout_s)
-        except LogError:
-            if path.exists():
-                raise
-            # Enrolled, then stopped before the log was created: start the log now.
-            log = ParticipantLog.create(path, study.meta["study"], lock_timeout_s=lock_timeout_s)
-        log.study = study.meta["study"]
-        if not log.events:
-            return cls._begin(study, log, enrolment)
-        first = log.events[0]
-        if first.get("type") != "session_started" or first.get("protocol_hash") != study.protocol.hash:
-            log.close()
-            raise LogError(f"participant {participant_id!r}: the log was not started with this study's protocol "
-                           f"({study.protocol.hash[:19]}...); it will not be continued")
-        session = cls(study.protocol, log, first["group"], enrolment, study)
-        log.append("session_resumed", software_version=mt_widgets.__version__, protocol_hash=study.protocol.hash,
-                   at=session._describe(session._slot), repaired_torn_line=log.repaired_torn_bytes)
-        session._enter()
-        return session
 
     @classmethod
-    def _begin(cls, study, log, enrolment) -> Session:
+    def arrive(cls, study: StudyFolder, participant_id: str | None = None, *, reentry_code: str | None = None,
+               now=None, group: str | None = None, parameters: dict | None = None,
+               enrol_new: bool = True) -> Session:
+        """The right session for a participant who arrives now: starts, resumes or refuses.
+
+        - A new ID (when ``enrol_new``): enrolled (randomised unless ``group``) and started on
+          the first session.
+        - An enrolled participant (by ID, or by the re-entry code shown at the end of their
+          previous session) whose current session is unfinished: resumed there.
+        - One whose session is finished and whom another session follows: that session
+          starts if ``now`` is inside its window; outside it, the protocol's rule: "refuse"
+          raises ``WindowError`` with the words to show (nothing is written), "flag" starts it
+          and the ``session_started`` event (and ``session.window``) says it is early or late.
+        - One who completed the last session: that session, finished (its thank-you).
+
+        The group is the enrolment's, in every session.
+
+        Args:
+            study: the study folder.
+            participant_id: the participant's ID, or None when ``reentry_code`` is given.
+            reentry_code: the code shown at the end of a previous session ("K7QM-3XRD").
+            now: the arrival time, an aware datetime (None: the clock; tests pass their own).
+            group: the experimenter's choice for a new participant (None: randomised).
+            parameters: identifying URL parameters recorded with a new enrolment.
+            enrol_new: False refuses an ID that is not enrolled (a follow-up-only page).
+
+        Raises:
+            WindowError: outside the window of a session whose protocol says "refuse".
+            LogError: an unknown code, an unknown ID when ``enrol_new`` is False, or a participant
+                who withdrew, declined or was screened out.
+        """
+        if not isinstance(study, StudyFolder):
+            raise ValueError(f"study: expected a StudyFolder, got {type(study).__name__}")
+        enrol_new = as_bool("enrol_new", enrol_new)
+        now = as_utc(now)
+        if (participant_id is None) == (reentry_code is None):
+            raise ValueError("participant_id, reentry_code: expected exactly one of them")
+        if reentry_code is not None:
+            participant_id = study.participant_for_code(reentry_code)
+        if participant_id not in study.participant_ids():
+            if not enrol_new:
+                raise LogError(f"participant_id: {participant_id!r} is not enrolled in this study")
+            return cls.start(study, participant_id, group=group, parameters=parameters)
+        cls._refuse_lost(study, participant_id)
+        sessions = study.protocol.sessions
+        for position, plan in enumerate(sessions):
+            path = study.log_path(participant_id, plan.id)
+            if not path.exists():
+                if position == 0:
+                    return cls.resume(study, participant_id, session=plan.id)
+                break
+            events, _ = read_events(path)
+            finished = [e for e in events if e["type"] == "session_finished"]
+            if not finished or position == len(sessions) - 1:
+                return cls.resume(study, participant_id, session=plan.id)
+            previous_end = finished[0]["time"]
+        else:  # pragma: no cover - the loop returns at the last session
+            raise AssertionError("unreachable")
+        check = plan.window.check(_dt.datetime.fromisoformat(previous_end.replace("Z", "+00:00")), now)
+        if check.action == "refuse":
+            raise WindowError(check, plan.id)
+        enrolment = study.enrolment(participant_id)
+        log = ParticipantLog.create(path, study.meta["study"])
+        return cls._begin(study, log, enrolment, plan.id, window=check.as_dict(), arrived_at=now)
+
+    @classmethod
+    def _begin(cls, study, log, enrolment, session: str | None = None, window: dict | None = None,
+               arrived_at=None) -> Session:
+        plan = study.protocol.session(session)
+        extra = {}
+        if len(study.protocol.sessions) > 1 or session is not None:
+            extra["session"] = plan.id
+        if window is not None:
+            extra.update(window=window, arrived_at=as_utc(arrived_at).isoformat(timespec="milliseconds")
+                         .replace("+00:00", "Z"))
         log.append("session_started", software_version=mt_widgets.__version__, protocol_hash=study.protocol.hash,
                    protocol_name=study.protocol.name, group=enrolment["group"], enrolment=enrolment,
-                   lam=study.protocol.lam, numpy_version=np.__version__, python_version=platform.python_version())
-        session = cls(study.protocol, log, enrolment["group"], enrolment, study)
-        session._enter()
-        return session
+                   lam=study.protocol.lam, numpy_version=np.__version__, python_version=platform.python_version(),
+                   **extra)
+        session_ = cls(study.protocol, log, enrolment["group"], enrolment, study, session=plan.id)
+        session_.window = window
+        session_._enter()
+        return session_
 
     @classmethod
     def lesson(cls, protocol: Protocol, group: str | None = None, participant: str = "lesson") -> Session:
@@ -365,7 +508,7 @@ class Session:
         return None
 
     def _step_slot(self, step_id: str) -> _Slot:
-        ids = [step.id for step in self.protocol.steps]
+        ids = [step.id for step in self.plan.steps]
         if step_id not in ids:
             raise LogError(f"step {step_id!r} in the log is not a step of this protocol ({ids})")
         return _Slot("step", index=ids.index(step_id))
@@ -396,11 +539,11 @@ class Session:
         if slot is None:
             return "the end of the protocol"
         if slot.kind == "step":
-            step = self.protocol.steps[slot.index]
+            step = self.plan.steps[slot.index]
             return f"{step.kind} step {step.id!r}"
         where = []
         if slot.phase_index is not None:
-            where.append(self.protocol.phases[slot.phase_index].id)
+            where.append(self.plan.phases[slot.phase_index].id)
         if slot.episode is not None:
             where.append(f"episode {slot.episode}")
         if slot.index is not None:
@@ -413,7 +556,7 @@ class Session:
         return self._slots[self._position]
 
     def _phase(self, slot: _Slot) -> Phase:
-        return self.protocol.phases[slot.phase_index]
+        return self.plan.phases[slot.phase_index]
 
     def _enter(self) -> None:
         """Logs what a step needs before it is shown (query states, practice start, the end)."""
@@ -475,19 +618,23 @@ class Session:
         done = len(self._finished_episodes)
         slot = self._slot
         in_episode = len(self._actions.get((slot.phase_index, slot.episode), [])) if slot.episode else 0
-        return {"episodes_done": done, "episodes_total": self.protocol.n_episodes,
+        return {"episodes_done": done, "episodes_total": self.plan.n_episodes,
                 "demonstrations_done": in_episode}
 
     def current_step(self) -> Step:
         """The step to show now (see ``Step``)."""
         slot = self._slot
-        texts = self.protocol.texts
+        texts = self.plan.texts
         if self._ended is not None:
             return Step("ended", texts[self._ended], ended=self._ended)
+        if slot.kind == "thank_you" and self.plan.index + 1 < len(self.protocol.sessions):
+            upcoming = self.protocol.sessions[self.plan.index + 1]
+            return Step("thank_you", texts["thank_you"], reentry_code=self.enrolment.get("reentry_code"),
+                        next_session={"id": upcoming.id, "window": upcoming.window.describe()})
         if slot.kind in ("welcome", "consent", "instructions", "thank_you"):
             return Step(slot.kind, texts[slot.kind])
         if slot.kind == "step":
-            step = self.protocol.steps[slot.index]
+            step = self.plan.steps[slot.index]
             return Step(step.kind, step.text, study_step=step)
         if slot.kind == "practice":
             practice = self.protocol.practice
@@ -544,7 +691,7 @@ class Session:
         slot = self._slot
         if self._ended is not None:
             raise SessionStateError(f"{call}: the session ended ({self._ended}); nothing more is recorded")
-        kind = self.protocol.steps[slot.index].kind if slot.kind == "step" else slot.kind
+        kind = self.plan.steps[slot.index].kind if slot.kind == "step" else slot.kind
         if kind not in kinds:
             raise SessionStateError(f"{call}: expected the current step to be {' or '.join(kinds)}, it is "
                                     f"{self._describe(slot)}")
@@ -563,7 +710,7 @@ class Session:
         slot = self._expect("advance", "welcome", "consent", "instructions", "phase_intro", "reproduction", "text",
                             "information")
         if slot.kind == "step":
-            step = self.protocol.steps[slot.index]
+            step = self.plan.steps[slot.index]
             if step.kind == "consent":
                 self.log.append("consent_given", step=step.id)
             else:
@@ -583,7 +730,7 @@ class Session:
     def decline_consent(self) -> Step:
         """"I do not agree": ends the session (logged; the participant is kept out of the analysis)."""
         slot = self._expect("decline_consent", "consent")
-        step_id = self.protocol.steps[slot.index].id if slot.kind == "step" else None
+        step_id = self.plan.steps[slot.index].id if slot.kind == "step" else None
         self.log.append("consent_declined", step=step_id)
         self._end("declined", step=step_id)
         return self.current_step()
@@ -598,7 +745,7 @@ class Session:
             The next step; an "ended" step when an eligibility answer screens the participant out.
         """
         slot = self._expect("submit_answers", "eligibility", "demographics", "questionnaire")
-        step = self.protocol.steps[slot.index]
+        step = self.plan.steps[slot.index]
         answers = step.check_answers(answers)
         if step.kind == "eligibility":
             eligible = all(item.is_eligible(answers[item.id]) for item in step.items)
@@ -620,7 +767,7 @@ class Session:
             plays: how many times it was started (replays included).
         """
         slot = self._expect("finish_video", "video")
-        step = self.protocol.steps[slot.index]
+        step = self.plan.steps[slot.index]
         if not isinstance(watched_to_end, bool):
             raise TypeError(f"watched_to_end: expected a bool, got {type(watched_to_end).__name__}")
         if isinstance(plays, bool) or not isinstance(plays, (int, np.integer)) or plays < 0:
@@ -647,9 +794,9 @@ class Session:
         self.log.append("withdrawn", reason=reason, data=policy, at=at)
         self._end("withdrawn", reason=reason, data=policy, step_reached=at)
         if policy == "delete" and self.folder is not None:
-            path = self.folder.log_path(self.participant)
             self.log.close()
-            path.unlink(missing_ok=True)
+            for plan in self.protocol.sessions:
+                self.folder.log_path(self.participant, plan.id).unlink(missing_ok=True)
         return self.current_step()
 
     def _end(self, ending: str, **fields) -> None:
