@@ -17,9 +17,11 @@ One concern per module:
 
 from .app import LOG_FOLDER_VARIABLE, StudyApp, default_log_folder
 from .forms import QuestionForm
+from .lab_page import EXPERIMENTER_CODE_VARIABLE, LabStudyPage
+from .online import OnlineStudyPage
 from .panel import ExperimenterPanel
 from .participant import ParticipantView
 from .video import VideoStep
 
-__all__ = ["ExperimenterPanel", "LOG_FOLDER_VARIABLE", "ParticipantView", "QuestionForm", "StudyApp", "VideoStep",
-           "default_log_folder"]
+__all__ = ["EXPERIMENTER_CODE_VARIABLE", "ExperimenterPanel", "LOG_FOLDER_VARIABLE", "LabStudyPage", "OnlineStudyPage",
+           "ParticipantView", "QuestionForm", "StudyApp", "VideoStep", "default_log_folder"]

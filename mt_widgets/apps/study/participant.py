@@ -188,6 +188,12 @@ class ParticipantView(VBox):
         labels = dict(_SCREEN_BUTTONS, instructions="Start the practice" if protocol.practice.duration_s > 0
                       else "Start")
         children = [HTML(self.text(step.text, step.skill))]
+        if step.kind == "thank_you" and step.reentry_code:
+            window = (step.next_session or {}).get("window", "")
+            children.append(HTML(
+                f"<p style='max-width:760px;font-size:1.1em'>To come back for the next part of the study"
+                f"{' (' + html.escape(window) + ')' if window else ''}, keep this code: "
+                f"<b class='mt-reentry-code'>{html.escape(step.reentry_code)}</b></p>"))
         choice = Choice()
         if step.kind in labels:
             children.append(choice.button(labels[step.kind], self.advance))
