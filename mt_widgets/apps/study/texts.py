@@ -6,8 +6,9 @@ from __future__ import annotations
 import html
 import math
 
-from mt_widgets.widgets import fill_words, get_theme
+from mt_widgets.widgets import get_theme
 from mt_widgets.widgets.legend import legend_entries
+from mt_widgets.widgets.theme import fill_words
 
 
 def paragraphs(text: str) -> str:
