@@ -197,8 +197,9 @@ class ClassSpawner(LocalProcessSpawner):
 c.JupyterHub.spawner_class = ClassSpawner
 c.Spawner.cmd = [str(STUDENT_PYTHON), "-m", "jupyterhub.singleuser"]
 c.Spawner.default_url = "/lab/tree/index.ipynb"
-c.Spawner.start_timeout = 180
-c.Spawner.http_timeout = 180
+# A class of thirty starting at once on two cores takes a minute or more (benchmarks/bench_hub.py).
+c.Spawner.start_timeout = 300
+c.Spawner.http_timeout = 300
 
 # Passed on from the hub's environment: the class folder, the exchange, and (tests) the checkout.
 _passed_on = ("MT_WIDGETS_CLASS_FOLDER", "MT_WIDGETS_EXCHANGE", "MT_WIDGETS_FAST")
@@ -214,6 +215,9 @@ c.Spawner.environment = {
     "JUPYTER_CONFIG_PATH": str(HERE / "student-config"),
     "MT_HUB_ROLE": lambda spawner: "instructor" if spawner.user.admin else "student",
     "PYTHONPATH": _python_path,
+    # Students' servers find no node: JupyterLab's import asks yarn (a node process, ~2 s) for the
+    # npm registry at every start when node is on PATH, for building extensions no student builds.
+    "PATH": lambda spawner: os.environ.get("PATH", "") if spawner.user.admin else str(STUDENT_PYTHON.parent),
     **{name: os.environ[name] for name in _passed_on if os.environ.get(name)},
 }
 

@@ -209,7 +209,7 @@ class ClassHub:
         if not ((users.get(name) or {}).get("servers") or {}).get(""):
             self.spawn(name)
 
-    def spawn(self, name: str, timeout: float = 180) -> float:
+    def spawn(self, name: str, timeout: float = 420) -> float:
         """Starts ``name``'s server; returns the seconds until the hub reports it ready.
 
         Follows the hub's progress event stream (no polling: thirty students polling the hub

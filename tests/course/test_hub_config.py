@@ -163,6 +163,7 @@ def test_each_students_caches_and_runtime_are_their_own_and_nothing_writes_into_
     assert environment["JUPYTER_RUNTIME_DIR"](spawner) == str(Path("/tmp", setting.cgroup, ANN))
     assert environment["PYTHONDONTWRITEBYTECODE"] == "1"
     assert environment["PYTHONPATH"].split(os.pathsep)[0] == str(HUB / "student-site")
+    assert "node" not in os.listdir(environment["PATH"](spawner))  # JupyterLab would run yarn at every start
     assert environment["MT_WIDGETS_CLASS_FOLDER"] == str(setting.tmp / "class")
     assert environment["MT_WIDGETS_EXCHANGE"] == "/srv/exchange"
     assert environment["MT_HUB_ROLE"](spawner) == "student"
