@@ -98,6 +98,7 @@ class DemoPage(VBox):
         choices = HBox([self.skill_chooser, self.guidance_switch],
                        layout=Layout(flex_flow="row wrap", align_items="center", grid_gap="2px 16px"))
         super().__init__([HTML(WELCOME), choices, self.episode_slot])
+        self.add_class("mt-focus")  # a visible focus on each control (canvas_access.py)
         self.start_episode()
 
     def start_episode(self, new_states: bool = False) -> EpisodeWidget:
