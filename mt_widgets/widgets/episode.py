@@ -268,10 +268,15 @@ class EpisodeWidget(VBox):
         # Each canvas's legend goes to the side column too, under what to do now: it explains every
         # mark, and under the canvas it would push the reproduction's Replay line off the screen.
         player_legend = self.player.view.legend
-        self.player.children = tuple(child for child in self.player.children if child is not player_legend)
+        # So do the reproduction's words (where the hand ended): under the canvas their second line
+        # fell below the window at 1400 x 1000; beside it they sit with the result.
+        moved = (player_legend, self.player.status)
+        self.player.children = tuple(child for child in self.player.children if child not in moved)
         player_legend.layout.display = "none"
-        self.side = VBox([self.teaching.controls, self.guidance_panel, self.next_button, self.next_actions,
-                          self.teaching.view.legend, player_legend],
+        self._show_status = self.player.status.layout.display != "none"   # hidden for a blinded study
+        self.player.status.layout.display = "none"                        # until the reproduction plays
+        self.side = VBox([self.teaching.controls, self.guidance_panel, self.next_button, self.player.status,
+                          self.next_actions, self.teaching.view.legend, player_legend],
                          layout=Layout(min_width="300px", max_width="400px", flex="1 1 300px"))
         canvases = VBox([self.teaching.view.canvas, self.player], layout=Layout(flex="0 1 auto"))
         self.stage = HBox([canvases, self.side], layout=Layout(flex_flow="row wrap", align_items="flex-start",
@@ -346,9 +351,13 @@ class EpisodeWidget(VBox):
     # -- driving it from code ------------------------------------------------------------------------------
     def demonstrate(self, action) -> DemonstrationRecord:
         """Set and confirm ``action`` (R,) at the current state, as if drawn (method "code")."""
+        if self.phase == "guidance":
+            raise RuntimeError("demonstrate: expected phase 'teaching', the episode is in 'guidance'; "
+                               "call next() after guidance")
         if self.phase != "teaching":
-            raise RuntimeError(f"demonstrate: expected phase 'teaching', the episode is in {self.phase!r}; "
-                               f"call next() after guidance")
+            raise RuntimeError(f"demonstrate: expected phase 'teaching', the episode is {self.phase} (all "
+                               f"{len(self.query_states)} demonstrations given); start a new EpisodeWidget to "
+                               f"teach again")
         self.teaching.set_action(action)
         self.teaching.confirm()
         return self.records[-1]
@@ -412,6 +421,8 @@ class EpisodeWidget(VBox):
         self.teaching.controls.layout.display = "none"
         self.teaching.view.legend.layout.display = "none"
         self.player.view.legend.layout.display = None
+        if self._show_status:
+            self.player.status.layout.display = None
         self.guidance_panel.hide()
         self.next_button.layout.display = "none"
         self.player.layout.display = None
