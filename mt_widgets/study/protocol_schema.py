@@ -362,7 +362,8 @@ def _parse_analysis(check, raw: dict) -> AnalysisPlan:
     if table is None:
         return AnalysisPlan()
     table = check.get(raw, ("analysis",), "table")
-    check.unknown(table, ("analysis",), ("test", "alternative", "alpha", "effect_size", "power", "changes"))
+    check.unknown(table, ("analysis",), ("test", "alternative", "alpha", "effect_size", "power", "changes",
+                                         "baseline"))
     values = {"test": check.get(table, ("analysis", "test"), "text", default="student", choices=TESTS),
               "alternative": check.get(table, ("analysis", "alternative"), "text", default="less",
                                        choices=ALTERNATIVES)}
@@ -390,4 +391,13 @@ def _parse_analysis(check, raw: dict) -> AnalysisPlan:
         values["changes"] = tuple(parsed)
     else:
         values["changes"] = PAPER_CHANGES
+    if "baseline" in table:
+        baseline = table["baseline"]
+        ok = (isinstance(baseline, list) and len(baseline) == 2 and all(
+            isinstance(b, list) and len(b) == 2 and isinstance(b[0], str) and isinstance(b[1], int)
+            and not isinstance(b[1], bool) for b in baseline))
+        if baseline is not False and not ok:
+            check.fail(("analysis", "baseline"), f"expected [[phase, episode], [phase, episode]] (or false for no "
+                                                 f"baseline check), got {baseline!r}")
+        values["baseline"] = None if baseline is False else tuple((b[0], b[1]) for b in baseline)
     return AnalysisPlan(**values)
