@@ -88,7 +88,7 @@ def test_participants_arrive_by_url_at_once_one_reloads_one_withdraws_one_declin
         page.get_by_role("radio", name="no").check()
         button(page, "Continue").click()
         page.get_by_placeholder("a number (years)").fill("17")
-        page.get_by_role("radio", name="male").check()
+        page.get_by_role("radio", name="male", exact=True).check()
         button(page, "Continue").click()
         page.get_by_text("please type a whole number from 18 to 120").wait_for()
         page.get_by_placeholder("a number (years)").fill("34")
