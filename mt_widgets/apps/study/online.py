@@ -117,6 +117,7 @@ class OnlineStudyPage(VBox):
         return VBox([
             HTML(f"<p style='max-width:760px;font-size:1.1em'>Your completion code is "
                  f"<b class='mt-completion-code'>{html.escape(completion.code)}</b>. You will be taken back to the "
-                 f"study's website in a few seconds; if not, <a href='{link}' class='mt-completion-link'>"
+                 f"study's website in a few seconds; if not, <a href='{link}' class='mt-completion-link' "
+                 f"style='color:#0b57d0;text-decoration:underline'>"
                  f"continue here</a>.</p>"),
             go_to(completion.url, self._redirect_delay_s)])
