@@ -214,6 +214,8 @@ class Protocol:
     skills: Mapping[str, Skill] = field(default_factory=lambda: ProtocolSkills({**SKILLS, **PRACTICE_SKILLS}),
                                         repr=False, compare=False)
     guidance_modality: str = "arrows+words"
+    #: How demonstrations are given: "drawn" on the screen, or "hand" (moving the uArm by hand).
+    demonstration_modality: str = "drawn"
     before: tuple[StudyStep, ...] = ()
     after: tuple[StudyStep, ...] = ()
     withdrawal: str = "exclude"
@@ -547,7 +549,7 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
 
     top_keys = ("format", "name", "title", "groups", "lambda", "seed", "query_states", "reproduction_duration_s",
                 "assignment", "texts", "practice", "phases", "skills", "guidance_modality", "withdrawal", "before",
-                "after", "analysis")
+                "after", "analysis", "demonstration_modality")
     check.unknown(raw, (), top_keys)
     version = check.get(raw, ("format",), "integer")
     if version != FORMAT_VERSION:
@@ -597,6 +599,8 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
 
     modality = check.get(raw, ("guidance_modality",), "text", default="arrows+words",
                          choices=tuple(GUIDANCE_MODALITIES))
+    demonstration_modality = check.get(raw, ("demonstration_modality",), "text", default="drawn",
+                                       choices=("drawn", "hand"))
     withdrawal = check.get(raw, ("withdrawal",), "text", default="exclude", choices=WITHDRAWAL_POLICIES)
     folder = Path(source).parent if source not in ("<string>", "") else None
     step_ids: set = set()
@@ -661,7 +665,8 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
         entry.setdefault("guidance", [])
     return Protocol(name, title, tuple(groups), lam, seed, query_states, duration, block_size, assignment_seed,
                     texts, practice, tuple(phases), data, text, source, skills, guidance_modality=modality,
-                    before=before, after=after, withdrawal=withdrawal, analysis=plan)
+                    demonstration_modality=demonstration_modality, before=before, after=after,
+                    withdrawal=withdrawal, analysis=plan)
 
 
 def _parse_analysis(check, raw: dict) -> AnalysisPlan:

@@ -64,7 +64,7 @@ Event types (besides ``seq``, ``type``, ``time``, ``participant``, ``study``):
 - ``demonstration``: phase, phase_index, episode, index (0-based), state, action, optimal,
   guidance_shown (bool), time_to_first_input_s, drawing_duration_s, response_time_s (from
   the state's appearance to the submission, measured by the engine), input (method, redraws,
-  ... as given by the caller).
+  ... as given by the caller), modality ("hand" for an input method "hand", else "drawn").
 - ``episode_finished``: phase, phase_index, episode, skill, guidance, actions (N x R),
   optimal, theta_hat (R x S), teaching_error, rho1, rho2, bound, residual, contributions
   (N,), exact, reproduction {diverged, diverged_at, final_position, duration_s}, started_at,
@@ -715,7 +715,8 @@ class Session:
         self.log.append("demonstration", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
                         index=slot.index, state=np.asarray(started["query_states"])[slot.index], action=action,
                         optimal=optimal, guidance_shown=started["guidance"], **measured,
-                        response_time_s=time.monotonic() - self._entered_at, input=timings)
+                        response_time_s=time.monotonic() - self._entered_at, input=timings,
+                        modality="hand" if timings.get("method") == "hand" else "drawn")
         self._actions.setdefault(key, []).append(action)
         self._complete()
         return Feedback(slot.index, started["guidance"], optimal.copy() if started["guidance"] else None, action,
