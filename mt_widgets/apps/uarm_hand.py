@@ -21,11 +21,16 @@ from ipywidgets import HTML, Button, Layout, VBox
 from mt_widgets.hardware import TEACHING_MAX_YAW_DEG, TEACHING_RADIUS_MM, SimulatedSwiftPro
 
 #: Size of the view (pixels), its scale and where the arm's base is drawn.
-WIDTH_PX, HEIGHT_PX = 420, 280
-PX_PER_MM = 0.75
-BASE_PX = (210.0, 268.0)
+WIDTH_PX, HEIGHT_PX = 280, 190
+PX_PER_MM = 0.5
+BASE_PX = (140.0, 182.0)
 #: How close (pixels) to the tool a press must be to grab it.
-GRAB_PX = 30.0
+GRAB_PX = 25.0
+#: The view floats at the top right of the window: the true-scale screen canvas is pinned
+#: to the bottom of the window (``uarm_screen``) and would cover it in the page's flow.
+BOX_CLASS = "mt-simulated-hand-box"
+_CSS = (f"<style>.{BOX_CLASS} {{ position: fixed; top: 6px; right: 6px; z-index: 30; background: #ffffff; "
+        f"border: 1px solid #999999; box-shadow: 0 2px 6px rgba(0,0,0,0.25); }}</style>")
 
 
 def arm_to_view(x_mm: float, y_mm: float) -> tuple[float, float]:
@@ -71,8 +76,10 @@ class SimulatedHand(VBox):
                                    tooltip="Close the simulated arm's port, as pulling its cable does")
         self.cable_button.on_click(lambda _: self.pull_cable())
         self.note = HTML("")
-        super().__init__([HTML("<b>Your hand on the simulated arm</b> (seen from above: drag the tip)"),
-                          self.canvas, self.note, self.cable_button], layout=Layout(padding="4px"))
+        super().__init__([HTML(_CSS + "<b>Your hand on the simulated arm</b><br><small>seen from above: drag "
+                               "the tip</small>"), self.canvas, self.note, self.cable_button],
+                         layout=Layout(padding="4px", width=f"{WIDTH_PX + 12}px"))
+        self.add_class(BOX_CLASS)
         self.refresh()
 
     def pull_cable(self) -> None:
@@ -96,15 +103,15 @@ class SimulatedHand(VBox):
                 bx, by = BASE_PX
                 tx, ty = arm_to_view(x, y)
                 c.stroke_style = "#888888"
-                c.line_width = 6
+                c.line_width = 4
                 c.stroke_line(bx, by, tx, ty)
                 c.fill_style = "#444444"
-                c.fill_circle(bx, by, 8)
+                c.fill_circle(bx, by, 6)
                 c.fill_style = "#000000" if released else "#7f7f7f"
-                c.fill_circle(tx, ty, 9)
+                c.fill_circle(tx, ty, 7)
                 c.fill_style = "#000000"
-                c.font = "13px sans-serif"
-                c.fill_text(f"tip at x = {x:.0f} mm, y = {y:.0f} mm", 8, 18)
+                c.font = "12px sans-serif"
+                c.fill_text(f"tip at x = {x:.0f} mm, y = {y:.0f} mm", 6, 14)
         if self.device.disconnected:
             self.note.value = "<i>The cable is pulled: the arm no longer hears the computer.</i>"
         elif released:

@@ -203,6 +203,10 @@ class UArmTeaching:
         if self.bridge.stop_requested:
             self.panel.say("The arm is stopped. Press Resume arm when it is safe to move it again.")
             return None
+        if not self.bridge.arm.connected:
+            self.panel.say("The robot arm is disconnected: draw the arrow on the screen instead, or call the "
+                           "experimenter. Your demonstrations are saved; nothing is lost.", error=True)
+            return None
         index = episode.state_index
         self._hand_stop.clear()
         self.panel.hand_button.disabled = True

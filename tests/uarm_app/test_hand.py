@@ -103,6 +103,7 @@ def test_a_pulled_cable_during_a_hand_move_keeps_the_confirmed_and_leaves_the_ar
     assert len(episode.teaching.demonstrations) == 1
     np.testing.assert_allclose(episode.teaching.demonstrations[0], (1.0, 1.0), atol=0.02)
     assert not teaching.panel.hand_button.disabled
+    assert teaching.teach_by_hand() is None and "disconnected" in teaching.panel.message.value
 
 
 def test_drawn_modality_hides_teaching_by_hand():
