@@ -48,6 +48,8 @@ class SimulatedHand(VBox):
 
     Args:
         device: the ``SimulatedSwiftPro`` (``mt_widgets.hardware.bridge.simulated_device``).
+        floating: float at the top right of the window (for a page whose screen canvas is
+            pinned to the bottom); False leaves it in the page's flow (a notebook).
 
     Attributes:
         canvas: the top view (mouse and touch drags move the tip).
@@ -56,7 +58,9 @@ class SimulatedHand(VBox):
         dragging: whether the tip is held.
     """
 
-    def __init__(self, device: SimulatedSwiftPro):
+    def __init__(self, device: SimulatedSwiftPro, floating: bool = True):
+        if not isinstance(floating, bool):
+            raise TypeError(f"floating: expected True or False, got {type(floating).__name__}")
         if not isinstance(device, SimulatedSwiftPro):
             raise TypeError(f"device: expected a SimulatedSwiftPro, got {type(device).__name__}")
         self.device = device
@@ -76,8 +80,8 @@ class SimulatedHand(VBox):
                                    tooltip="Close the simulated arm's port, as pulling its cable does")
         self.cable_button.on_click(lambda _: self.pull_cable())
         self.note = HTML("")
-        super().__init__([HTML(_CSS + "<b>Your hand on the simulated arm</b><br><small>seen from above: drag "
-                               "the tip</small>"), self.canvas, self.note, self.cable_button],
+        title = "<b>Your hand on the simulated arm</b><br><small>seen from above: drag the tip</small>"
+        super().__init__([HTML((_CSS if floating else "") + title), self.canvas, self.note, self.cable_button],
                          layout=Layout(padding="4px", width=f"{WIDTH_PX + 12}px"))
         self.add_class(BOX_CLASS)
         self.refresh()

@@ -126,7 +126,7 @@ class UArmTeaching:
         self.panel.hand_button.on_click(lambda _: self.teach_by_hand())
         device = simulated_device(arm)
         #: The stand-in for a hand on the simulated arm (None on a real arm).
-        self.hand_view = SimulatedHand(device) if device is not None else None
+        self.hand_view = SimulatedHand(device, floating=bool(self.geometry.pinned)) if device is not None else None
         self._hand_stop = threading.Event()
         self._hand_job: Future | None = None
         self.demonstration_modality = "drawn"
