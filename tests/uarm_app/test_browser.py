@@ -135,3 +135,46 @@ def test_teaching_by_hand_in_the_browser_with_a_pulled_cable_mid_move(uarm_voila
     assert s["released"] and len(s["demonstrations"]) == 2 and s["phase"] == "teaching"
     assert page.get_by_text("Cable pulled").count() >= 1
     page.screenshot(path=artifacts("cable-pulled"))
+
+
+@pytest.mark.browser
+def test_the_uarm_study_app_taught_by_hand_logs_the_modality_and_survives_a_pulled_cable(uarm_voila, tall_page,
+                                                                                         artifacts):
+    page = tall_page
+    page.goto(uarm_voila.url("/voila/render/uarm_study_hand.ipynb"), timeout=60_000)
+    for label in ("Continue", "I agree", "Start", "Start"):
+        button = page.get_by_role("button", name=label, exact=True)
+        button.first.wait_for(timeout=150_000)
+        button.first.click()
+    s = wait_for_status(page, "s.in_episode && s.hand_shown && !s.hand_busy", timeout=60_000)
+    hand_button = page.get_by_role("button", name="Teach by hand (H)")
+    for index, step in enumerate([(1.5, 0.0), (0.0, 1.0)]):
+        s = wait_for_status(page, f"s.index === {index} && !s.hand_busy && !s.released", timeout=30_000)
+        hand_button.click()
+        s = wait_for_status(page, "s.released", timeout=30_000)
+        state_cm = np.array(s["state_mm"][:2]) / 10
+        _drag_tip(page, state_cm, step)
+        s = wait_for_status(page, f"s.pending !== null && Math.abs(s.pending[0] - {step[0]}) < 0.3 "
+                                  f"&& Math.abs(s.pending[1] - {step[1]}) < 0.3", timeout=30_000)
+        if index == 0:
+            page.screenshot(path=artifacts("study-hand-arrow"))
+        page.get_by_role("button", name="Confirm").click()
+        wait_for_status(page, f"s.logged.length === {index + 1}", timeout=30_000)
+    s = wait_for_status(page, "s.index === 2 && !s.hand_busy && !s.released", timeout=30_000)
+    assert s["logged"] == [["hand", "hand"], ["hand", "hand"]]
+    hand_button.click()
+    s = wait_for_status(page, "s.released", timeout=30_000)
+    _drag_tip(page, np.array(s["state_mm"][:2]) / 10, (1.0, 0.0), fractions=(0.3, 0.6), release=False)
+    page.mouse.up()
+    page.get_by_role("button", name="Pull the USB cable").click()
+    s = wait_for_status(page, "s.message.includes('safe')", timeout=30_000)
+    assert s["released"] and len(s["logged"]) == 2 and len(s["demonstrations"]) == 2
+    page.screenshot(path=artifacts("study-cable-pulled"))
+    # The participant can still finish by drawing: the confirmed arrow is logged as drawn.
+    page.get_by_role("button", name="Clear").click()
+    page.locator(".widget-inline-hbox:has-text('u1 (cm)') input").first.fill("1")
+    page.locator(".widget-inline-hbox:has-text('u2 (cm)') input").first.fill("0.5")
+    page.get_by_role("button", name="Set arrow").click()
+    page.get_by_role("button", name="Confirm").click()
+    s = wait_for_status(page, "s.logged.length === 3", timeout=30_000)
+    assert s["logged"][2] == ["drawn", "numeric"]
