@@ -128,6 +128,7 @@ class UArmTeaching:
         #: The stand-in for a hand on the simulated arm (None on a real arm).
         self.hand_view = SimulatedHand(device, floating=bool(self.geometry.pinned)) if device is not None else None
         self._hand_stop = threading.Event()
+        self._reattach_on_resume = False
         self._hand_job: Future | None = None
         self.demonstration_modality = "drawn"
         self.set_demonstration_modality(demonstration_modality)
@@ -234,6 +235,13 @@ class UArmTeaching:
                 if last is None or float(np.max(np.abs(action - last))) > 0.005:
                     episode.teaching.set_action(action, method="hand")
                     last = action
+            if self.bridge.stop_requested:
+                # Stopped mid-move: the arm stays released (it cannot move by itself); Resume
+                # attaches it again before anything moves it (on 4.0-4.4 nothing is sent while paused).
+                self._reattach_on_resume = True
+                self.panel.say("The arm is stopped and released. Press Resume arm when it is safe: it will hold "
+                               "itself again and go back to the situation.")
+                return
             self.panel.say("The arm holds itself again and goes back to the situation...")
             move.end()
             self._update_position()
@@ -334,6 +342,10 @@ class UArmTeaching:
         def resume_and_show():
             try:
                 self.bridge.resume()
+                if self._reattach_on_resume:  # a hand move was stopped with the arm released
+                    self.bridge.arm.attach()
+                    self.bridge.arm.set_position_reports(None)
+                    self._reattach_on_resume = False
             except BaseException:
                 self.panel.resume_button.layout.display = None
                 raise

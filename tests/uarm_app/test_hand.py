@@ -106,6 +106,28 @@ def test_a_pulled_cable_during_a_hand_move_keeps_the_confirmed_and_leaves_the_ar
     assert teaching.teach_by_hand() is None and "disconnected" in teaching.panel.message.value
 
 
+@pytest.mark.parametrize("version", ["4.10", "4.2"])  # 4.2: the stop is a pause
+def test_stop_during_a_hand_move_keeps_the_arm_released_until_resume_attaches_and_returns(version):
+    arm = SwiftPro(sim_url(version=version), timeout=1.0)
+    arm.connect()
+    teaching = UArmTeaching(arm, demonstration_modality="hand")
+    try:
+        page = UArmEpisodePage(teaching, "uarm-point", seed=0, guidance=False)
+        dev = device_of(arm)
+        teaching.wait(10)
+        job = teaching.teach_by_hand()
+        hand_step(teaching, (2.0, 0.0))
+        teaching.stop()
+        job.result(20)
+        assert dev.steppers_released() and "stopped and released" in teaching.panel.message.value
+        teaching.resume().result(20)
+        assert not dev.steppers_released()
+        np.testing.assert_allclose(arm_to_plant_cm(arm.position()), page.episode.query_states[0], atol=1e-2)
+        assert page.episode.teaching.demonstrations == []  # nothing was confirmed
+    finally:
+        teaching.close()
+
+
 def test_drawn_modality_hides_teaching_by_hand():
     arm = SwiftPro(sim_url(), timeout=1.0)
     arm.connect()
