@@ -8,6 +8,8 @@ class's progress files and checks in ``mt_widgets.classroom``; the uArm Swift Pr
 ``mt_widgets.hardware``; the pages and kiosks built from them in ``mt_widgets.apps``.
 """
 
+from importlib.metadata import PackageNotFoundError, version
+
 from .core import (
     DEFAULT_LAMBDA,
     SKILLS,
@@ -21,7 +23,10 @@ from .core import (
     teaching_risk,
 )
 
-__version__ = "0.1.0"
+try:  # The one version source is pyproject.toml; the installed package's metadata carries it.
+    __version__ = version("mt-widgets")
+except PackageNotFoundError:  # imported from a source tree that was never installed
+    __version__ = "0+unknown"
 
 __all__ = ["DEFAULT_LAMBDA", "SKILLS", "RidgeLearner", "SeedSchedule", "Skill", "TeachingEpisode", "TwoLinkArm",
            "analyse_demonstrations", "optimal_actions", "teaching_risk", "__version__"]

@@ -1,11 +1,9 @@
 #!/usr/bin/env bash
-# The fast tier for the edit loop: every test but the real-browser ones, the notebooks (nbval)
-# and the slow ones (marked in tests/conftest.py), in about a minute on a 2-core machine.
-# ./scripts/run-tests.sh still runs everything. Extra arguments go to pytest (a folder, -k ...).
+# The edit loop: the tiers lint and fast of tests/tiers.py (every test but the slow, real-browser,
+# notebook and hub ones), in about a minute on a 2-core machine, without Chromium.
+# ./scripts/run-tests.sh runs every tier. Extra arguments go to pytest (a folder, -k ...).
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 source "$REPO/scripts/setup.sh"
 cd "$REPO"
-# The one switch that shortens long work under test (see mt_widgets/core/fast_mode.py).
-export MT_WIDGETS_FAST=1
-exec "$VENV/bin/python" -m pytest -m "not browser and not slow" --timeout=600 "$@"
+exec "$VENV/bin/python" -m pytest -m "lint or ($("$VENV/bin/python" tests/tiers.py fast))" --timeout=600 "$@"

@@ -46,7 +46,7 @@ def wait_for_port(port: int, process: subprocess.Popen, log: Path, timeout: floa
 
 
 def jupyter_env(root: Path, **extra: str) -> dict:
-    """The environment of a test server: its own JUPYTER_* folders under ``root``, fast mode on."""
+    """The environment of a test server: its own JUPYTER_* folders under ``root``."""
     env = dict(os.environ)
     for name in ("JUPYTER_CONFIG_DIR", "JUPYTERLAB_SETTINGS_DIR", "JUPYTERLAB_WORKSPACES_DIR", "JUPYTER_RUNTIME_DIR"):
         path = root / name.lower()
@@ -60,7 +60,6 @@ def jupyter_env(root: Path, **extra: str) -> dict:
     (settings / "@jupyterlab" / "apputils-extension").mkdir(parents=True, exist_ok=True)
     (settings / "@jupyterlab" / "apputils-extension" / "notification.jupyterlab-settings").write_text(
         json.dumps({"fetchNews": "false"}))
-    env["MT_WIDGETS_FAST"] = "1"
     env.update(extra)
     return env
 

@@ -1,9 +1,5 @@
-"""Shared test settings."""
-
-import os
-
-# Notebooks run by nbval inherit this: the one documented switch that shortens long work.
-os.environ.setdefault("MT_WIDGETS_FAST", "1")
+"""Shared test settings: the tiers' marks, the browser. A notebook's shortening under test is the
+root conftest.py's (tests/notebook_parameters.py)."""
 
 # Pages that browser tests serve through Voila or JupyterLab: they are driven by a browser,
 # not executed by nbval.
@@ -13,7 +9,7 @@ collect_ignore_glob = ["*/pages/*.ipynb", "*/pages/**/*.ipynb"]
 import pytest  # noqa: E402
 
 from browser_support import CHROMIUM, CHROMIUM_ARGS, artifact_path  # noqa: E402
-from tiers import SLOW_TESTS  # noqa: E402
+from tiers import HUB_TESTS, LINT_TESTS  # noqa: E402
 
 
 @pytest.fixture(scope="session")
@@ -35,19 +31,26 @@ def browser():
 
 
 def pytest_collection_modifyitems(config, items):
-    """Marks for the fast tier (``-m "not browser and not slow"``, scripts/test-fast.sh): every
-    test that drives Chromium is ``browser`` (it takes the ``browser`` fixture, or lives in a
-    folder named ``browser*``), every notebook run by nbval and every test of ``SLOW_TESTS`` is
-    ``slow``."""
+    """The tiers' marks (tests/tiers.py): ``lint`` for tests/test_lint.py; ``browser`` for a test
+    that drives Chromium (it takes the ``browser`` fixture, or lives in a folder named
+    ``browser*``); ``notebook`` (and ``slow``) for every notebook cell run by nbval; ``hub`` for
+    the tests that start a JupyterHub (tests/course/test_hub.py). ``slow`` is otherwise written
+    on the slow tests themselves (``@pytest.mark.slow``)."""
     for item in items:
         try:
-            folders = item.path.relative_to(config.rootpath).parts[:-1]
+            relative = item.path.relative_to(config.rootpath)
         except ValueError:  # a path outside the repository (a temporary folder)
-            folders = ()
+            relative = item.path
+        folders = relative.parts[:-1]
         if "browser" in getattr(item, "fixturenames", ()) or any(f.startswith("browser") for f in folders):
             item.add_marker(pytest.mark.browser)
-        if item.path.suffix == ".ipynb" or item.nodeid.startswith(SLOW_TESTS):
+        if item.path.suffix == ".ipynb":
+            item.add_marker(pytest.mark.notebook)
             item.add_marker(pytest.mark.slow)
+        if relative.as_posix() in LINT_TESTS:
+            item.add_marker(pytest.mark.lint)
+        if relative.as_posix() in HUB_TESTS:
+            item.add_marker(pytest.mark.hub)
 
 
 @pytest.fixture

@@ -1,26 +1,61 @@
-"""The fast tier's marks (tests/conftest.py) keep naming tests that exist: a renamed slow test
-would otherwise quietly join the fast tier, a moved browser folder leave it."""
+"""The tiers (tests/tiers.py) and their marks (tests/conftest.py): every test lands in exactly one
+tier, the files the marks name exist, and the scripts run the tiers tiers.py lists."""
 
-import ast
+import itertools
+import subprocess
+import sys
 from pathlib import Path
 
-from tiers import SLOW_TESTS
+import pytest
+from _pytest.mark.expression import Expression
+
+from tiers import HUB_TESTS, LINT_TESTS, MARKS, TIERS, tier_expression
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def test_every_listed_slow_test_exists():
-    for prefix in SLOW_TESTS:
-        path, _, name = prefix.partition("::")
-        file = ROOT / path
-        assert file.is_file(), f"SLOW_TESTS names {path}, which does not exist"
-        if name:
-            tests = {node.name for node in ast.walk(ast.parse(file.read_text(encoding="utf-8")))
-                     if isinstance(node, ast.FunctionDef) and node.name.startswith("test_")}
-            assert any(test.startswith(name) for test in tests), f"no test in {path} starts with {name!r}"
+@pytest.mark.parametrize("marks", [set(combination) for size in range(len(MARKS) + 1)
+                                   for combination in itertools.combinations(MARKS, size)],
+                         ids=lambda marks: "+".join(sorted(marks)) or "unmarked")
+def test_every_combination_of_marks_is_in_exactly_one_tier(marks):
+    chosen = [name for name, expression in TIERS if Expression.compile(expression).evaluate(lambda mark: mark in marks)]
+    assert len(chosen) == 1, f"a test marked {sorted(marks)} runs in the tiers {chosen}"
+
+
+def test_the_cheap_tiers_run_first():
+    assert [name for name, _ in TIERS][:2] == ["lint", "fast"]
+    assert tier_expression("fast") == TIERS[1][1]
+    with pytest.raises(ValueError, match="name: expected one of"):
+        tier_expression("quick")
+
+
+def test_the_files_the_marks_name_exist_and_the_marks_are_declared():
+    for path in LINT_TESTS + HUB_TESTS:
+        assert (ROOT / path).is_file(), f"tests/tiers.py names {path}, which does not exist"
+    declared = {line.split(":")[0].strip().strip('"') for line in
+                (ROOT / "pyproject.toml").read_text().split("markers = [", 1)[1].split("]", 1)[0].splitlines()
+                if line.strip()}
+    assert set(MARKS) <= declared
 
 
 def test_the_browser_test_folders_are_named_as_the_marking_expects():
     # tests/conftest.py marks every test in a folder named browser* as a browser test.
     folders = {path.name for path in (ROOT / "tests").glob("browser*") if path.is_dir()}
     assert {"browser", "browser_study"} <= folders
+
+
+def test_the_lint_mark_lands_on_the_lint_tests_only():
+    # Collect a few known tests and read the marks conftest.py gave them.
+    result = subprocess.run(
+        [sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:cacheprovider",
+         "-m", tier_expression("lint"), "tests/test_lint.py", "tests/test_fast_tier.py"],
+        cwd=ROOT, capture_output=True, text=True, timeout=300)
+    collected = [line for line in result.stdout.splitlines() if "::" in line]
+    assert collected and all(line.startswith("tests/test_lint.py::") for line in collected), result.stdout
+
+
+def test_the_script_lists_the_tiers_for_run_tests():
+    listed = subprocess.run([sys.executable, str(ROOT / "tests" / "tiers.py")], capture_output=True, text=True,
+                            check=True, timeout=60).stdout
+    assert [tuple(line.split("\t")) for line in listed.splitlines()] == list(TIERS)
+    assert "tests/tiers.py" in (ROOT / "scripts" / "run-tests.sh").read_text()

@@ -1,5 +1,6 @@
 """Promises the repository makes: clean notebooks, a pure core, Binder in step with pyproject."""
 
+import ast
 import json
 import re
 import subprocess
@@ -41,11 +42,57 @@ def _requirement_set(lines):
     return {re.sub(r"\s+", "", line) for line in lines if line.strip() and not line.lstrip().startswith("#")}
 
 
+def _extra(project, name):
+    """An extra's requirements, with ``mt-widgets[a,b]`` (an extra naming others) expanded."""
+    requirements = []
+    for requirement in project["optional-dependencies"][name]:
+        own = re.fullmatch(r"mt-widgets\[([\w,-]+)\]", re.sub(r"\s+", "", requirement))
+        if own:
+            requirements += [r for other in own.group(1).split(",") for r in _extra(project, other)]
+        else:
+            requirements.append(requirement)
+    return requirements
+
+
 def test_binder_requirements_agree_with_pyproject():
     project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
-    expected = _requirement_set(project["dependencies"] + project["optional-dependencies"]["lab"])
+    expected = _requirement_set(project["dependencies"] + _extra(project, "lab"))
     binder = _requirement_set((REPO / "binder" / "requirements.txt").read_text().splitlines())
     assert binder == expected, f"only in binder: {binder - expected}; only in pyproject: {expected - binder}"
+
+
+#: The distribution that provides an import name, where the two differ.
+_DISTRIBUTION = {"serial": "pyserial", "IPython": "ipython", "PIL": "pillow"}
+
+
+def _third_party_imports(folder: Path) -> set[str]:
+    """The distributions the modules below ``folder`` import (anywhere in a module, also inside a function)."""
+    names = set()
+    for path in folder.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                names |= {alias.name.split(".")[0] for alias in node.names}
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                names.add(node.module.split(".")[0])
+    names -= set(sys.stdlib_module_names) | {"mt_widgets"}
+    return {_DISTRIBUTION.get(name, name).lower() for name in names}
+
+
+def _distributions(requirements) -> set[str]:
+    return {re.match(r"[A-Za-z0-9_.-]+", requirement).group(0).lower() for requirement in requirements}
+
+
+def test_the_dependencies_are_what_the_core_imports_and_the_extras_cover_the_rest():
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    core = _third_party_imports(REPO / "mt_widgets" / "core")
+    assert _distributions(project["dependencies"]) == core, (
+        "pyproject.toml's dependencies must be exactly what mt_widgets/core imports; the rest go in extras")
+    everything = _third_party_imports(REPO / "mt_widgets")
+    installed = _distributions(project["dependencies"] + _extra(project, "lab"))
+    # IPython and traitlets come with ipywidgets (the widgets extra), which requires both; tomli is
+    # Python 3.10's optional TOML reader (mt_widgets/study/protocol.py says why it is no dependency).
+    missing = everything - installed
+    assert missing <= {"ipython", "traitlets", "tomli"}, f"imported but in no extra of lab: {missing}"
 
 
 def test_ci_runs_the_readme_test_command():
@@ -66,3 +113,13 @@ def test_start_here_links_every_tutorial_and_app():
     for path in sorted((REPO / "tutorials").glob("[0-9][0-9]_*.ipynb")) + sorted((REPO / "notebooks").glob("*.ipynb")):
         if path.name != "00_start_here.ipynb":
             assert f"{path.name})" in text, f"tutorials/00_start_here.ipynb does not link {path.name}"
+
+
+def test_the_version_is_written_once_in_pyproject():
+    import mt_widgets
+
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    assert mt_widgets.__version__ == project["version"]
+    written = [path.relative_to(REPO) for path in (REPO / "mt_widgets").rglob("*.py")
+               if re.search(r"^__version__\s*=\s*['\"]", path.read_text(encoding="utf-8"), re.M)]
+    assert not written, f"a version written by hand in {written}: read importlib.metadata instead"

@@ -1,24 +1,57 @@
-"""The fast tier's list of slow tests, in a module of its own: tests import it by name
-(``from tiers import SLOW_TESTS``), which a ``conftest`` import cannot do reliably, since pytest
-re-imports every folder's conftest.py under the one name ``conftest``."""
+"""The test suite's tiers: which tests a tier runs, in the order ``./scripts/run-tests.sh`` runs them.
 
-#: Tests that take seconds each (subprocesses, whole simulated studies, long rollouts), as
-#: "path::name" prefixes (every parametrisation): ``slow`` without an edit to their files. A new
-#: slow test can as well carry ``@pytest.mark.slow`` itself.
-SLOW_TESTS = (
-    "tests/analysis/test_figures.py::test_the_report_shows_the_participants_own_errors_and_arrows",
-    "tests/classroom/test_progress.py::test_two_kernels_of_one_student_writing_at_once_lose_nothing",
-    "tests/core/test_energy_and_rollouts.py::test_energy_is_conserved_without_gravity",
-    "tests/core/test_energy_and_rollouts.py::test_the_compiled_rollout_equals_the_generic_numpy_rollout",
-    "tests/core/test_machine_teaching.py::test_learning_from_the_optimal_demonstration_gives_back_theta",
-    "tests/core/test_query_states_and_skills.py::test_no_seed_dead_ends",
-    "tests/in_silico/test_synthetic_teachers.py::test_batched_engine_and_session_engine_give_the_same_study",
-    "tests/in_silico/test_synthetic_teachers.py::test_in_the_simulation_the_two_baselines_do_not_differ",
-    "tests/in_silico/test_synthetic_teachers.py::test_the_shipped_synthetic_studies_are_what_the_current_model",
-    "tests/in_silico/test_synthetic_teachers.py::test_the_study_analysis_imports_without_widgets",
-    "tests/in_silico/test_synthetic_teachers.py::test_without_an_effect_simulated_power_is_the_false_positive",
-    "tests/study/test_concurrency.py::",
-    "tests/study/test_crash_safety.py::test_killed_and_resumed_sessions_log_exactly_the_uninterrupted",
-    "tests/study/test_user_skill_protocol.py::",
-    "tests/test_readme.py::test_readme_example_runs",
+A tier is a pytest marker expression over five marks, set by tests/conftest.py (``mark_tiers``):
+
+- ``lint``: tests/test_lint.py (ruff over the tree);
+- ``browser``: a test that drives Chromium (it takes the ``browser`` fixture, lives in a folder named
+  ``browser*``, or carries ``@pytest.mark.browser``);
+- ``notebook``: a notebook cell run by nbval;
+- ``hub``: a test that starts a JupyterHub (tests/course/test_hub.py);
+- ``slow``: a test that takes seconds, marked ``@pytest.mark.slow`` where it is written.
+
+Every test belongs to exactly one tier (tests/test_fast_tier.py checks it over every combination
+of marks). The cheap tiers come first, so a lint error or a broken core stops the run in a minute
+or two instead of after every browser test.
+
+``python tests/tiers.py`` prints the tiers, one ``name<TAB>expression`` a line, for
+scripts/run-tests.sh; ``python tests/tiers.py fast`` one tier's expression, for scripts/test-fast.sh.
+This module imports nothing from pytest: the scripts read it before any test runs.
+"""
+
+from __future__ import annotations
+
+#: The marks tests/conftest.py sets; a tier selects by these only.
+MARKS = ("lint", "browser", "notebook", "hub", "slow")
+
+#: The files whose tests are ``lint``, and ``hub``, as paths from the repository's root.
+LINT_TESTS = ("tests/test_lint.py",)
+HUB_TESTS = ("tests/course/test_hub.py",)
+
+#: (name, marker expression), in the order they run. ``fast`` is what scripts/test-fast.sh runs
+#: after ``lint``: the edit loop's tiers.
+TIERS = (
+    ("lint", "lint"),
+    ("fast", "not lint and not browser and not notebook and not hub and not slow"),
+    ("slow", "slow and not lint and not browser and not notebook and not hub"),
+    ("browser", "browser and not lint and not notebook and not hub"),
+    ("notebook", "notebook and not lint and not hub"),
+    ("hub", "hub and not lint"),
 )
+
+
+def tier_expression(name: str) -> str:
+    """The marker expression of the tier ``name`` (one of ``TIERS``)."""
+    for tier, expression in TIERS:
+        if tier == name:
+            return expression
+    raise ValueError(f"name: expected one of {[tier for tier, _ in TIERS]}, got {name!r}")
+
+
+if __name__ == "__main__":
+    import sys
+
+    if len(sys.argv) > 1:  # one tier's expression
+        print(tier_expression(sys.argv[1]))
+    else:
+        for tier, expression in TIERS:
+            print(f"{tier}\t{expression}")

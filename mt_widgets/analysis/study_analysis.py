@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from mt_widgets.study.log import StudyFolder
+from mt_widgets.study.study_folder import StudyFolder
 from mt_widgets.study.tidy import read_study
 
 from .example_studies import EXAMPLE_STUDY

@@ -33,7 +33,8 @@ from ipywidgets import HTML
 
 from mt_widgets.core import Box
 from mt_widgets.core.validation import as_bool
-from mt_widgets.widgets import ViewTransform, keep_canvas_size
+from mt_widgets.widgets import ViewTransform
+from mt_widgets.widgets.episode import keep_canvas_size
 
 #: The paper's display: 518 mm x 325 mm (a 24-inch 16:10 monitor, 1920 x 1200 pixels).
 PAPER_SCREEN_MM = (518.0, 325.0)

@@ -8,7 +8,6 @@ from .arm import ArmParameters, TwoLinkArm
 from .arm_plant import ArmPlant
 from .drawing import PlantDrawing, PoseSketch, TargetShape
 from .episode import DemonstrationAnalysis, EpisodeStateError, TeachingEpisode
-from .fast_mode import running_under_test
 from .features import EndEffectorFeatures, FeatureMap, FunctionFeatures, PositionFeatures
 from .learner import DEFAULT_LAMBDA, RidgeLearner
 from .machine_teaching import (
@@ -37,5 +36,5 @@ __all__ = [
     "TeachingEpisode",
     "Trajectory", "TrajectoryBatch", "TwoLinkArm", "UARM_WORKSPACE_CM", "UArmPlant",
     "UnderdeterminedTeachingWarning", "action_difference", "analyse_demonstrations", "condition_number",
-    "optimal_actions", "ridge_operator", "running_under_test", "sample_query_states", "teaching_risk",
+    "optimal_actions", "ridge_operator", "sample_query_states", "teaching_risk",
 ]

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mt_widgets.core import SKILLS, running_under_test
+from mt_widgets.core import SKILLS
 from mt_widgets.core.validation import as_positive
 
 from .connector import SIMULATOR_URL, SwiftPro
@@ -58,9 +58,8 @@ log = logging.getLogger(__name__)
 
 #: Millimetres per centimetre: the plant's unit to the arm's.
 MM_PER_CM = 10.0
-#: The simulated arm (``SIMULATOR_URL``, firmware 4.x) fast, for tests and ``MT_WIDGETS_FAST=1`` runs:
-#: 10 ms boot, moves 50x faster.
-FAST_SIMULATOR_URL = "uarm-sim://?firmware=4&boot=0.01&motion_scale=0.02"
+#: How much faster than real time the simulated arm of tests and short runs moves (``FAST_SIMULATOR_URL``).
+FAST_SIMULATOR_SPEED = 50.0
 
 #: The plant a bridge follows (step period, per-step limit, workspace): the paper's uArm skills'.
 _PLANT = SKILLS["uarm-point"].plant
@@ -82,18 +81,32 @@ def arm_to_plant_cm(points_mm) -> np.ndarray:
     return points[..., :2] / MM_PER_CM
 
 
-def default_simulator_url() -> str:
-    """The simulated arm's URL: fast under test (``MT_WIDGETS_FAST=1``), real time otherwise."""
-    return FAST_SIMULATOR_URL if running_under_test() else SIMULATOR_URL
+def default_simulator_url(speed: float = 1.0) -> str:
+    """The simulated arm's URL (firmware 4.x) moving ``speed`` times faster than real time.
+
+    At ``speed`` 1 it is ``SIMULATOR_URL``, which boots and moves as a real arm does; faster, it also
+    boots in 10 ms. The caller says the speed: nothing here asks whether it runs under test.
+    """
+    speed = as_positive("speed", speed)
+    if speed == 1.0:
+        return SIMULATOR_URL
+    return f"{SIMULATOR_URL}&boot=0.01&motion_scale={1.0 / speed:g}"
 
 
-def connect_arm(port: str | None = None, *, simulator_url: str | None = None, **arm_options) -> SwiftPro:
+#: The simulated arm 50x faster than real time, booting in 10 ms: for tests and short runs.
+FAST_SIMULATOR_URL = default_simulator_url(FAST_SIMULATOR_SPEED)
+
+
+def connect_arm(port: str | None = None, *, simulator_url: str | None = None, simulator_speed: float = 1.0,
+                **arm_options) -> SwiftPro:
     """A connected arm: the given port, else a plugged-in Swift Pro, else the simulated arm.
 
     Args:
         port: a device path or pyserial URL to use as is; None or ``"auto"`` to look for a
             Swift Pro by its USB id and fall back on the simulated arm when none answers.
-        simulator_url: the fallback (default :func:`default_simulator_url`).
+        simulator_url: the fallback (default: the simulated arm, ``default_simulator_url(simulator_speed)``).
+        simulator_speed: how much faster than real time the fallback simulated arm moves (1: real
+            time, as a real arm; tests pass ``FAST_SIMULATOR_SPEED``). Not used with ``simulator_url``.
         **arm_options: passed to ``SwiftPro`` (``timeout``, ``envelope``, ...).
 
     Returns:
@@ -112,7 +125,7 @@ def connect_arm(port: str | None = None, *, simulator_url: str | None = None, **
         return arm
     except SwiftProNotFound as exc:
         log.info("no Swift Pro plugged in (%s): using the simulated arm", exc)
-    arm = SwiftPro(simulator_url or default_simulator_url(), **arm_options)
+    arm = SwiftPro(simulator_url or default_simulator_url(simulator_speed), **arm_options)
     arm.connect()
     return arm
 
@@ -404,6 +417,6 @@ class UArmBridge:
         return None
 
 
-__all__ = ["ExecutionReport", "FAST_SIMULATOR_URL", "MM_PER_CM", "SIMULATOR_URL", "UArmBridge", "arm_to_plant_cm",
-           "connect_arm", "default_simulator_url", "describe_error", "is_simulated", "plant_to_arm_mm",
-           "polar_waypoints"]
+__all__ = ["ExecutionReport", "FAST_SIMULATOR_SPEED", "FAST_SIMULATOR_URL", "MM_PER_CM", "SIMULATOR_URL", "UArmBridge",
+           "arm_to_plant_cm", "connect_arm", "default_simulator_url", "describe_error", "is_simulated",
+           "plant_to_arm_mm", "polar_waypoints"]

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from mt_widgets.core.validation import as_bool
-from mt_widgets.study.log import StudyFolder
 from mt_widgets.study.session import Session
+from mt_widgets.study.study_folder import StudyFolder
 
 from .plan import default_parameters, episode_plan, imagined_line_target, participant_id, resolve_protocol, teacher_seed
 from .progress import Progress
@@ -39,7 +39,8 @@ class SessionTeacher:
             seed.entropy, spawn_key=tuple(seed.spawn_key) + (7,)) if isinstance(seed, np.random.SeedSequence)
             else np.random.SeedSequence(int(seed), spawn_key=(7,)))
         self.plan = episode_plan(protocol)
-        self._episode_of = {(step["phase_index"], step["episode"]): e for e, step in enumerate(self.plan)}
+        self._episode_of = {(step["session"], step["phase_index"], step["episode"]): e
+                            for e, step in enumerate(self.plan)}
         parameters = default_parameters(protocol) if parameters is None else parameters
         self.population = TeacherPopulation.draw(parameters, [seed], len(self.plan),
                                                  max(step["demonstrations"] for step in self.plan))
@@ -54,7 +55,8 @@ class SessionTeacher:
                 self.demonstrate(session, step)
             elif step.kind == "episode_end":
                 results.append(session.finish_episode())
-                self.population.see_reproduction()
+                if self.plan[self._episode_of[(session.plan.id, step.phase_index, step.episode)]]["reproduced"]:
+                    self.population.see_reproduction()
             elif step.kind == "practice":
                 session.finish_practice(duration_s=float(step.duration_s or 0.0))
             elif step.kind == "video":
@@ -86,14 +88,14 @@ class SessionTeacher:
     def demonstrate(self, session, step) -> None:
         """Draws one arrow for the current query state and submits it with its timings."""
         skill = self.protocol.skill(step.skill)
-        e = self._episode_of[(step.phase_index, step.episode)]
+        e = self._episode_of[(session.plan.id, step.phase_index, step.episode)]
         if self._episode is None or self._episode[0] != e:
             # What the teacher works from for this episode: where the target is from each tip
             # position, and the optimal arrows its understanding blends in.
             positions, _ = skill.end_effector(step.query_states)
             # The session's own episode: no second TeachingEpisode (and SVD) per study episode.
             optimal = step.teaching_episode.optimal_actions
-            anchor = imagined_line_target(self.protocol, step.phase_index)
+            anchor = imagined_line_target(self.protocol, step.phase_index, session.plan.id)
             along = None if anchor is None else along_line_offsets(positions, skill.target, anchor)
             self._episode = (e, naive_offsets(positions, skill.target), optimal, along)
         _, offsets, optimal, along = self._episode

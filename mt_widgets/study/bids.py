@@ -25,7 +25,8 @@ from pathlib import Path
 
 import mt_widgets
 
-from .log import StudyFolder, read_events
+from .log import read_log
+from .study_folder import StudyFolder
 from .tidy import excluded_participants, participant_logs
 
 BIDS_VERSION = "1.9.0"
@@ -131,7 +132,7 @@ def export_bids(study_folder, out_folder) -> Path:
     asked = [step for step in protocol.steps if step.kind in ("questionnaire", "eligibility")]
     participants, labels, phenotype = [], {}, {step.id: [] for step in asked}
     for path in participant_logs(study.folder):
-        events, _ = read_events(path)
+        events = read_log(path, protocol.sessions[0].id)
         if not events or events[0]["type"] != "session_started":
             continue
         pid = events[0]["participant"]
@@ -205,11 +206,11 @@ def _write_participant(out: Path, label: str, task: str, events: list[dict], sid
         episode, done = started[key], finished.get(key, {})
         row = {"phase": event["phase"], "phase_index": event["phase_index"], "episode": event["episode"],
                "trial": event["index"], "skill": episode["skill"], "guidance_shown": bool(event["guidance_shown"]),
-               "guidance_modality": episode.get("guidance_modality", "arrows+words"),
+               "guidance_modality": episode["guidance_modality"],
                "action_1": event["action"][0], "action_2": event["action"][1],
                "optimal_1": event["optimal"][0], "optimal_2": event["optimal"][1],
-               "time_to_first_input": event.get("time_to_first_input_s"),
-               "drawing_duration": event.get("drawing_duration_s"), "response_time": event.get("response_time_s"),
+               "time_to_first_input": event["time_to_first_input_s"],
+               "drawing_duration": event["drawing_duration_s"], "response_time": event["response_time_s"],
                "teaching_error": done.get("teaching_error"), "rho1": done.get("rho1"), "rho2": done.get("rho2"),
                "reproduction_diverged": done["reproduction"]["diverged"] if done else None}
         row.update({f"state_{i + 1}": value for i, value in enumerate(event["state"])})

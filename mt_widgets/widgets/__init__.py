@@ -13,36 +13,25 @@
 Widgets hold no science: they call ``mt_widgets.core`` and draw the result.
 """
 
-from .animation import Animation, frame_times, play_frames, retire, sample_at, stop_animations
-from .arm_view import LAYERS, ArmView
-from .arrows import draw_arrow, draw_arrow_pair
+from .animation import play_frames, retire, stop_animations
+from .arm_view import ArmView
+from .arrows import draw_arrow
 from .coords import ViewTransform
-from .demo import DEMO_SKILLS, DemoPage
-from .episode import DemonstrationRecord, EpisodeResult, EpisodeWidget, keep_canvas_size
-from .guidance import GuidancePanel, explain_difference, legend_html
-from .legend import MARKS, CanvasLegend, legend_entries
+from .demo import DemoPage
+from .episode import DemonstrationRecord, EpisodeResult, EpisodeWidget
+from .guidance import GuidancePanel
 from .progress import EffortProgress
-from .redraw import drawing_batch, repaint_on_new_view
 from .reproduction import ReproductionPlayer
 from .robots import RobotPainter, painter_for
-from .teaching import ConfirmedAction, TeachingCanvas, describe_action
-from .theme import (
-                    COLOR_NAMES,
-                    DEFAULT_THEME,
-                    PAPER_THEME,
-                    PAPER_UARM_THEME,
-                    THEMES,
-                    ArrowStyle,
-                    Theme,
-                    fill_words,
-                    get_theme,
-)
+from .teaching import ConfirmedAction, TeachingCanvas
+from .theme import DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, Theme, get_theme
 
+# What a user builds a lesson or a page from. The helpers the views share (legend entries, arrow
+# styles, colour names, drawing batches, frame times, ...) stay in their modules
+# (``mt_widgets.widgets.theme``, ``.legend``, ``.redraw``, ``.animation``, ...), imported from there.
 __all__ = [
-    "COLOR_NAMES", "MARKS", "Animation", "ArmView", "ArrowStyle", "CanvasLegend", "ConfirmedAction", "DEFAULT_THEME",
-    "DEMO_SKILLS", "DemoPage", "DemonstrationRecord", "EffortProgress", "EpisodeResult", "EpisodeWidget",
-    "GuidancePanel", "LAYERS", "PAPER_THEME", "PAPER_UARM_THEME", "ReproductionPlayer", "RobotPainter", "THEMES",
-    "TeachingCanvas", "Theme", "ViewTransform", "describe_action", "draw_arrow", "draw_arrow_pair", "drawing_batch",
-    "explain_difference", "fill_words", "frame_times", "get_theme", "keep_canvas_size", "legend_entries",
-    "legend_html", "painter_for", "play_frames", "repaint_on_new_view", "retire", "sample_at", "stop_animations",
+    "DEFAULT_THEME", "PAPER_THEME", "PAPER_UARM_THEME", "THEMES", "ArmView", "ConfirmedAction", "DemoPage",
+    "DemonstrationRecord", "EffortProgress", "EpisodeResult", "EpisodeWidget", "GuidancePanel", "ReproductionPlayer",
+    "RobotPainter", "TeachingCanvas", "Theme", "ViewTransform", "draw_arrow", "get_theme", "painter_for",
+    "play_frames", "retire", "stop_animations",
 ]

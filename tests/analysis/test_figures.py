@@ -91,6 +91,7 @@ def test_fig5_draws_the_reproduction_of_each_learnt_skill_beside_the_target(stud
     assert len(p3) == 8
 
 
+@pytest.mark.slow
 def test_the_report_shows_the_participants_own_errors_and_arrows(study, tmp_path):
     participant = study.episodes.participant.iloc[-1]
     figure = teaching_report(study.episodes, study.demonstrations, participant)

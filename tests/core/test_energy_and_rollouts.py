@@ -20,6 +20,7 @@ def energy_drift(gravity: float) -> float:
     return float(np.max(np.abs(energy - energy[0])) / scale)
 
 
+@pytest.mark.slow
 def test_energy_is_conserved_without_gravity():
     assert energy_drift(0.0) < 1e-9
 
@@ -28,6 +29,7 @@ def test_energy_is_conserved_with_gravity():
     assert energy_drift(9.81) < 1e-6
 
 
+@pytest.mark.slow
 def test_the_compiled_rollout_equals_the_generic_numpy_rollout():
     # The same features given as a user function take the generic RK4 path written in numpy.
     skill = SKILLS["sim-point"]

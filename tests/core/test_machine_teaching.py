@@ -28,6 +28,7 @@ def teaching_problems(draw, below_teaching_dimension=False):
     return Phi, theta, lam, rng
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None)
 @given(teaching_problems())
 def test_learning_from_the_optimal_demonstration_gives_back_theta(problem):

@@ -94,6 +94,7 @@ def test_a_user_defines_a_new_skill_in_a_few_lines():
         Skill("bad", "bad", base.plant, features, np.zeros((2, 5)), base.start)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("key", ["sim-point", "uarm-point"])
 def test_no_seed_dead_ends(key):
     # Before backtracking, about 1 uArm seed in 750 found no well-conditioned third state.

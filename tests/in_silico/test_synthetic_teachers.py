@@ -98,6 +98,7 @@ def test_guided_teachers_move_toward_the_optimal_arrows_and_control_does_not():
     assert p3["control"][8] > 0.8 * p3["control"][1]
 
 
+@pytest.mark.slow
 def test_batched_engine_and_session_engine_give_the_same_study(tmp_path):
     from mt_widgets.study.tidy import read_study
     run_through_sessions(tmp_path / "study", 2, seed=4)
@@ -152,6 +153,7 @@ def test_the_papers_baselines_follow_from_its_changes_and_percentages():
     assert physical == pytest.approx({"P1": 5.30 / 0.8826, "P2": 6.32 / 0.7734})
 
 
+@pytest.mark.slow
 def test_in_the_simulation_the_two_baselines_do_not_differ_as_in_the_paper():
     # The paper's post-hoc check finds no difference between the P1 and P2 errors (p = 0.0989,
     # 0.1148). Over 150 studies of 2 x 16 with their own query states, the paired t-test of
@@ -231,6 +233,7 @@ def test_compare_with_paper_has_one_row_per_change_and_group():
     assert table.loc[0, "mean_gap"] == pytest.approx(table.loc[0, "in_silico_mean"] - table.loc[0, "paper_mean"])
 
 
+@pytest.mark.slow
 def test_without_an_effect_simulated_power_is_the_false_positive_rate():
     # Teachers who learn nothing from guidance: the groups differ by chance only, so a
     # one-sided test at alpha = 0.05 rejects in about 5 % of studies.
@@ -262,6 +265,7 @@ def test_progress_prints_a_text_line_outside_a_kernel(capsys):
     assert "studies 3/3" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_the_study_analysis_imports_without_widgets():
     code = ("import sys, mt_widgets.in_silico, mt_widgets.analysis.figures, mt_widgets.analysis.power, "
             "mt_widgets.in_silico.teachers, mt_widgets.analysis.statistics, mt_widgets.analysis; "
@@ -276,6 +280,7 @@ def test_the_plan_follows_the_protocol():
     assert len(plan) == 12
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("which", ["sim", "uarm"])
 def test_the_shipped_synthetic_studies_are_what_the_current_model_writes(which, tmp_path):
     # Fails when the teacher model or a fit changes without ``python -m mt_widgets.analysis.example_studies``.

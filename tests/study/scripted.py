@@ -82,4 +82,61 @@ def demonstrations(events) -> list[tuple]:
             for e in events if e["type"] == "demonstration"]
 
 
-__all__ = ["SHORT_PROTOCOL", "demonstrations", "load_protocol", "run", "scripted_action", "short_protocol"]
+__all__ = ["FOLLOWUP_SESSION", "SHORT_PROTOCOL", "demonstrations", "followup_protocol", "load_protocol", "run",
+           "run_all", "scripted_action", "short_protocol"]
+
+
+#: A follow-up session a week (to two weeks) after SHORT_PROTOCOL's main session: retention of
+#: skill A and transfer to skill B, with its own questionnaire.
+FOLLOWUP_SESSION = """
+[[sessions]]
+id = "followup-1w"
+welcome = "Welcome back."
+instructions = "As last time."
+thank_you = "Thank you, that was the last session."
+
+[sessions.window]
+earliest = "7d"
+latest = "14d"
+too_early = "refuse"
+too_late = "{late}"
+too_early_text = "Too early: come back on {{opens}}."
+
+[[sessions.phases]]
+id = "F1"
+skill = "uarm-point"
+episodes = 1
+instructions = "Retention."
+
+[[sessions.phases]]
+id = "F2"
+skill = "uarm-line"
+episodes = 1
+instructions = "Transfer."
+
+[[sessions.after]]
+id = "followup_tlx"
+kind = "questionnaire"
+
+[[sessions.after.items]]
+id = "effort"
+kind = "likert"
+prompt = "How hard did you work?"
+levels = ["1", "2", "3", "4", "5"]
+"""
+
+
+def followup_protocol(late: str = "refuse"):
+    """SHORT_PROTOCOL with FOLLOWUP_SESSION (too late: ``late``, "refuse" or "flag")."""
+    return parse_protocol(SHORT_PROTOCOL + FOLLOWUP_SESSION.replace("{late}", late).replace("{{", "{")
+                          .replace("}}", "}"), "short-followup.toml")
+
+
+def run_all(session) -> None:
+    """Drives ``session`` to its end, answering every question with its first option."""
+    while not session.finished:
+        step = session.current_step()
+        if step.kind in ("questionnaire", "demographics", "eligibility"):
+            session.submit_answers({item.id: item.choices[0] for item in step.study_step.items})
+        else:
+            run(session, stop_after=1)

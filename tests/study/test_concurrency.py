@@ -5,10 +5,15 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 from mt_widgets.study import StudyFolder, read_events
 from mt_widgets.study.participants import block_assignment
 
 from .scripted import short_protocol
+
+# Each test runs sessions in subprocesses: seconds each.
+pytestmark = pytest.mark.slow
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -87,6 +87,7 @@ def reference(tmp_path_factory):
     return _summary(session.events)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2])
 def test_killed_and_resumed_sessions_log_exactly_the_uninterrupted_demonstrations(tmp_path, reference, seed):
     StudyFolder.create(tmp_path, short_protocol())

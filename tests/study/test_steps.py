@@ -5,7 +5,8 @@ import re
 import numpy as np
 import pytest
 
-from mt_widgets.apps import StudyApp, participant_texts
+from blinding_support import participant_texts
+from mt_widgets.apps import StudyApp
 from mt_widgets.core import SKILLS
 from mt_widgets.study import (
     LogError,
@@ -18,9 +19,9 @@ from mt_widgets.study import (
     read_events,
     read_study,
 )
-from mt_widgets.study.log import OUTCOME_FILE
 from mt_widgets.study.protocol import PROTOCOL_FOLDER
 from mt_widgets.study.session import timeline
+from mt_widgets.study.study_folder import OUTCOME_FILE
 
 from .scripted import SHORT_PROTOCOL, scripted_action
 

@@ -15,6 +15,9 @@ from mt_widgets import SKILLS
 from mt_widgets.study import ProtocolError, Session, StudyFolder, export_study, load_protocol, parse_protocol
 from mt_widgets.widgets import EpisodeWidget
 
+# Each test loads a user's skill module and runs a session with it: seconds each.
+pytestmark = pytest.mark.slow
+
 USER_PLANT = Path(__file__).resolve().parents[1] / "user_plant.py"
 
 PROTOCOL = """

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from mt_widgets.widgets import DEMO_SKILLS, DemoPage
+from mt_widgets.widgets import DemoPage
+from mt_widgets.widgets.demo import DEMO_SKILLS
 
 
 def finish(episode):

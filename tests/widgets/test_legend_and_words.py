@@ -5,9 +5,12 @@ import re
 import numpy as np
 import pytest
 
+from blinding_support import participant_texts
 from mt_widgets import SKILLS
-from mt_widgets.apps import StudyApp, participant_texts
-from mt_widgets.widgets import THEMES, ArmView, EpisodeWidget, ReproductionPlayer, Theme, explain_difference, fill_words
+from mt_widgets.apps import StudyApp
+from mt_widgets.widgets import THEMES, ArmView, EpisodeWidget, ReproductionPlayer, Theme
+from mt_widgets.widgets.guidance import explain_difference
+from mt_widgets.widgets.theme import fill_words
 
 
 def lab(hex_color: str) -> np.ndarray:
