@@ -173,3 +173,32 @@ def test_in_the_study_the_modality_is_protocol_data_and_logged(tmp_path):
         np.testing.assert_allclose(demos[0]["action"], (1.5, 0.0), atol=0.02)
     finally:
         app.arm_teaching.close()
+
+
+def test_the_simulated_hand_drags_the_tip_only_when_released_and_pulls_the_cable():
+    from mt_widgets.apps.uarm_hand import SimulatedHand, arm_to_view
+    from mt_widgets.hardware import SimulatedSwiftPro
+    dev = SimulatedSwiftPro(boot_delay=0.0)
+    dev.power_on(time.monotonic())
+    hand = SimulatedHand(dev, floating=False)
+    start = dev.position_at(time.monotonic())
+    tip = arm_to_view(start[0], start[1])
+    hand._down(*tip)
+    hand._move(tip[0], tip[1] - 10)  # 20 mm forward
+    hand._up(0, 0)
+    assert dev.hand_refusals >= 1 and dev.position_at(time.monotonic()) == pytest.approx(start)
+    assert "hold" in hand.note.value  # powered: it does not give way
+    dev.write(b"#1 M2019\n", time.monotonic())
+    hand._down(*tip)
+    hand._move(tip[0], tip[1] - 10)
+    hand._up(0, 0)
+    wait_until(lambda: not dev.hand_is_moving(time.monotonic()), what="the hand move to end")
+    assert dev.position_at(time.monotonic())[0] == pytest.approx(start[0] + 20.0, abs=0.01)
+    hand._down(tip[0] + 100, tip[1])  # a press away from the tip grabs nothing
+    assert not hand.dragging
+    hand.pull_cable()
+    assert dev.disconnected and hand.cable_button.disabled and "pulled" in hand.note.value
+    with pytest.raises(TypeError, match="device"):
+        SimulatedHand(object())
+    with pytest.raises(TypeError, match="floating"):
+        SimulatedHand(dev, floating="yes")
