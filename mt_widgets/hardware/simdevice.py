@@ -778,6 +778,77 @@ class SimulatedSwiftPro:
         cmd.speed = self._speed_4x(values[-1], linear)
         return None
 
+    # -- the 3Plus jogs: to the edge of the reach along an axis (G2207), a joint to its limit
+    # (G2208), every joint back inside its limits (G2209). Approximation: the firmware computes
+    # the edges from its joint limits with 1-2 degree margins; here the edge is found on the
+    # same reach rule as every other move, 1 mm inside.
+    def _jog(self, cmd, t, to_target):
+        fields = scan4(_pattern("N d F f"), cmd.args)
+        if len(fields) < 2:
+            return 21
+        speed = grbl_read_float(fields[1])
+        if speed is None:
+            return "ok"
+        direction = int(fields[0]) + (3 if speed < 0 else 0)
+        if not 0 <= direction <= 5:
+            return 21
+        target = to_target(direction, self._actual(t))
+        cmd.target = target if target is not None else (-1.0, 0.0, 0.0)  # the firmware's "to report error"
+        cmd.speed = self._speed_4x(abs(speed), False)
+        return None
+
+    @staticmethod
+    def _axis_edge(direction, start):
+        axis, sign = direction % 3, (1.0 if direction < 3 else -1.0)
+
+        def at(d):
+            p = list(start)
+            p[axis] += sign * d
+            return tuple(p)
+        if not is_reachable(*start) or not is_reachable(*at(0.7)):
+            return None  # no room to move: E22
+        lo, hi = 0.7, 400.0
+        for _ in range(40):
+            mid = (lo + hi) / 2
+            lo, hi = (mid, hi) if is_reachable(*at(mid)) else (lo, mid)
+        return at(lo - 1.0) if lo - 1.0 >= 0.7 else None
+
+    @staticmethod
+    def _joint_limit(direction, start):
+        angles = joint_angles(*start)
+        if angles is None:
+            return None
+        b, lo, up, _ = angles
+        if direction in (0, 3):
+            goal = BASE_LIMIT_DEG - 0.5 if direction == 0 else -BASE_LIMIT_DEG + 0.5
+            b, moved = goal, abs(goal - b)
+        elif direction in (1, 4):  # lower arm: until the angle between the arms is at its min / max
+            between = BETWEEN_ARMS_LIMITS_DEG[0] if direction == 1 else BETWEEN_ARMS_LIMITS_DEG[1]
+            goal = min(max(180.0 - between - up, LOWER_ARM_LIMITS_DEG[0] + 1), LOWER_ARM_LIMITS_DEG[1] - 1)
+            lo, moved = goal, abs(goal - lo)
+        else:  # upper arm, likewise
+            between = BETWEEN_ARMS_LIMITS_DEG[0] if direction == 2 else BETWEEN_ARMS_LIMITS_DEG[1]
+            goal = min(max(180.0 - between - lo, UPPER_ARM_LIMITS_DEG[0] + 1), UPPER_ARM_LIMITS_DEG[1] - 1)
+            up, moved = goal, abs(goal - up)
+        if moved < 0.7:
+            return None  # already at the limit: E22
+        return tool_position(b, lo, up)
+
+    def _g2209(self, cmd, t):
+        fields = scan4(_pattern("F f"), cmd.args)
+        if not fields:
+            return 21
+        speed = grbl_read_float(fields[0])
+        if speed is None:
+            return "ok"
+        angles = joint_angles(*self._actual(t))
+        b, lo, up = angles[:3] if angles else (0.0, 45.0, 30.0)
+        b = min(max(b, -BASE_LIMIT_DEG + 2), BASE_LIMIT_DEG - 2)
+        lo = min(max(lo, LOWER_ARM_LIMITS_DEG[0] + 2), LOWER_ARM_LIMITS_DEG[1] - 2)
+        up = min(max(up, UPPER_ARM_LIMITS_DEG[0] + 2), UPPER_ARM_LIMITS_DEG[1] - 2)
+        cmd.target, cmd.speed = tool_position(b, lo, up), self._speed_4x(abs(speed), False)
+        return None
+
     def _polar_target(self, s: float, r: float, h: float) -> tuple[float, float, float]:
         a = math.radians(r - 90.0)
         return (s * math.cos(a), s * math.sin(a), h)
@@ -814,6 +885,9 @@ class SimulatedSwiftPro:
             "G2205": lambda c, t: self._fixed_move("S f R f H f F f", c, self._polar_offset, True),
             "G2206": lambda c, t: self._fixed_move(
                 "B f L f R f F f", c, lambda b, lo, up, f: tool_position(b - 90.0, lo, up), False),
+            "G2207": lambda c, t: self._jog(c, t, self._axis_edge),
+            "G2208": lambda c, t: self._jog(c, t, self._joint_limit),
+            "G2209": self._g2209,
         }
         h = {}  # the moves above are started by _start_move_4x from the queue
         h.update({

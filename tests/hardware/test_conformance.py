@@ -205,6 +205,22 @@ def test_4x_joint_move_g2206():
     assert arm.dev.position_at(arm.t) == pytest.approx((220.0, 0.0, 80.0), abs=0.01)
 
 
+def test_4x_jogs_g2207_g2208_g2209():
+    arm = SdkClient(4)
+    assert is_ok(arm.send("G2207 N0 F100", timeout=10))  # +X to the edge of the reach
+    x, y, z = arm.dev.position_at(arm.t)
+    assert x > 300.0 and (y, z) == pytest.approx((0.0, 100.0))
+    assert arm.send("G2207 N0 F100", timeout=10) == ["E22"]  # already there: the firmware reports an error
+    assert is_ok(arm.send("G2207 N0 F-100", timeout=10))  # a negative speed goes the other way
+    assert arm.dev.position_at(arm.t)[0] < 150.0
+    assert is_ok(arm.send("G2208 N0 F100", timeout=10))  # the base to its limit
+    assert values(arm.send("P2206 N0"))[0] > 170.0
+    assert arm.send("G2208 N0 F100", timeout=10) == ["E22"]
+    assert is_ok(arm.send("G2209 F100", timeout=10))  # every joint inside its limits
+    assert values(arm.send("P2206 N0"))[0] <= 178.0 + 1e-6
+    assert arm.send("G2207 N9 F100") == ["E21"] and arm.send("G2208 F100") == ["E21"]
+
+
 def test_delay_g2004(arm):
     assert is_ok(arm.send(f"G2004 P{100}"))
 
@@ -400,7 +416,8 @@ def test_unknown_commands(arm):
     assert ret == (["E20"] if arm.dev.firmware == 4 else TIMEOUT)
 
 
-COVERED_4X = {"G0", "G1", "G2004", "G2201", "G2202", "G2204", "G2205", "G2206", "M17", "M18", "M204", "M2019",
+COVERED_4X = {"G0", "G1", "G2004", "G2201", "G2202", "G2204", "G2205", "G2206", "G2207", "G2208", "G2209",
+              "M17", "M18", "M204", "M2019",
               "M2120", "M2121", "M2122", "M2123", "M2124", "M2201", "M2202", "M2203", "M2205", "M2210", "M2211",
               "M2212", "M2213", "M2215", "M2220", "M2221", "M2222", "M2231", "M2232", "M2233", "M2234", "M2240",
               "M2241", "M2400", "M2401", "M2410", "M2411", "M2412", "M2413", "M2500", "P2200", "P2201", "P2202",
