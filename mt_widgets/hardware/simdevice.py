@@ -324,6 +324,7 @@ class SimulatedSwiftPro:
             self._relative = False          # 3.x G90/G91
             self._joint_offset = [0.0, 0.0, 0.0]  # 3.x: measured minus believed joint angles
             self._serial_moved = False      # 3.x M2500 moves the command port to Serial2
+            self._grove: dict[int, int] = {}  # 3.x: port -> Grove module type initialised
             self.bt_name = "uArm"
 
     def write(self, data: bytes, now: float) -> None:
@@ -1446,7 +1447,9 @@ class SimulatedSwiftPro:
             "M2220": self._m2220, "M2221": self._m2221, "M2222": self._m2222,
             "M2231": self._effector_3x("pump"), "M2232": self._effector_3x("gripper"),
             "M2233": self._ok_only, "M2234": self._m2234_3x, "M2240": self._m2240, "M2241": self._m2241,
-            "M2245": self._m2245_3x, "M2400": self._m2400, "M2401": self._m2401_3x,
+            "M2245": self._m2245_3x, "M2300": self._r3_ok, "M2301": self._r3_ok, "M2302": self._r3_ok,
+            "M2303": self._r3_ok, "M2304": self._m2304_3x, "M2305": self._m2305_3x, "M2306": self._grove_port_3x,
+            "M2307": self._grove_port_3x, "M2400": self._m2400, "M2401": self._m2401_3x,
             "M2410": self._m2410, "M2411": self._m2411_3x, "M2500": self._m2500_3x,
             "P2200": self._p2200, "P2201": self._p3_text(lambda: "V" + self.device_name),
             "P2202": self._p3_text(lambda: self._profile.hardware),
@@ -1521,6 +1524,60 @@ class SimulatedSwiftPro:
             return
         self.bt_name = self._after(cmd, "V").strip()[:11]
         self._r3(cmd, t, 0, "")
+
+    # -- Grove modules (3.x, uArmGrove2.cpp): ports 0..13, 22 module types, each allowed on
+    # some ports (PortMask). Nothing is plugged into the simulated arm: a module on the I2C
+    # port (the sensors and displays that answer on the bus) fails its init; UNCERTAIN: that
+    # the digital and analog ones initialise without a module, as here.
+    _GROVE_PORTS = 14
+    _GROVE_MASKS = (0, 0x38, 0x38, 6, 0x338, 6, 6, 6, 6, 1, 1, 1, 0x310, 0x310, 0x338, 1, 0x338, 1, 0x338,
+                    0x338, 6, 1)
+
+    def _grove_arg(self, cmd, letters: str):
+        """The 3.x Grove commands' arguments, or None (answered) when one is missing."""
+        if not all(self._seen(cmd, c) for c in letters):
+            self._r3(cmd, t=cmd.arrival, result=25, buf=f"format: {cmd.word} " + " ".join(f"{c}n" for c in letters)
+                     + "\r\n")
+            return None
+        return [marlin_int(self._after(cmd, c)) & 0xFF for c in letters]
+
+    def _m2304_3x(self, cmd, t):
+        args = self._grove_arg(cmd, "P")
+        if args is not None:
+            self._grove.pop(args[0], None)
+            self._r3(cmd, t, 0, "")
+
+    def _m2305_3x(self, cmd, t):
+        args = self._grove_arg(cmd, "PN")
+        if args is None:
+            return
+        port, kind = args
+        if port > self._GROVE_PORTS - 1:
+            self._r3(cmd, t, 25, f"port num should less than {self._GROVE_PORTS}\r\n")
+        elif kind > len(self._GROVE_MASKS) - 1:
+            self._r3(cmd, t, 25, f"module num should less than {len(self._GROVE_MASKS)}\r\n")
+        elif not self._GROVE_MASKS[kind] & (1 << port):
+            valid = "".join(f"{i} " for i in range(self._GROVE_PORTS) if self._GROVE_MASKS[kind] & (1 << i))
+            self._r3(cmd, t, 25, f"For module {kind}, valid port(s) is(are): {valid}\r\n")
+        elif kind == 0:
+            self._r3(cmd, t, 25, "Memory allocation failed\r\n")
+        elif self._GROVE_MASKS[kind] == 1:
+            self._r3(cmd, t, 25, "init failed\r\n")  # nothing answers on the I2C bus
+        else:
+            self._grove[port] = kind
+            self._r3(cmd, t, 0, "")
+
+    def _grove_port_3x(self, cmd, t):
+        args = self._grove_arg(cmd, "PV" if cmd.word == "M2306" else "P")
+        if args is None:
+            return
+        port = args[0]
+        if port > self._GROVE_PORTS - 1:
+            self._r3(cmd, t, 25, f"port num should less than {self._GROVE_PORTS}\r\n")
+        elif port not in self._grove:
+            self._r3(cmd, t, 25, f"port {port} not initialized\r\n")
+        else:
+            self._r3(cmd, t, 0, "")  # reports (@11) need a module that reads something: none here
 
     def _m2401_3x(self, cmd, t):
         # calibration needs an unlock code (V) or B; the code is not published: V fails.
