@@ -14,7 +14,9 @@ Run it as root with the hub's settings (the same environment variables as
 ``add`` and ``remove`` rewrite the roster atomically; the running hub re-reads it at the next
 login (no restart). ``remove`` also clears the password and ends the person's running server
 and kernels; ``--delete-account`` removes their system user and home too (their work goes).
-``set-password --stdin`` reads the password from standard input, for scripts.
+With ``MT_WIDGETS_CLASS_FOLDER`` set (as for the hub), ``add`` and ``sync`` also make each
+student's progress files in the class folder. ``set-password --stdin`` reads the password
+from standard input, for scripts.
 """
 
 from __future__ import annotations
@@ -84,6 +86,15 @@ def _end_processes(login: str) -> int:
     return ended
 
 
+def _prepare(entry, homes: Path, group: str) -> None:
+    """``entry``'s system user and home, and for a student their progress files in the class folder."""
+    gid = class_hub.ensure_group(group)
+    class_hub.ensure_system_user(entry.login, homes / entry.login, group, entry.is_admin)
+    folder = os.environ.get("MT_WIDGETS_CLASS_FOLDER")
+    if folder and not entry.is_admin and Path(folder, "class.json").exists():
+        class_hub.ensure_progress_files(Path(folder), entry.login, gid)
+
+
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     if not args.roster:
@@ -120,8 +131,7 @@ def main(argv=None) -> int:
         was = "updated" if args.login in roster else "added"
         write_roster(roster.with_entry(entry), roster_path)
         if os.geteuid() == 0:
-            class_hub.ensure_group(args.instructors_group)
-            class_hub.ensure_system_user(entry.login, homes / entry.login, args.instructors_group, entry.is_admin)
+            _prepare(entry, homes, args.instructors_group)
         print(f"{entry.login} {was} as {entry.role}"
               + ("; set their password with set-password before they log in" if entry.is_admin else ""))
         return 0
@@ -162,9 +172,8 @@ def main(argv=None) -> int:
         return 0
 
     if args.command == "sync":
-        class_hub.ensure_group(args.instructors_group)
         for entry in roster.entries:
-            class_hub.ensure_system_user(entry.login, homes / entry.login, args.instructors_group, entry.is_admin)
+            _prepare(entry, homes, args.instructors_group)
         print(f"{len(roster)} accounts ready under {homes}")
         return 0
     return 2

@@ -13,8 +13,9 @@ instructor's command); one place for each mechanism:
   Each student's ``<pseudonym>.jsonl`` and ``.locks/<pseudonym>.lock`` are made by the hub before
   their server starts, owned by the student and the instructors' group, mode 0640: the student
   appends to their own file, the instructors read every file, no student reads or alters a
-  classmate's, nor takes a classmate's file name first. Students' servers run with umask 027,
-  so nothing else they write there is readable by classmates either.
+  classmate's, nor takes a classmate's file name first. Students' servers run with umask 027
+  (student-config/jupyter_server_config.py), so nothing else they write there is readable by
+  classmates either.
 - **The course folder** (``source/``, ``gradebook.db``, ``autograded/``, ``feedback/``): root and
   the instructors' group, 2770; nothing in it is readable by others.
 - **Limits** (``CgroupLimits``): on a machine without systemd, cgroup v1 memory and cpu groups
@@ -41,6 +42,11 @@ from pathlib import Path
 
 from mt_widgets.classroom.progress import LOCK_FOLDER, create_class_folder, pseudonym, read_class_meta
 
+#: The class's limits and culling unless the hub's environment says otherwise; the Zero to
+#: JupyterHub values (z2jh/values.yaml) carry the same (tests/course/test_hub_config.py checks).
+DEFAULT_MEM_LIMIT = "1G"
+DEFAULT_CPU_LIMIT = 1.0
+DEFAULT_CULL_IDLE_S = 3600
 #: The comment (GECOS) of every account this hub creates: it changes or removes no other.
 MARKER = "mt-widgets class hub"
 #: Class folder mode: setgid (files keep the instructors' group), sticky (nobody removes another's
@@ -48,8 +54,6 @@ MARKER = "mt-widgets class hub"
 CLASS_FOLDER_MODE = 0o3773
 PROGRESS_FILE_MODE = 0o640
 COURSE_FOLDER_MODE = 0o2770
-#: Students' servers create files readable by their own group at most.
-STUDENT_UMASK = 0o027
 NOLOGIN = next((shell for shell in ("/usr/sbin/nologin", "/sbin/nologin", "/bin/false") if os.path.exists(shell)),
                "/bin/false")
 

@@ -127,7 +127,7 @@ if os.environ.get("MT_HUB_API_TOKEN"):
         "scopes": ["admin:users", "admin:servers", "tokens", "access:servers", "read:users"],
         "services": ["class-admin"],
     })
-CULL_IDLE_S = int(os.environ.get("MT_HUB_CULL_IDLE_SECONDS", "3600"))
+CULL_IDLE_S = int(os.environ.get("MT_HUB_CULL_IDLE_SECONDS", str(class_hub.DEFAULT_CULL_IDLE_S)))
 if CULL_IDLE_S > 0:
     # Stops servers idle that long; a student's saved notebooks and progress stay in their home.
     c.JupyterHub.services.append({
@@ -144,8 +144,8 @@ if CULL_IDLE_S > 0:
 # -- limits ----------------------------------------------------------------------------------------
 LIMITS = None
 if os.environ.get("MT_HUB_LIMITS", "on") != "off":
-    LIMITS = CgroupLimits(class_hub.parse_bytes(os.environ.get("MT_HUB_MEM_LIMIT", "1G")),
-                          float(os.environ.get("MT_HUB_CPU_LIMIT", "1.0")),
+    LIMITS = CgroupLimits(class_hub.parse_bytes(os.environ.get("MT_HUB_MEM_LIMIT", class_hub.DEFAULT_MEM_LIMIT)),
+                          float(os.environ.get("MT_HUB_CPU_LIMIT", class_hub.DEFAULT_CPU_LIMIT)),
                           parent=os.environ.get("MT_HUB_CGROUP", "mt-hub"))
     _problem = LIMITS.problem()
     if _problem:
@@ -179,7 +179,8 @@ for _entry in roster.entries:
 
 
 class ClassSpawner(LocalProcessSpawner):
-    """A student's server as their own system user, inside their cgroups, with umask 027."""
+    """A student's server as their own system user, inside their cgroups (umask 027 comes from
+    student-config/jupyter_server_config.py, which Zero to JupyterHub's pods load too)."""
 
     def make_preexec_fn(self, name):
         drop_root = super().make_preexec_fn(name)
@@ -188,7 +189,6 @@ class ClassSpawner(LocalProcessSpawner):
         def preexec():
             if join is not None:
                 join()  # while still root: the group's files are root's
-            os.umask(class_hub.STUDENT_UMASK)
             drop_root()
 
         return preexec
@@ -197,11 +197,14 @@ class ClassSpawner(LocalProcessSpawner):
 c.JupyterHub.spawner_class = ClassSpawner
 c.Spawner.cmd = [str(STUDENT_PYTHON), "-m", "jupyterhub.singleuser"]
 c.Spawner.default_url = "/lab/tree/index.ipynb"
-c.Spawner.start_timeout = 180
-c.Spawner.http_timeout = 180
+# A class of thirty starting at once on two cores takes a minute or more (benchmarks/bench_hub.py).
+c.Spawner.start_timeout = 300
+c.Spawner.http_timeout = 300
 
 # Passed on from the hub's environment: the class folder, the exchange, and (tests) the checkout.
-_passed_on = ("MT_WIDGETS_CLASS_FOLDER", "MT_WIDGETS_EXCHANGE", "MT_WIDGETS_FAST", "PYTHONPATH")
+_passed_on = ("MT_WIDGETS_CLASS_FOLDER", "MT_WIDGETS_EXCHANGE", "MT_WIDGETS_FAST")
+# student-site/ first: it leaves out a package that costs every server seconds at start (its docstring).
+_python_path = os.pathsep.join([str(HERE / "student-site"), *filter(None, [os.environ.get("PYTHONPATH")])])
 c.Spawner.environment = {
     # numba's compiled rollouts go to each student's home, never into the shared installation.
     "NUMBA_CACHE_DIR": lambda spawner: str(HOMES / spawner.user.name / ".cache" / "numba"),
@@ -211,6 +214,10 @@ c.Spawner.environment = {
     # nbgrader's student side and the server's settings (IPC kernels, extensions) come from here.
     "JUPYTER_CONFIG_PATH": str(HERE / "student-config"),
     "MT_HUB_ROLE": lambda spawner: "instructor" if spawner.user.admin else "student",
+    "PYTHONPATH": _python_path,
+    # Students' servers find no node: JupyterLab's import asks yarn (a node process, ~2 s) for the
+    # npm registry at every start when node is on PATH, for building extensions no student builds.
+    "PATH": lambda spawner: os.environ.get("PATH", "") if spawner.user.admin else str(STUDENT_PYTHON.parent),
     **{name: os.environ[name] for name in _passed_on if os.environ.get(name)},
 }
 

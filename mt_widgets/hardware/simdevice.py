@@ -324,6 +324,7 @@ class SimulatedSwiftPro:
             self._relative = False          # 3.x G90/G91
             self._joint_offset = [0.0, 0.0, 0.0]  # 3.x: measured minus believed joint angles
             self._serial_moved = False      # 3.x M2500 moves the command port to Serial2
+            self._grove: dict[int, int] = {}  # 3.x: port -> Grove module type initialised
             self.bt_name = "uArm"
 
     def write(self, data: bytes, now: float) -> None:
@@ -778,6 +779,77 @@ class SimulatedSwiftPro:
         cmd.speed = self._speed_4x(values[-1], linear)
         return None
 
+    # -- the 3Plus jogs: to the edge of the reach along an axis (G2207), a joint to its limit
+    # (G2208), every joint back inside its limits (G2209). Approximation: the firmware computes
+    # the edges from its joint limits with 1-2 degree margins; here the edge is found on the
+    # same reach rule as every other move, 1 mm inside.
+    def _jog(self, cmd, t, to_target):
+        fields = scan4(_pattern("N d F f"), cmd.args)
+        if len(fields) < 2:
+            return 21
+        speed = grbl_read_float(fields[1])
+        if speed is None:
+            return "ok"
+        direction = int(fields[0]) + (3 if speed < 0 else 0)
+        if not 0 <= direction <= 5:
+            return 21
+        target = to_target(direction, self._actual(t))
+        cmd.target = target if target is not None else (-1.0, 0.0, 0.0)  # the firmware's "to report error"
+        cmd.speed = self._speed_4x(abs(speed), False)
+        return None
+
+    @staticmethod
+    def _axis_edge(direction, start):
+        axis, sign = direction % 3, (1.0 if direction < 3 else -1.0)
+
+        def at(d):
+            p = list(start)
+            p[axis] += sign * d
+            return tuple(p)
+        if not is_reachable(*start) or not is_reachable(*at(0.7)):
+            return None  # no room to move: E22
+        lo, hi = 0.7, 400.0
+        for _ in range(40):
+            mid = (lo + hi) / 2
+            lo, hi = (mid, hi) if is_reachable(*at(mid)) else (lo, mid)
+        return at(lo - 1.0) if lo - 1.0 >= 0.7 else None
+
+    @staticmethod
+    def _joint_limit(direction, start):
+        angles = joint_angles(*start)
+        if angles is None:
+            return None
+        b, lo, up, _ = angles
+        if direction in (0, 3):
+            goal = BASE_LIMIT_DEG - 0.5 if direction == 0 else -BASE_LIMIT_DEG + 0.5
+            b, moved = goal, abs(goal - b)
+        elif direction in (1, 4):  # lower arm: until the angle between the arms is at its min / max
+            between = BETWEEN_ARMS_LIMITS_DEG[0] if direction == 1 else BETWEEN_ARMS_LIMITS_DEG[1]
+            goal = min(max(180.0 - between - up, LOWER_ARM_LIMITS_DEG[0] + 1), LOWER_ARM_LIMITS_DEG[1] - 1)
+            lo, moved = goal, abs(goal - lo)
+        else:  # upper arm, likewise
+            between = BETWEEN_ARMS_LIMITS_DEG[0] if direction == 2 else BETWEEN_ARMS_LIMITS_DEG[1]
+            goal = min(max(180.0 - between - lo, UPPER_ARM_LIMITS_DEG[0] + 1), UPPER_ARM_LIMITS_DEG[1] - 1)
+            up, moved = goal, abs(goal - up)
+        if moved < 0.7:
+            return None  # already at the limit: E22
+        return tool_position(b, lo, up)
+
+    def _g2209(self, cmd, t):
+        fields = scan4(_pattern("F f"), cmd.args)
+        if not fields:
+            return 21
+        speed = grbl_read_float(fields[0])
+        if speed is None:
+            return "ok"
+        angles = joint_angles(*self._actual(t))
+        b, lo, up = angles[:3] if angles else (0.0, 45.0, 30.0)
+        b = min(max(b, -BASE_LIMIT_DEG + 2), BASE_LIMIT_DEG - 2)
+        lo = min(max(lo, LOWER_ARM_LIMITS_DEG[0] + 2), LOWER_ARM_LIMITS_DEG[1] - 2)
+        up = min(max(up, UPPER_ARM_LIMITS_DEG[0] + 2), UPPER_ARM_LIMITS_DEG[1] - 2)
+        cmd.target, cmd.speed = tool_position(b, lo, up), self._speed_4x(abs(speed), False)
+        return None
+
     def _polar_target(self, s: float, r: float, h: float) -> tuple[float, float, float]:
         a = math.radians(r - 90.0)
         return (s * math.cos(a), s * math.sin(a), h)
@@ -814,6 +886,9 @@ class SimulatedSwiftPro:
             "G2205": lambda c, t: self._fixed_move("S f R f H f F f", c, self._polar_offset, True),
             "G2206": lambda c, t: self._fixed_move(
                 "B f L f R f F f", c, lambda b, lo, up, f: tool_position(b - 90.0, lo, up), False),
+            "G2207": lambda c, t: self._jog(c, t, self._axis_edge),
+            "G2208": lambda c, t: self._jog(c, t, self._joint_limit),
+            "G2209": self._g2209,
         }
         h = {}  # the moves above are started by _start_move_4x from the queue
         h.update({
@@ -1372,7 +1447,9 @@ class SimulatedSwiftPro:
             "M2220": self._m2220, "M2221": self._m2221, "M2222": self._m2222,
             "M2231": self._effector_3x("pump"), "M2232": self._effector_3x("gripper"),
             "M2233": self._ok_only, "M2234": self._m2234_3x, "M2240": self._m2240, "M2241": self._m2241,
-            "M2245": self._m2245_3x, "M2400": self._m2400, "M2401": self._m2401_3x,
+            "M2245": self._m2245_3x, "M2300": self._r3_ok, "M2301": self._r3_ok, "M2302": self._r3_ok,
+            "M2303": self._r3_ok, "M2304": self._m2304_3x, "M2305": self._m2305_3x, "M2306": self._grove_port_3x,
+            "M2307": self._grove_port_3x, "M2400": self._m2400, "M2401": self._m2401_3x,
             "M2410": self._m2410, "M2411": self._m2411_3x, "M2500": self._m2500_3x,
             "P2200": self._p2200, "P2201": self._p3_text(lambda: "V" + self.device_name),
             "P2202": self._p3_text(lambda: self._profile.hardware),
@@ -1447,6 +1524,60 @@ class SimulatedSwiftPro:
             return
         self.bt_name = self._after(cmd, "V").strip()[:11]
         self._r3(cmd, t, 0, "")
+
+    # -- Grove modules (3.x, uArmGrove2.cpp): ports 0..13, 22 module types, each allowed on
+    # some ports (PortMask). Nothing is plugged into the simulated arm: a module on the I2C
+    # port (the sensors and displays that answer on the bus) fails its init; UNCERTAIN: that
+    # the digital and analog ones initialise without a module, as here.
+    _GROVE_PORTS = 14
+    _GROVE_MASKS = (0, 0x38, 0x38, 6, 0x338, 6, 6, 6, 6, 1, 1, 1, 0x310, 0x310, 0x338, 1, 0x338, 1, 0x338,
+                    0x338, 6, 1)
+
+    def _grove_arg(self, cmd, letters: str):
+        """The 3.x Grove commands' arguments, or None (answered) when one is missing."""
+        if not all(self._seen(cmd, c) for c in letters):
+            self._r3(cmd, t=cmd.arrival, result=25, buf=f"format: {cmd.word} " + " ".join(f"{c}n" for c in letters)
+                     + "\r\n")
+            return None
+        return [marlin_int(self._after(cmd, c)) & 0xFF for c in letters]
+
+    def _m2304_3x(self, cmd, t):
+        args = self._grove_arg(cmd, "P")
+        if args is not None:
+            self._grove.pop(args[0], None)
+            self._r3(cmd, t, 0, "")
+
+    def _m2305_3x(self, cmd, t):
+        args = self._grove_arg(cmd, "PN")
+        if args is None:
+            return
+        port, kind = args
+        if port > self._GROVE_PORTS - 1:
+            self._r3(cmd, t, 25, f"port num should less than {self._GROVE_PORTS}\r\n")
+        elif kind > len(self._GROVE_MASKS) - 1:
+            self._r3(cmd, t, 25, f"module num should less than {len(self._GROVE_MASKS)}\r\n")
+        elif not self._GROVE_MASKS[kind] & (1 << port):
+            valid = "".join(f"{i} " for i in range(self._GROVE_PORTS) if self._GROVE_MASKS[kind] & (1 << i))
+            self._r3(cmd, t, 25, f"For module {kind}, valid port(s) is(are): {valid}\r\n")
+        elif kind == 0:
+            self._r3(cmd, t, 25, "Memory allocation failed\r\n")
+        elif self._GROVE_MASKS[kind] == 1:
+            self._r3(cmd, t, 25, "init failed\r\n")  # nothing answers on the I2C bus
+        else:
+            self._grove[port] = kind
+            self._r3(cmd, t, 0, "")
+
+    def _grove_port_3x(self, cmd, t):
+        args = self._grove_arg(cmd, "PV" if cmd.word == "M2306" else "P")
+        if args is None:
+            return
+        port = args[0]
+        if port > self._GROVE_PORTS - 1:
+            self._r3(cmd, t, 25, f"port num should less than {self._GROVE_PORTS}\r\n")
+        elif port not in self._grove:
+            self._r3(cmd, t, 25, f"port {port} not initialized\r\n")
+        else:
+            self._r3(cmd, t, 0, "")  # reports (@11) need a module that reads something: none here
 
     def _m2401_3x(self, cmd, t):
         # calibration needs an unlock code (V) or B; the code is not published: V fails.

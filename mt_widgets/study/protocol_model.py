@@ -142,6 +142,8 @@ class Protocol:
     skills: Mapping[str, Skill] = field(default_factory=lambda: ProtocolSkills({**SKILLS, **PRACTICE_SKILLS}),
                                         repr=False, compare=False)
     guidance_modality: str = "arrows+words"
+    #: How demonstrations are given: "drawn" on the screen, or "hand" (moving the uArm by hand).
+    demonstration_modality: str = "drawn"
     before: tuple[StudyStep, ...] = ()
     after: tuple[StudyStep, ...] = ()
     withdrawal: str = "exclude"

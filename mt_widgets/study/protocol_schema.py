@@ -142,7 +142,7 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
     top_keys = ("format", "name", "title", "groups", "lambda", "seed", "query_states", "reproduction_duration_s",
                 "assignment", "texts", "practice", "phases", "skills", "guidance_modality", "withdrawal", "before",
                 "after", "analysis", "session", "sessions", "online", "reproduce_after",
-                "matched_difficulty")
+                "matched_difficulty", "demonstration_modality")
     check.unknown(raw, (), top_keys)
     version = check.get(raw, ("format",), "integer")
     if version != FORMAT_VERSION:
@@ -192,6 +192,8 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
 
     modality = check.get(raw, ("guidance_modality",), "text", default="arrows+words",
                          choices=tuple(GUIDANCE_MODALITIES))
+    demonstration_modality = check.get(raw, ("demonstration_modality",), "text", default="drawn",
+                                       choices=("drawn", "hand"))
     withdrawal = check.get(raw, ("withdrawal",), "text", default="exclude", choices=WITHDRAWAL_POLICIES)
     folder = Path(source).parent if source not in ("<string>", "") else None
     step_ids: set = set()
@@ -234,8 +236,9 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
             phase_entry.setdefault("guidance", [])
     return Protocol(name, title, tuple(groups), lam, seed, query_states, duration, block_size, assignment_seed,
                     texts, practice, tuple(phases), data, text, source, skills, guidance_modality=modality,
-                    before=before, after=after, withdrawal=withdrawal, analysis=plan, sessions=tuple(sessions),
-                    online=online, reproduce_after=reproduce_after, matched_difficulty=matched)
+                    demonstration_modality=demonstration_modality, before=before, after=after,
+                    withdrawal=withdrawal, analysis=plan, sessions=tuple(sessions), online=online,
+                    reproduce_after=reproduce_after, matched_difficulty=matched)
 
 
 def _parse_matched_difficulty(check, raw: dict):

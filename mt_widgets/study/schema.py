@@ -51,7 +51,7 @@ Participant log events (one JSON object a line; ``mt_widgets.study.log`` writes 
 - ``demonstration``: phase, phase_index, episode, index (0-based), state, action, optimal,
   guidance_shown (bool), time_to_first_input_s, drawing_duration_s, response_time_s (from
   the state's appearance to the submission, measured by the engine), input (method, redraws,
-  ... as given by the caller).
+  ... as given by the caller), modality ("hand" for an input method "hand", else "drawn").
 - ``episode_finished``: phase, phase_index, episode, skill, guidance, actions (N x R),
   optimal, theta_hat (R x S), teaching_error, rho1, rho2, bound, residual, contributions
   (N,), exact, reproduction {diverged, diverged_at, final_position, duration_s}, started_at,

@@ -635,7 +635,8 @@ class Session:
         self.log.append("demonstration", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
                         index=slot.index, state=np.asarray(started["query_states"])[slot.index], action=action,
                         optimal=optimal, guidance_shown=started["guidance"], **measured,
-                        response_time_s=time.monotonic() - self._entered_at, input=timings)
+                        response_time_s=time.monotonic() - self._entered_at, input=timings,
+                        modality="hand" if timings.get("method") == "hand" else "drawn")
         self._actions.setdefault(key, []).append(action)
         self._complete()
         return Feedback(slot.index, started["guidance"], optimal.copy() if started["guidance"] else None, action,

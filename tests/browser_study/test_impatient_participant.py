@@ -13,7 +13,7 @@ import pytest
 from mt_widgets import SKILLS
 from mt_widgets.widgets import ArmView
 
-from .test_study_page import button, current_episode, open_and_fill, wait_for_log, wait_for_marker
+from .support import button, current_episode, open_and_fill, wait_for_log, wait_for_marker
 
 pytestmark = pytest.mark.browser
 

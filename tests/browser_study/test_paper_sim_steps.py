@@ -26,6 +26,8 @@ from mt_widgets.study.practice import PRACTICE_SKILLS
 from mt_widgets.widgets import ArmView
 from mt_widgets.widgets.theme import DEFAULT_THEME
 
+from .support import unlock
+
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
 PAGE = "/voila/render/study_sim.ipynb"
@@ -239,8 +241,7 @@ def take_part(server, participant, group, withdraw=False, replay=False, shot=Non
         context, page = local_page(browser, 1280, 1300)
         page.set_default_timeout(60_000)
         try:
-            page.goto(server.url(PAGE), timeout=120_000)
-            page.get_by_text("Experimenter", exact=True).wait_for(timeout=120_000)
+            unlock(page, server)
             page.get_by_placeholder("pseudonymous code, e.g. P07").fill(participant)
             page.get_by_label("Group").select_option(label=group)
             button(page, "Start new participant").click()

@@ -205,6 +205,22 @@ def test_4x_joint_move_g2206():
     assert arm.dev.position_at(arm.t) == pytest.approx((220.0, 0.0, 80.0), abs=0.01)
 
 
+def test_4x_jogs_g2207_g2208_g2209():
+    arm = SdkClient(4)
+    assert is_ok(arm.send("G2207 N0 F100", timeout=10))  # +X to the edge of the reach
+    x, y, z = arm.dev.position_at(arm.t)
+    assert x > 300.0 and (y, z) == pytest.approx((0.0, 100.0))
+    assert arm.send("G2207 N0 F100", timeout=10) == ["E22"]  # already there: the firmware reports an error
+    assert is_ok(arm.send("G2207 N0 F-100", timeout=10))  # a negative speed goes the other way
+    assert arm.dev.position_at(arm.t)[0] < 150.0
+    assert is_ok(arm.send("G2208 N0 F100", timeout=10))  # the base to its limit
+    assert values(arm.send("P2206 N0"))[0] > 170.0
+    assert arm.send("G2208 N0 F100", timeout=10) == ["E22"]
+    assert is_ok(arm.send("G2209 F100", timeout=10))  # every joint inside its limits
+    assert values(arm.send("P2206 N0"))[0] <= 178.0 + 1e-6
+    assert arm.send("G2207 N9 F100") == ["E21"] and arm.send("G2208 F100") == ["E21"]
+
+
 def test_delay_g2004(arm):
     assert is_ok(arm.send(f"G2004 P{100}"))
 
@@ -389,6 +405,19 @@ def test_3x_other_commands():
     assert arm.send("M2401")[0] == "E25"
 
 
+def test_3x_grove_commands_with_nothing_plugged_in():
+    arm = SdkClient(3)
+    assert arm.send("M2307 P5")[:2] == ["E25", "port"]           # not initialised
+    assert is_ok(arm.send("M2305 P5 N2"))                           # a button on port 5 (mask 0x38)
+    assert is_ok(arm.send("M2306 P5 V100")) and is_ok(arm.send("M2307 P5"))
+    assert arm.send("M2305 P0 N2")[:3] == ["E25", "For", "module"]  # not a port for a button
+    assert arm.send("M2305 P0 N9")[0] == "E25"                      # the 6-axis sensor: nothing on I2C
+    assert arm.send("M2305 P20 N2")[0] == "E25" and arm.send("M2305 P5")[:2] == ["E25", "format:"]
+    assert is_ok(arm.send("M2304 P5")) and arm.send("M2307 P5")[0] == "E25"
+    for msg in ("M2300 N2 D5", "M2301 N2 V100", "M2302 N2 V1", "M2303 N17 S0 Vhello"):
+        assert is_ok(arm.send(msg)), msg
+
+
 def test_3x_m2500_moves_the_command_port_away():
     arm = SdkClient(3)
     assert is_ok(arm.send("M2500"))
@@ -400,7 +429,8 @@ def test_unknown_commands(arm):
     assert ret == (["E20"] if arm.dev.firmware == 4 else TIMEOUT)
 
 
-COVERED_4X = {"G0", "G1", "G2004", "G2201", "G2202", "G2204", "G2205", "G2206", "M17", "M18", "M204", "M2019",
+COVERED_4X = {"G0", "G1", "G2004", "G2201", "G2202", "G2204", "G2205", "G2206", "G2207", "G2208", "G2209",
+              "M17", "M18", "M204", "M2019",
               "M2120", "M2121", "M2122", "M2123", "M2124", "M2201", "M2202", "M2203", "M2205", "M2210", "M2211",
               "M2212", "M2213", "M2215", "M2220", "M2221", "M2222", "M2231", "M2232", "M2233", "M2234", "M2240",
               "M2241", "M2400", "M2401", "M2410", "M2411", "M2412", "M2413", "M2500", "P2200", "P2201", "P2202",
@@ -409,7 +439,8 @@ COVERED_4X = {"G0", "G1", "G2004", "G2201", "G2202", "G2204", "G2205", "G2206", 
 COVERED_3X = {"G0", "G1", "G4", "G90", "G91", "G2004", "G2201", "G2202", "G2203", "G2204", "G2205", "M17", "M18",
               "M84", "M204", "M2000", "M2019", "M2120", "M2122", "M2200", "M2201", "M2202", "M2203", "M2210",
               "M2211", "M2212", "M2213", "M2220", "M2221", "M2222", "M2231", "M2232", "M2233", "M2234", "M2240",
-              "M2241", "M2245", "M2400", "M2401", "M2410", "M2411", "M2500", "P2200", "P2201", "P2202", "P2203",
+              "M2241", "M2245", "M2300", "M2301", "M2302", "M2303", "M2304", "M2305", "M2306", "M2307", "M2400",
+              "M2401", "M2410", "M2411", "M2500", "P2200", "P2201", "P2202", "P2203",
               "P2204", "P2205", "P2206", "P2220", "P2221", "P2231", "P2232", "P2233", "P2234", "P2240", "P2241",
               "P2242", "P2245", "P2400"}
 

@@ -5,7 +5,8 @@ import re
 import numpy as np
 import pytest
 
-from mt_widgets.apps import StudyApp, participant_texts
+from blinding_support import participant_texts
+from mt_widgets.apps import StudyApp
 from mt_widgets.core import SKILLS
 from mt_widgets.study import (
     LogError,

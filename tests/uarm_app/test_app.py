@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from ipywidgets import Button
 
-from mt_widgets.apps.study_app import participant_texts
+from blinding_support import participant_texts
 from mt_widgets.apps.uarm_study import UArmEpisodePage, UArmStudyApp, UArmTeaching
 from mt_widgets.core import Trajectory
 from mt_widgets.hardware import SwiftPro

@@ -5,6 +5,7 @@
   kernel's five ports by binding port 0 and closing it again, and with thirty servers starting
   kernels at once another kernel binds the same port in between (``ZMQError: Address already in
   use``, then a lost kernel). Files cannot collide: each kernel's names come from its own id.
+- umask 027: nothing a member writes is readable by classmates.
 - Students get what a lesson uses: JupyterLab, Voila's pages, nbgrader's assignment list and
   validation; not the language server, terminals (their shell is nologin anyway) or
   nbgrader's formgrader, which only instructors (``MT_HUB_ROLE=instructor``) load. Each
@@ -16,6 +17,9 @@ import os
 c = get_config()  # noqa: F821 - provided by Jupyter's config loader
 
 c.KernelManager.transport = "ipc"
+# Files a member's server and kernels create are readable by their own group at most (on the
+# class folder, that group is the instructors'): deploy/jupyterhub/class_hub.py.
+os.umask(0o027)
 if os.environ.get("MT_HUB_ROLE") != "instructor":
     c.ServerApp.terminals_enabled = False
     c.ServerApp.jpserver_extensions = {
