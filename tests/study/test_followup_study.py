@@ -101,3 +101,16 @@ def test_the_followups_simulated_power_falls_with_faster_forgetting():
     assert set(slow.power) == {"P1_to_P3E8", "P1_to_P4", "P2_to_P5", "P1_to_F1", "P2_to_F2"}
     assert slow.power["P1_to_F1"]["student"] > 0.8 > 0.3 > fast.power["P1_to_F1"]["student"]
     assert slow.power["P1_to_P4"] == fast.power["P1_to_P4"]  # forgetting happens after the main session only
+
+
+def test_the_batched_engine_and_the_session_engine_agree_across_sessions_with_forgetting(study):
+    # The module's study: 4 teachers, seed 2, a 30-day half-life, through Session.arrive 28 days later.
+    episodes, _ = read_study(study.folder)
+    groups = [study.enrolment(pid)["group"] for pid in study.participant_ids()]
+    batched = run_in_silico(4, "paper-sim-followup", seed=2, groups=groups, reproduce=False,
+                            forgetting=Forgetting(30.0)).episodes
+    logged = sorted((r["participant"], r["session"], r["phase"], r["episode"], r["teaching_error"]) for r in episodes)
+    simulated = sorted(zip(batched["participant"], batched["session"], batched["phase"], batched["episode"],
+                           batched["teaching_error"]))
+    assert [row[:4] for row in logged] == [row[:4] for row in simulated] and len(logged) == 4 * 14
+    assert np.allclose([row[4] for row in logged], [row[4] for row in simulated], rtol=0, atol=1e-9)
