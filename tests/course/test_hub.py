@@ -281,7 +281,7 @@ def _oom_kills(hub, name: str) -> int:
     return int(dict(line.split() for line in control.splitlines()).get("oom_kill", 0))
 
 
-@pytest.mark.timeout(600)
+@pytest.mark.timeout(1200)
 def test_a_class_of_thirty_logs_in_at_once_and_every_episode_completes(hub, browser, artifacts):
     started = time.perf_counter()
     with ThreadPoolExecutor(len(STUDENTS)) as pool:
@@ -298,8 +298,10 @@ def test_a_class_of_thirty_logs_in_at_once_and_every_episode_completes(hub, brow
     spawn_wall = time.perf_counter() - started
 
     with ThreadPoolExecutor(len(STUDENTS)) as pool:
+        # Thirty kernels importing and teaching at once on two cores: minutes on a loaded machine
+        # (CPU, not a lost kernel: a kernel that dies or errs fails the test at once).
         runs = dict(zip(STUDENTS, pool.map(lambda item: hub.run_in_kernel(item[1], EPISODE_CODE.format(
-            number=item[0] % 12)), enumerate(STUDENTS))))
+            number=item[0] % 12), timeout=900), enumerate(STUDENTS))))
     results = {}
     for name, run in runs.items():
         assert run["error"] is None and not run["died"], f"{name}: {run}"
