@@ -419,5 +419,6 @@ def test_the_nbgrader_exchange_works_on_the_hub_and_keeps_submissions_apart(hub)
         feedback = list((hub.homes / name / ASSIGNMENT / "feedback").rglob(f"{ASSIGNMENT}.html"))
         assert len(feedback) == 1, f"{name} got no feedback"
         html = feedback[0].read_text()
-        score = "10.0 / 10.0" if kind == "solution" else "0.0 / 10.0"
+        # a1: 10 autograded points and a written answer (2) the instructor grades by hand later.
+        score = "10.0 / 12.0" if kind == "solution" else "0.0 / 12.0"
         assert f"Score: {score}" in html.replace("&nbsp;", " ") or score in html, html[:2000]
