@@ -56,7 +56,7 @@ def protocol_report(protocol) -> dict:
     protocol = protocol if isinstance(protocol, Protocol) else load_protocol(protocol)
     plan = protocol.analysis
     steps = []
-    for step in protocol.steps:
+    for step in (step for session in protocol.sessions for step in session.steps):
         entry = {"id": step.id, "kind": step.kind, "position": step.position}
         if step.kind == "video":
             entry.update(video=Path(step.video).name if step.video and not step.video_is_url else step.video,
@@ -70,7 +70,12 @@ def protocol_report(protocol) -> dict:
         "parameters": [{"name": name, "value": value} for name, value in _flatten(protocol.data)],
         "steps": steps,
         "phases": [{"id": p.id, "skill": p.skill, "episodes": p.episodes, "demonstrations": p.demonstrations,
-                    "guidance": list(p.guidance)} for p in protocol.phases],
+                    "guidance": list(p.guidance), "session": p.session} for p in protocol.all_phases],
+        "sessions": [{"id": s.id, "phases": [p.id for p in s.phases],
+                      "window": None if s.window is None else s.window.describe(),
+                      "too_early": None if s.window is None else s.window.too_early,
+                      "too_late": None if s.window is None else s.window.too_late} for s in protocol.sessions],
+        "groups": list(protocol.groups),
         "guidance_modality": protocol.guidance_modality, "withdrawal": protocol.withdrawal,
         "analysis_plan": {**plan.as_dict(), "primary_test_name": TEST_NAMES[plan.test],
                           "also_reported": [TEST_NAMES[t] for t in TEST_NAMES if t != plan.test]},
@@ -87,13 +92,20 @@ def report_markdown(report: dict) -> str:
              "|---|---|---|---|---|"]
     lines += [f"| {p['id']} | {p['skill']} | {p['episodes']} | {p['demonstrations']} | "
               f"{', '.join(p['guidance']) or '-'} |" for p in report["phases"]]
+    if len(report["sessions"]) > 1:
+        lines += ["", "## Sessions", ""]
+        for session in report["sessions"]:
+            when = (f"{session['window']}; too early: {session['too_early']}, too late: {session['too_late']}"
+                    if session["window"] else "first session")
+            lines.append(f"- `{session['id']}`: phases {', '.join(session['phases'])} ({when})")
     lines += ["", "## Steps around the task", ""]
     for step in report["steps"]:
         extra = f" (video {step['video']}, sha256 {step['sha256']})" if step["kind"] == "video" else ""
         items = f": items {', '.join(i['id'] for i in step.get('items', []))}" if step.get("items") else ""
         lines.append(f"- {step['position']}: `{step['id']}` ({step['kind']}){extra}{items}")
     lines += ["", "## Analysis plan", "",
-              f"- Primary test: {plan['primary_test_name']}, {plan['alternative']} (target minus control), "
+              f"- Primary test: {plan['primary_test_name']}, {plan['alternative']} ({report['groups'][0]} minus "
+              f"{report['groups'][1] if len(report['groups']) > 1 else 'the other group'}), "
               f"alpha = {plan['alpha']}; also reported: {', '.join(plan['also_reported'])}",
               "- Changes (later minus earlier teaching error): " + "; ".join(
                   f"{c['label']} ({c['meaning']})" for c in plan["changes"]),

@@ -3,6 +3,29 @@ and the tidy export. No widgets here (``mt_widgets.apps`` composes them with thi
 
 Depends on ``mt_widgets.core`` only. The simulation of teachers (``mt_widgets.in_silico``) and the
 analysis (``mt_widgets.analysis``) are packages of their own above this one.
+
+One concern per module::
+
+    protocol.py        the file format; load_protocol, parse_protocol, the shipped protocols
+    protocol_model.py  Protocol, Phase, Practice: the validated, frozen model
+    protocol_schema.py validation of TOML/JSON into the model (ProtocolError with line and field)
+    protocol_source.py line numbers of fields in the source text
+    skill_modules.py   the skills a protocol names (a user's Python file, "module:name")
+    session_plan.py    sessions and their windows ([[sessions]])
+    online.py          online participants: URL parameters, completion URLs and codes ([online])
+    steps.py           steps around the task ([[before]] / [[after]]): video, forms, questionnaires
+    analysis_plan.py   the pre-registered analysis plan ([analysis])
+    practice.py        the neutral practice skills
+    participants.py    IDs (typed and from a URL), re-entry codes, block randomisation
+    timeline.py        a session unrolled into steps (StepKind), each episode's query states
+    replay.py          a log replayed against the timeline
+    session.py         the engine: Session (start, resume, arrive, lesson, the driver calls)
+    session_types.py   what the engine hands a view: Step, Feedback, EpisodeResult
+    schema.py          the files' schema version, the event types, migrations of older logs
+    log.py             the append-only participant log (ParticipantLog, read_events, read_log)
+    study_folder.py    the study folder: study.json, enrolments, outcomes, status
+    jsonl.py           JSON lines, locks and fsync: the crash-safe primitives
+    tidy.py, bids.py   exports: episodes/demonstrations CSVs, a BIDS dataset
 """
 
 from .analysis_plan import PAPER_CHANGES, AnalysisPlan, Change

@@ -88,8 +88,48 @@ class SourceLocator:
                     return i + 1
         return start + 1
 
+    def _toml_index(self) -> dict:
+        """{field path: 1-based line} of every table header and key of TOML text, nested arrays of
+        tables included (``[[sessions.phases]]`` is ("sessions", i, "phases", j))."""
+        if getattr(self, "_index", None) is not None:
+            return self._index
+        index, counters, current, in_string = {}, {}, (), False
+        header = re.compile(r"^\[(\[?)\s*([^\]]+?)\s*\]\]?")
+        for number, raw in enumerate(self.lines, start=1):
+            line = raw.strip()
+            if in_string:
+                in_string = line.count('"""') % 2 == 0
+                continue
+            match = header.match(line)
+            if match:
+                parts = [part.strip().strip('"') for part in match.group(2).split(".")]
+                resolved: tuple = ()
+                for j, part in enumerate(parts):
+                    resolved += (part,)
+                    if j < len(parts) - 1 and resolved in counters:  # inside an array's last table
+                        resolved += (counters[resolved] - 1,)
+                if match.group(1):  # [[array]]: one more element
+                    counters[resolved] = counters.get(resolved, 0) + 1
+                    resolved += (counters[resolved] - 1,)
+                current = resolved
+                index.setdefault(current, number)
+                continue
+            key = re.match(r'^"?([A-Za-z0-9_-]+)"?\s*=', line)
+            if key:
+                index.setdefault(current + (key.group(1),), number)
+                in_string = line[key.end():].count('"""') % 2 == 1
+        self._index = index
+        return index
+
     def line(self, path: tuple) -> int | None:
         """Line of ``path`` (e.g. ("phases", 2, "episodes")); falls back to its table."""
+        if self.kind == "toml" and path and path[0] in ("sessions", "online", "matched_difficulty"):
+            index, prefix = self._toml_index(), tuple(path)
+            while prefix:
+                if prefix in index:
+                    return index[prefix]
+                prefix = prefix[:-1]
+            return None
         if self.kind == "toml" and len(path) > 1 and path[0] in ("before", "after") and isinstance(path[1], int):
             return self._step_line(path)
         if self.kind == "json":

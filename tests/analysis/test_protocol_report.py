@@ -96,3 +96,15 @@ def test_fig5_draws_the_true_skills_rollout_and_a_zoom_on_the_goal():
                               zoom=False)
     assert not any(child.get_gid() == "zoom" for ax in plain.axes for child in ax.child_axes)
     assert not any(str(ln.get_gid()).startswith("true/") for ax in plain.axes for ln in ax.lines)
+
+
+def test_a_followup_protocols_report_lists_its_sessions_windows_and_every_step(tmp_path):
+    markdown, data = write_protocol_report("paper-sim-followup", tmp_path)
+    text = markdown.read_text()
+    assert "## Sessions" in text
+    assert "- `followup`: phases F1, F2 (4 w to 6 w after the previous session; too early: refuse, too late: flag)" \
+        in text
+    assert "| F1 | sim-point | 1 | 5 | - |" in text and "(target minus control)" in text
+    report = json.loads(data.read_text())
+    assert [p["session"] for p in report["phases"]][-2:] == ["followup", "followup"]
+    assert "followup_questionnaire" in [s["id"] for s in report["steps"]]

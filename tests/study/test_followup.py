@@ -194,3 +194,15 @@ def test_durations_read_in_words():
         parse_duration("7 days")
     with pytest.raises(TypeError):
         parse_duration(7)
+
+
+def test_errors_in_a_session_name_the_line_of_the_field():
+    base = SHORT_PROTOCOL + FOLLOWUP_SESSION.replace("{late}", "flag")
+    for old, new in (('earliest = "7d"', 'earliest = "week"'),
+                     ('id = "F2"\nskill = "uarm-line"\nepisodes = 1', 'id = "F2"\nskill = "uarm-line"\nepisodes = 0')):
+        text = base.replace(old, new)
+        with pytest.raises(ProtocolError) as caught:
+            parse_protocol(text, "x.toml")
+        wrong = new.splitlines()[-1]
+        assert text.splitlines()[caught.value.line - 1] == wrong
+        assert str(caught.value).startswith(f"x.toml, line {caught.value.line}: sessions[0].")

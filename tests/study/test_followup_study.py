@@ -10,6 +10,7 @@ import pytest
 from bids_validator import BIDSValidator
 
 from mt_widgets.analysis import analyse_study
+from mt_widgets.analysis.power import simulated_power
 from mt_widgets.in_silico import Forgetting, run_in_silico, run_through_sessions
 from mt_widgets.study import export_bids, load_protocol, read_events, read_study
 
@@ -90,3 +91,13 @@ def test_forgetting_is_the_documented_half_life():
         Forgetting(0)
     with pytest.raises(ValueError, match="half_life_days"):
         Forgetting(True)
+
+
+def test_the_followups_simulated_power_falls_with_faster_forgetting():
+    slow = simulated_power(16, n_studies=60, seed=5, protocol="paper-sim-followup", share_states=True,
+                           forgetting=Forgetting(30.0), progress=False)
+    fast = simulated_power(16, n_studies=60, seed=5, protocol="paper-sim-followup", share_states=True,
+                           forgetting=Forgetting(7.0), progress=False)
+    assert set(slow.power) == {"P1_to_P3E8", "P1_to_P4", "P2_to_P5", "P1_to_F1", "P2_to_F2"}
+    assert slow.power["P1_to_F1"]["student"] > 0.8 > 0.3 > fast.power["P1_to_F1"]["student"]
+    assert slow.power["P1_to_P4"] == fast.power["P1_to_P4"]  # forgetting happens after the main session only

@@ -125,3 +125,11 @@ def test_every_outcome_needs_its_url():
     text = ONLINE.split("[online.completion.withdrawn]")[0]
     with pytest.raises(ProtocolError, match="online.completion.withdrawn: missing required table"):
         online_protocol(text)
+
+
+def test_an_error_in_the_online_table_names_its_line():
+    text = SHORT_PROTOCOL + ONLINE.replace('code = "SCR33N"', 'code = "a b"')
+    with pytest.raises(ProtocolError) as caught:
+        parse_protocol(text, "y.toml")
+    assert text.splitlines()[caught.value.line - 1] == 'code = "a b"'
+    assert caught.value.field == "online.completion.screened_out.code"
