@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 
 # The simulated-arm helpers of the connector's tests, shared rather than copied (re-exported).
-from hardware.helpers import arm_is_moving, device_of, sim_url, wait_until
+from hardware.helpers import InThread, arm_is_moving, device_of, sim_url, wait_until
 from hardware.helpers import sent_lines as received
 
 _MOVE = re.compile(r"^#\d+ (G0|G1|G2204|G2201|G2205) (.*)$")
@@ -33,5 +33,5 @@ def is_stop(line: str) -> bool:
     return re.match(r"^#\d+ (S1100|S1000 V0|G2203)\b", line) is not None
 
 
-__all__ = ["arm_is_moving", "device_of", "is_move", "is_stop", "moves", "parse_fields", "received", "sim_url",
-           "wait_until"]
+__all__ = ["InThread", "arm_is_moving", "device_of", "is_move", "is_stop", "moves", "parse_fields", "received",
+           "sim_url", "wait_until"]
