@@ -123,3 +123,93 @@ def artifact_path(test_name: str, step: str) -> str:
     """Where a screenshot is kept: test-artifacts/<test name>-<step>.png."""
     ARTIFACTS.mkdir(exist_ok=True)
     return str(ARTIFACTS / f"{test_name.replace('[', '-').replace(']', '')}-{step}.png")
+
+
+# -- helpers of the pages' tests: buttons, drags on a canvas, the marker, a participant's log --------
+
+#: The end-effector marker's colour (Okabe-Ito yellow).
+MARKER_RGB = (240, 228, 66)
+
+
+def button(page, name: str):
+    """The button named ``name``: icons add to a button's accessible name, so match the words only."""
+    import re
+
+    return page.get_by_role("button", name=re.compile(rf"^\W*{re.escape(name)}\s*$"))
+
+
+def drag_from(page, pixel, offset, steps: int = 4) -> None:
+    """A real drag on the first canvas from canvas ``pixel`` by ``offset`` (canvas pixels), through the
+    element's CSS-scaled box, in ``steps`` moves."""
+    import numpy as np
+
+    element = page.locator("canvas").first
+    box = element.bounding_box()
+    width, height = element.evaluate("c => [c.width, c.height]")
+
+    def to_page(x, y):
+        return box["x"] + x * box["width"] / width, box["y"] + y * box["height"] / height
+
+    start = to_page(*pixel)
+    end = to_page(pixel[0] + offset[0], pixel[1] + offset[1])
+    page.mouse.move(*start)
+    page.mouse.down()
+    for fraction in np.linspace(1.0 / steps, 1.0, steps):
+        page.mouse.move(start[0] + fraction * (end[0] - start[0]), start[1] + fraction * (end[1] - start[1]))
+    page.mouse.up()
+
+
+def wait_for_marker(page, pixel, canvases: int = 2, timeout: float = 15_000) -> None:
+    """Waits until the page holds ``canvases`` canvases (one episode: teaching and reproduction) and
+    the first shows the end-effector marker at ``pixel``: drawn, not just present."""
+    page.wait_for_function(
+        """([x, y, rgb, n]) => {
+            const all = document.querySelectorAll('canvas');
+            if (all.length !== n) return false;
+            const d = all[0].getContext('2d').getImageData(Math.round(x) - 2, Math.round(y) - 2, 5, 5).data;
+            for (let i = 0; i < d.length; i += 4) {
+                if (Math.abs(d[i] - rgb[0]) < 40 && Math.abs(d[i + 1] - rgb[1]) < 40
+                    && Math.abs(d[i + 2] - rgb[2]) < 40 && d[i + 3] > 200) return true;
+            }
+            return false;
+        }""", arg=[float(pixel[0]), float(pixel[1]), list(MARKER_RGB), canvases], timeout=timeout)
+
+
+def log_events(logs: Path, participant: str) -> list[dict]:
+    """The events of ``participant``'s log in the study folder ``logs`` so far ([] before it exists)."""
+    from mt_widgets.study import read_events
+
+    path = Path(logs) / f"{participant}.jsonl"
+    return read_events(path)[0] if path.exists() else []
+
+
+def wait_for_log(logs: Path, participant: str, predicate, timeout: float = 15.0, poll: float = 0.05) -> list[dict]:
+    """Waits until ``predicate(events)`` holds for ``participant``'s log; returns the events."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        events = log_events(logs, participant)
+        if predicate(events):
+            return events
+        time.sleep(poll)
+    last = log_events(logs, participant)[-1:]
+    raise AssertionError(f"{participant}: the log never satisfied the condition; last event: {last}")
+
+
+def current_episode(logs: Path, participant: str) -> dict:
+    """The ``episode_started`` event of ``participant``'s current episode."""
+    return [e for e in log_events(logs, participant) if e["type"] == "episode_started"][-1]
+
+
+#: The study page as Voila serves it (tests/browser_study/conftest.py copies notebooks/study_sim.ipynb).
+STUDY_PAGE = "/voila/render/study_sim.ipynb"
+
+
+def open_and_fill(page, server, protocol_path, participant: str) -> None:
+    """Opens the study page, chooses the protocol file (named "browser") and types the participant's ID."""
+    page.goto(server.url(STUDY_PAGE), timeout=60_000)
+    page.get_by_text("Experimenter", exact=True).wait_for(timeout=60_000)
+    protocol = page.get_by_placeholder("paper-sim, paper-uarm or a .toml/.json file")
+    protocol.fill(str(protocol_path))
+    protocol.press("Enter")
+    page.get_by_text("Protocol 'browser'").wait_for(timeout=10_000)
+    page.get_by_placeholder("pseudonymous code, e.g. P07").fill(participant)

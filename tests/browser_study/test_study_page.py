@@ -6,133 +6,39 @@ resumes the participant, and the log ends complete: every demonstration once, in
 """
 
 import json
-import re
-import time
 
 import numpy as np
 import pytest
 
-from browser_support import artifact_path
+from browser_support import (
+    artifact_path,
+    button,
+    current_episode,
+    drag_from,
+    open_and_fill,
+    wait_for_log,
+    wait_for_marker,
+)
 from mt_widgets import SKILLS
-from mt_widgets.study import read_events, read_study
+from mt_widgets.study import read_study
 from mt_widgets.widgets import ArmView
+from protocols import BROWSER_TEXTS, phase, protocol_toml
 
 pytestmark = pytest.mark.browser
 
-PROTOCOL = """
-format = 1
-name = "browser"
-lambda = 0.01
-seed = 5
-reproduction_duration_s = 2.0
-[assignment]
-block_size = 2
-seed = 1
-[texts]
-welcome = "Welcome to the test study."
-consent = "Consent text."
-instructions = "How to teach."
-reproduction = "This is what the robot learnt."
-thank_you = "Thank you, all done."
-[practice]
-skill = "sim-point"
-duration_s = 3
-text = "Practice freely."
-[[phases]]
-id = "P1"
-skill = "sim-point"
-episodes = 1
-demonstrations = 3
-instructions = "First part: teach skill 1."
-[[phases]]
-id = "P3"
-skill = "sim-point"
-episodes = 1
-demonstrations = 3
-guidance = ["target"]
-instructions = "Second part: teach skill 1 again."
-"""
-PAGE = "/voila/render/study_sim.ipynb"
-
-
-def button(page, name):
-    # Icons add to a button's accessible name: match the words, nothing else.
-    return page.get_by_role("button", name=re.compile(rf"^\W*{re.escape(name)}\s*$"))
-
-
-def open_and_fill(page, server, protocol_path, participant):
-    page.goto(server.url(PAGE), timeout=60_000)
-    page.get_by_text("Experimenter", exact=True).wait_for(timeout=60_000)
-    protocol = page.get_by_placeholder("paper-sim, paper-uarm or a .toml/.json file")
-    protocol.fill(str(protocol_path))
-    protocol.press("Enter")
-    page.get_by_text("Protocol 'browser'").wait_for(timeout=10_000)
-    page.get_by_placeholder("pseudonymous code, e.g. P07").fill(participant)
-
-
-def log_events(server, participant):
-    path = server.logs / f"{participant}.jsonl"
-    return read_events(path)[0] if path.exists() else []
-
-
-def wait_for_log(server, participant, predicate, timeout=15.0):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        events = log_events(server, participant)
-        if predicate(events):
-            return events
-        time.sleep(0.05)
-    raise AssertionError(f"the log never satisfied the condition; last event: {log_events(server, participant)[-1:]}")
-
-
-def drag(page, ee_pixel, offset):
-    """A real drag from the end-effector, through the CSS-scaled canvas box."""
-    element = page.locator("canvas").first
-    box = element.bounding_box()
-    width, height = element.evaluate("c => [c.width, c.height]")
-
-    def to_page(x, y):
-        return box["x"] + x * box["width"] / width, box["y"] + y * box["height"] / height
-
-    start = to_page(*ee_pixel)
-    end = to_page(ee_pixel[0] + offset[0], ee_pixel[1] + offset[1])
-    page.mouse.move(*start)
-    page.mouse.down()
-    for fraction in np.linspace(0.25, 1.0, 4):
-        page.mouse.move(start[0] + fraction * (end[0] - start[0]), start[1] + fraction * (end[1] - start[1]))
-    page.mouse.up()
-
-
-YELLOW = (240, 228, 66)  # the end-effector marker (Okabe-Ito yellow)
-
-
-def wait_for_marker(page, ee_pixel, timeout=15_000):
-    """Waits until the page holds one episode (two canvases: teaching, reproduction) and the
-    teaching canvas shows the end-effector marker at ``ee_pixel``: drawn, not just present."""
-    page.wait_for_function(
-        """([x, y, rgb]) => {
-            const all = document.querySelectorAll('canvas');
-            if (all.length !== 2) return false;
-            const d = all[0].getContext('2d').getImageData(Math.round(x) - 2, Math.round(y) - 2, 5, 5).data;
-            for (let i = 0; i < d.length; i += 4) {
-                if (Math.abs(d[i] - rgb[0]) < 40 && Math.abs(d[i + 1] - rgb[1]) < 40
-                    && Math.abs(d[i + 2] - rgb[2]) < 40 && d[i + 3] > 200) return true;
-            }
-            return false;
-        }""", arg=[float(ee_pixel[0]), float(ee_pixel[1]), list(YELLOW)], timeout=timeout)
-
-
-def current_episode(server, participant):
-    started = [e for e in log_events(server, participant) if e["type"] == "episode_started"]
-    return started[-1]
+PROTOCOL = protocol_toml(
+    "browser",
+    [phase("P1", "sim-point", instructions="First part: teach skill 1.", demonstrations=3),
+     phase("P3", "sim-point", instructions="Second part: teach skill 1 again.", demonstrations=3, guidance=["target"])],
+    texts=BROWSER_TEXTS, practice_s=3, practice_text="Practice freely.", top={"reproduction_duration_s": 2.0})
 
 
 def demonstrate(page, server, participant, phase, index, offset):
     """Draws and confirms the arrow at query state ``index`` of ``phase``; waits until it is on disk."""
     # The episode's query states are logged when the kernel enters it: wait for that first.
-    wait_for_log(server, participant, lambda events: any(
+    wait_for_log(server.logs, participant, lambda events: any(
         e["type"] == "episode_started" and e["phase"] == phase for e in events))
-    episode = current_episode(server, participant)
+    episode = current_episode(server.logs, participant)
     view = ArmView(SKILLS[episode["skill"]])
     ee = view.end_effector_pixel(np.asarray(episode["query_states"][index]))
     try:
@@ -142,7 +48,7 @@ def demonstrate(page, server, participant, phase, index, offset):
         raise
     confirm = button(page, "Confirm")
     for _ in range(3):  # the canvas takes the drag once the state is drawn: retry a missed one
-        drag(page, ee, offset)
+        drag_from(page, ee, offset)
         try:
             page.wait_for_function("b => !b.disabled", arg=confirm.element_handle(), timeout=3_000)
             break
@@ -150,7 +56,7 @@ def demonstrate(page, server, participant, phase, index, offset):
             continue
     confirm.click()
     key = (episode["phase"], episode["episode"], index)
-    return wait_for_log(server, participant, lambda events: any(
+    return wait_for_log(server.logs, participant, lambda events: any(
         (e["phase"], e["episode"], e["index"]) == key for e in events if e["type"] == "demonstration"))
 
 
@@ -181,7 +87,7 @@ def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resum
     practice_view = ArmView(SKILLS["sim-point"])
     practice_states = SKILLS["sim-point"].query_states(seed=np.random.SeedSequence(12345).spawn(1)[0])
     wait_for_marker(page, practice_view.end_effector_pixel(practice_states[0]))
-    drag(page, practice_view.end_effector_pixel(practice_states[0]), (60, -30))
+    drag_from(page, practice_view.end_effector_pixel(practice_states[0]), (60, -30))
     page.screenshot(path=shot("practice"))
     page.get_by_text("Practice time is over.").wait_for(timeout=10_000)
     button(page, "Continue to the study").click()
@@ -193,7 +99,7 @@ def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resum
     for index in range(3):
         demonstrate(page, voila_study, participant, "P1", index, (50 - 20 * index, -40))
     assert page.get_by_text("optimal action").count() == 0
-    wait_for_log(voila_study, participant, lambda events: events[-1]["type"] == "episode_finished")
+    wait_for_log(voila_study.logs, participant, lambda events: events[-1]["type"] == "episode_finished")
     page.get_by_text("This is what the robot learnt.").wait_for()
     page.screenshot(path=shot("reproduction"))
     button(page, "Continue").click()
@@ -217,7 +123,7 @@ def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resum
     except Exception:
         page.screenshot(path=shot("resume-failed"))
         raise AssertionError(f"resume failed; the page says: {page.inner_text('body')[:1500]}") from None
-    episode = current_episode(voila_study, participant)
+    episode = current_episode(voila_study.logs, participant)
     wait_for_marker(page, ArmView(SKILLS["sim-point"]).end_effector_pixel(np.asarray(episode["query_states"][2])))
     page.screenshot(path=shot("resumed"))
     demonstrate(page, voila_study, participant, "P3", 2, (30, 50))
@@ -227,7 +133,7 @@ def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resum
     page.get_by_text("Thank you, all done.").wait_for()
     page.screenshot(path=shot("thank-you"))
 
-    events = wait_for_log(voila_study, participant, lambda events: events[-1]["type"] == "session_finished")
+    events = wait_for_log(voila_study.logs, participant, lambda events: events[-1]["type"] == "session_finished")
     demos = [(e["phase"], e["episode"], e["index"]) for e in events if e["type"] == "demonstration"]
     assert demos == [("P1", 1, 0), ("P1", 1, 1), ("P1", 1, 2), ("P3", 1, 0), ("P3", 1, 1), ("P3", 1, 2)]
     assert [e["guidance_shown"] for e in events if e["type"] == "demonstration"] == [False] * 3 + [True] * 3

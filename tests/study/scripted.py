@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from mt_widgets import SKILLS
 from mt_widgets.study import load_protocol, parse_protocol
+from mt_widgets.study.protocol import PROTOCOL_FOLDER
 
 #: A short protocol with every kind of step (practice, phases with and without guidance,
 #: several episodes): the engine knows no more than this file, so it is enough to test it.
@@ -83,3 +86,150 @@ def demonstrations(events) -> list[tuple]:
 
 
 __all__ = ["SHORT_PROTOCOL", "demonstrations", "load_protocol", "run", "scripted_action", "short_protocol"]
+
+
+# -- a protocol with the steps around the task (tests/study/test_steps.py, test_bids.py) --------------
+
+VIDEO = PROTOCOL_FOLDER / "media" / "instructions.webm"
+
+STEPS = f"""
+withdrawal = "exclude"
+guidance_modality = "arrows"
+
+[[before]]
+id = "video"
+kind = "video"
+file = "{VIDEO}"
+
+[[before]]
+id = "info"
+kind = "information"
+text = "What the study is."
+
+[[before]]
+id = "consent"
+kind = "consent"
+text = "Do you agree?"
+
+[[before]]
+id = "screen"
+kind = "eligibility"
+
+[[before.items]]
+id = "background"
+kind = "choice"
+prompt = "Robotics before?"
+options = ["no", "yes"]
+eligible = ["no"]
+
+[[before]]
+id = "about"
+kind = "demographics"
+
+[[after]]
+id = "tlx"
+kind = "questionnaire"
+
+[[after.items]]
+id = "effort"
+kind = "likert"
+prompt = "How hard did you work?"
+levels = ["1", "2", "3", "4", "5", "6", "7"]
+
+[[after.items]]
+id = "hours"
+kind = "number"
+prompt = "Hours of sleep"
+minimum = 0
+maximum = 24
+
+[[after.items]]
+id = "notes"
+kind = "text"
+prompt = "Anything else?"
+required = false
+"""
+
+
+def with_steps(extra: str = STEPS, base: str = SHORT_PROTOCOL) -> str:
+    # Top-level keys go before the first table; the step tables at the end; practice draws only.
+    base = base.replace('text = "Practice."', 'text = "Practice."\nreproduction = false')
+    head, tables = extra.split("[[before]]", 1) if "[[before]]" in extra else (extra, "")
+    first = base.index("[assignment]")
+    return base[:first] + head + base[first:] + ("\n[[before]]" + tables if tables else "")
+
+
+def steps_protocol(extra: str = STEPS):
+    return parse_protocol(with_steps(extra), "steps.toml")
+
+
+def run_to_end(session, answers=None):
+    answers = answers or {"screen": {"background": "no"}, "about": {"age": 30, "sex": "female"},
+                          "tlx": {"effort": "5", "hours": 7}}
+    while not session.finished:
+        step = session.current_step()
+        if step.kind == "video":
+            session.finish_video(True, 2)
+        elif step.kind in ("eligibility", "demographics", "questionnaire"):
+            session.submit_answers(answers[step.study_step.id])
+        elif step.kind == "practice":
+            session.finish_practice(1.0)
+        elif step.kind == "demonstration":
+            session.submit_demonstration(scripted_action(step))
+        elif step.kind == "episode_end":
+            session.finish_episode()
+        else:
+            session.advance()
+
+
+def run_to_end_one(session):
+    """One step of ``run_to_end``."""
+    step = session.current_step()
+    if step.kind == "video":
+        session.finish_video(True, 1)
+    elif step.kind in ("eligibility", "demographics", "questionnaire"):
+        session.submit_answers({"screen": {"background": "no"}, "about": {"age": 30, "sex": "male"}}[
+            step.study_step.id])
+    elif step.kind == "practice":
+        session.finish_practice(1.0)
+    elif step.kind == "demonstration":
+        session.submit_demonstration(scripted_action(step))
+    elif step.kind == "episode_end":
+        session.finish_episode()
+    else:
+        session.advance()
+
+
+# -- a participant through the study app's widgets (tests/study/test_app.py, test_rolled_out_once.py) ---
+
+def click_primary(app):
+    """Clicks the page's one primary button (a consent page also offers "I do not agree")."""
+    from ipywidgets import Button
+
+    found, pending = [], list(app.body.children)
+    while pending:
+        widget = pending.pop()
+        if isinstance(widget, Button) and widget.button_style == "primary":
+            found.append(widget)
+        pending += list(getattr(widget, "children", ()))
+    assert len(found) == 1, found
+    found[0].click()
+
+
+def act(app):
+    """One participant action through the widgets, as the buttons and the canvas would do it."""
+    step = app.session.current_step()
+    if step.kind in ("welcome", "consent", "instructions", "phase_intro"):
+        click_primary(app)
+    elif step.kind == "practice":
+        # The practice cannot be skipped before its time (a cold first run may have used it up).
+        assert app._practice_done.disabled or time.monotonic() - app._practice_started >= step.duration_s
+        app._practice_done.disabled = False
+        app._practice_done.click()
+    elif step.kind in ("demonstration", "episode_end"):
+        if app.episode.phase == "guidance":
+            app.episode.next()
+        else:
+            app.episode.demonstrate(SKILLS[step.skill].target_actions(step.state[None])[0] + 0.3)
+    elif step.kind == "reproduction":
+        app._continue.click()

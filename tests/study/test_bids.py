@@ -8,7 +8,7 @@ from bids_validator import BIDSValidator
 
 from mt_widgets.study import Session, StudyFolder, export_bids, load_protocol
 
-from .test_steps import run_to_end, run_to_end_one, steps_protocol
+from .scripted import run_to_end, run_to_end_one, steps_protocol
 
 
 def _rows(path):

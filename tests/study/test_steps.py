@@ -19,102 +19,10 @@ from mt_widgets.study import (
     read_study,
 )
 from mt_widgets.study.log import OUTCOME_FILE
-from mt_widgets.study.protocol import PROTOCOL_FOLDER
 from mt_widgets.study.session import timeline
 
-from .scripted import SHORT_PROTOCOL, scripted_action
-
-VIDEO = PROTOCOL_FOLDER / "media" / "instructions.webm"
-
-STEPS = f"""
-withdrawal = "exclude"
-guidance_modality = "arrows"
-
-[[before]]
-id = "video"
-kind = "video"
-file = "{VIDEO}"
-
-[[before]]
-id = "info"
-kind = "information"
-text = "What the study is."
-
-[[before]]
-id = "consent"
-kind = "consent"
-text = "Do you agree?"
-
-[[before]]
-id = "screen"
-kind = "eligibility"
-
-[[before.items]]
-id = "background"
-kind = "choice"
-prompt = "Robotics before?"
-options = ["no", "yes"]
-eligible = ["no"]
-
-[[before]]
-id = "about"
-kind = "demographics"
-
-[[after]]
-id = "tlx"
-kind = "questionnaire"
-
-[[after.items]]
-id = "effort"
-kind = "likert"
-prompt = "How hard did you work?"
-levels = ["1", "2", "3", "4", "5", "6", "7"]
-
-[[after.items]]
-id = "hours"
-kind = "number"
-prompt = "Hours of sleep"
-minimum = 0
-maximum = 24
-
-[[after.items]]
-id = "notes"
-kind = "text"
-prompt = "Anything else?"
-required = false
-"""
-
-
-def _with_steps(extra: str = STEPS, base: str = SHORT_PROTOCOL) -> str:
-    # Top-level keys go before the first table; the step tables at the end; practice draws only.
-    base = base.replace('text = "Practice."', 'text = "Practice."\nreproduction = false')
-    head, tables = extra.split("[[before]]", 1) if "[[before]]" in extra else (extra, "")
-    first = base.index("[assignment]")
-    return base[:first] + head + base[first:] + ("\n[[before]]" + tables if tables else "")
-
-
-def steps_protocol(extra: str = STEPS):
-    return parse_protocol(_with_steps(extra), "steps.toml")
-
-
-def run_to_end(session, answers=None):
-    answers = answers or {"screen": {"background": "no"}, "about": {"age": 30, "sex": "female"},
-                          "tlx": {"effort": "5", "hours": 7}}
-    while not session.finished:
-        step = session.current_step()
-        if step.kind == "video":
-            session.finish_video(True, 2)
-        elif step.kind in ("eligibility", "demographics", "questionnaire"):
-            session.submit_answers(answers[step.study_step.id])
-        elif step.kind == "practice":
-            session.finish_practice(1.0)
-        elif step.kind == "demonstration":
-            session.submit_demonstration(scripted_action(step))
-        elif step.kind == "episode_end":
-            session.finish_episode()
-        else:
-            session.advance()
-
+from .scripted import STEPS, VIDEO, run_to_end, run_to_end_one, steps_protocol
+from .scripted import with_steps as _with_steps
 
 # -- protocol input ----------------------------------------------------------------------------------
 
@@ -256,22 +164,6 @@ def test_a_withdrawn_participant_is_kept_out_logged_and_cannot_be_resumed(tmp_pa
     assert [r["state"] for r in study.status()] == ["completed", "completed", "withdrawn"]
 
 
-def run_to_end_one(session):
-    """One step of ``run_to_end``."""
-    step = session.current_step()
-    if step.kind == "video":
-        session.finish_video(True, 1)
-    elif step.kind in ("eligibility", "demographics", "questionnaire"):
-        session.submit_answers({"screen": {"background": "no"}, "about": {"age": 30, "sex": "male"}}[
-            step.study_step.id])
-    elif step.kind == "practice":
-        session.finish_practice(1.0)
-    elif step.kind == "demonstration":
-        session.submit_demonstration(scripted_action(step))
-    elif step.kind == "episode_end":
-        session.finish_episode()
-    else:
-        session.advance()
 
 
 def test_a_protocol_that_says_delete_deletes_the_log_and_records_the_withdrawal(tmp_path):

@@ -14,33 +14,11 @@ from mt_widgets.apps.uarm_study import UArmEpisodePage, UArmStudyApp, UArmTeachi
 from mt_widgets.core import Trajectory
 from mt_widgets.hardware import SwiftPro
 from mt_widgets.hardware.bridge import arm_to_plant_cm
+from protocols import phase, protocol_toml
 
 from .helpers import arm_is_moving, device_of, is_move, moves, received, sim_url, wait_until
 
-ONE_EPISODE = """
-format = 1
-name = "one-uarm-episode"
-lambda = 0.01
-seed = 5
-[assignment]
-block_size = 2
-seed = 3
-[texts]
-welcome = "Welcome."
-consent = "Consent."
-instructions = "Instructions."
-reproduction = "Reproduction."
-thank_you = "Thank you."
-[practice]
-skill = "uarm-point"
-duration_s = 0
-text = "Practice."
-[[phases]]
-id = "P1"
-skill = "uarm-point"
-episodes = 1
-instructions = "Skill 1."
-"""
+ONE_EPISODE = protocol_toml("one-uarm-episode", [phase("P1", "uarm-point", instructions="Skill 1.")], assignment_seed=3)
 
 
 @pytest.fixture
