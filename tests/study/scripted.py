@@ -164,32 +164,21 @@ def steps_protocol(extra: str = STEPS):
 
 
 def run_to_end(session, answers=None):
+    """Drives ``session`` to its end: every video watched (twice), the forms answered with ``answers``."""
     answers = answers or {"screen": {"background": "no"}, "about": {"age": 30, "sex": "female"},
                           "tlx": {"effort": "5", "hours": 7}}
     while not session.finished:
-        step = session.current_step()
-        if step.kind == "video":
-            session.finish_video(True, 2)
-        elif step.kind in ("eligibility", "demographics", "questionnaire"):
-            session.submit_answers(answers[step.study_step.id])
-        elif step.kind == "practice":
-            session.finish_practice(1.0)
-        elif step.kind == "demonstration":
-            session.submit_demonstration(scripted_action(step))
-        elif step.kind == "episode_end":
-            session.finish_episode()
-        else:
-            session.advance()
+        run_to_end_one(session, answers, plays=2)
 
 
-def run_to_end_one(session):
-    """One step of ``run_to_end``."""
+def run_to_end_one(session, answers=None, plays: int = 1):
+    """One step of ``run_to_end`` (by default: the video played once, the forms before the task answered)."""
+    answers = answers or {"screen": {"background": "no"}, "about": {"age": 30, "sex": "male"}}
     step = session.current_step()
     if step.kind == "video":
-        session.finish_video(True, 1)
+        session.finish_video(True, plays)
     elif step.kind in ("eligibility", "demographics", "questionnaire"):
-        session.submit_answers({"screen": {"background": "no"}, "about": {"age": 30, "sex": "male"}}[
-            step.study_step.id])
+        session.submit_answers(answers[step.study_step.id])
     elif step.kind == "practice":
         session.finish_practice(1.0)
     elif step.kind == "demonstration":
