@@ -159,6 +159,20 @@ def drag_from(page, pixel, offset, steps: int = 4) -> None:
     page.mouse.up()
 
 
+def drag_and_confirm(page, pixel, offset, tries: int = 4, wait_ms: float = 4_000) -> None:
+    """Drags the arrow (``drag_from``) and clicks Confirm once it is enabled; the canvas takes the drag
+    once the state is drawn, so a drag that left Confirm disabled is made again (``tries`` in all)."""
+    confirm = button(page, "Confirm")
+    for _ in range(tries):
+        drag_from(page, pixel, offset)
+        try:
+            page.wait_for_function("b => !b.disabled", arg=confirm.element_handle(), timeout=wait_ms)
+            break
+        except Exception:
+            continue
+    confirm.click()
+
+
 def wait_for_marker(page, pixel, canvases: int = 2, timeout: float = 15_000) -> None:
     """Waits until the page holds ``canvases`` canvases (one episode: teaching and reproduction) and
     the first shows the end-effector marker at ``pixel``: drawn, not just present."""

@@ -27,7 +27,7 @@ from browser_support import (
     STUDY_PAGE,
     artifact_path,
     button,
-    drag_from,
+    drag_and_confirm,
     local_page,
     log_events,
     wait_for_marker,
@@ -67,18 +67,6 @@ def count_colour(page, rgb, canvas_index=0) -> int:
 
 
 OFFSETS = ((50, -40), (-50, -30), (40, 45), (-45, 40), (55, 10))
-def drag_and_confirm(page, pixel, offset):
-    confirm = button(page, "Confirm")
-    for _ in range(4):  # the canvas takes the drag once the state is drawn: retry a missed one
-        drag_from(page, pixel, offset)
-        try:
-            page.wait_for_function("b => !b.disabled", arg=confirm.element_handle(), timeout=4_000)
-            break
-        except Exception:
-            continue
-    confirm.click()
-
-
 def wait_enabled(page, name, timeout=60_000):
     page.wait_for_function("b => !b.disabled", arg=button(page, name).element_handle(timeout=timeout),
                            timeout=timeout)

@@ -14,6 +14,7 @@ from browser_support import (
     artifact_path,
     button,
     current_episode,
+    drag_and_confirm,
     drag_from,
     open_and_fill,
     wait_for_log,
@@ -46,15 +47,7 @@ def demonstrate(page, server, participant, phase, index, offset):
     except Exception:
         page.screenshot(path=artifact_path("study-page-no-marker", f"{episode['phase']}-{index}"))
         raise
-    confirm = button(page, "Confirm")
-    for _ in range(3):  # the canvas takes the drag once the state is drawn: retry a missed one
-        drag_from(page, ee, offset)
-        try:
-            page.wait_for_function("b => !b.disabled", arg=confirm.element_handle(), timeout=3_000)
-            break
-        except Exception:
-            continue
-    confirm.click()
+    drag_and_confirm(page, ee, offset, tries=3, wait_ms=3_000)
     key = (episode["phase"], episode["episode"], index)
     return wait_for_log(server.logs, participant, lambda events: any(
         (e["phase"], e["episode"], e["index"]) == key for e in events if e["type"] == "demonstration"))
