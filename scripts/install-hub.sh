@@ -1,26 +1,79 @@
 #!/usr/bin/env bash
 # Installs what a JupyterHub for a class needs beyond the Python extras (mt-widgets[course,hub]):
-# configurable-http-proxy from npm. It goes into .npm/ of this checkout unless one is already on
-# PATH (set NPM_GLOBAL=1 to run `npm install -g configurable-http-proxy` instead). Prints the
-# folder to put first on PATH. Sourced by run-tests.sh, so the hub tests find the proxy.
+#
+# 1. configurable-http-proxy from npm. It goes into .npm/ of this checkout unless one is already on
+#    PATH (set NPM_GLOBAL=1 to run `npm install -g configurable-http-proxy` instead).
+# 2. The students' Python, .venv/students/, when students could not run .venv's own: every
+#    student's server runs as that student's system user, who must be able to enter every folder
+#    down to the interpreter, and a pyenv Python under /root (mode 0700) is out of their reach.
+#    .venv/students is a venv of the system's python3 of the same minor version (same ABI), whose
+#    site-packages, share/ and etc/ are .venv's own (symlinks): one installation, nothing copied;
+#    the hub finds it through MT_HUB_STUDENT_PYTHON (tests/course/hub_support.py sets it).
+#
+# Prints the folder to put first on PATH (for the proxy) as its last line. Sourced by
+# run-tests.sh, so the hub tests find the proxy.
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-if command -v configurable-http-proxy >/dev/null 2>&1; then
-    dirname "$(command -v configurable-http-proxy)"
-    exit 0
+VENV="$REPO/.venv"
+
+students_python() {
+    # Can a user who is neither owner nor group enter every folder down to .venv's interpreter?
+    local real folder
+    real="$(readlink -f "$VENV/bin/python")"
+    folder="$(dirname "$real")"
+    while [ "$folder" != / ]; do
+        if [ "$(( $(stat -c '%a' "$folder" | sed 's/^.*\(.\)$/\1/') & 1 ))" = 0 ]; then
+            break
+        fi
+        folder="$(dirname "$folder")"
+    done
+    if [ "$folder" = / ]; then
+        return 0  # .venv's interpreter is reachable: students use it as it is
+    fi
+    local version system
+    version="$("$VENV/bin/python" -c 'import sys; print("%d.%d" % sys.version_info[:2])')"
+    system="/usr/bin/python$version"
+    if [ ! -x "$system" ]; then
+        echo "students cannot enter $folder (so not run $real), and there is no $system to give them" >&2
+        echo "(Debian: apt-get install python$version, or chmod o+x $folder)" >&2
+        return 1
+    fi
+    local students="$VENV/students"
+    if [ ! -x "$students/bin/python" ]; then
+        "$system" -m venv --without-pip "$students" >&2
+        local site="lib/python$version/site-packages"
+        rm -rf "${students:?}/$site"
+        ln -s "$VENV/$site" "$students/$site"
+        for shared in share etc; do
+            [ -e "$VENV/$shared" ] && ln -sfn "$VENV/$shared" "$students/$shared"
+        done
+    fi
+    echo "students' Python: $students/bin/python ($("$students/bin/python" --version 2>&1))" >&2
+}
+
+proxy() {
+    if command -v configurable-http-proxy >/dev/null 2>&1; then
+        dirname "$(command -v configurable-http-proxy)"
+        return 0
+    fi
+    if [ -x "$REPO/.npm/bin/configurable-http-proxy" ]; then
+        echo "$REPO/.npm/bin"
+        return 0
+    fi
+    if ! command -v npm >/dev/null 2>&1; then
+        echo "configurable-http-proxy needs npm (Debian: apt-get install -y npm)" >&2
+        return 1
+    fi
+    if [ "${NPM_GLOBAL:-0}" = 1 ]; then
+        npm install -g --no-fund --no-audit configurable-http-proxy >&2
+        dirname "$(command -v configurable-http-proxy)"
+    else
+        npm install --prefix "$REPO/.npm" -g --no-fund --no-audit configurable-http-proxy >&2
+        echo "$REPO/.npm/bin"
+    fi
+}
+
+if [ -x "$VENV/bin/python" ]; then
+    students_python
 fi
-if [ -x "$REPO/.npm/bin/configurable-http-proxy" ]; then
-    echo "$REPO/.npm/bin"
-    exit 0
-fi
-if ! command -v npm >/dev/null 2>&1; then
-    echo "configurable-http-proxy needs npm (Debian: apt-get install -y npm)" >&2
-    exit 1
-fi
-if [ "${NPM_GLOBAL:-0}" = 1 ]; then
-    npm install -g --no-fund --no-audit configurable-http-proxy >&2
-    dirname "$(command -v configurable-http-proxy)"
-else
-    npm install --prefix "$REPO/.npm" -g --no-fund --no-audit configurable-http-proxy >&2
-    echo "$REPO/.npm/bin"
-fi
+proxy

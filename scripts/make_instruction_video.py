@@ -1,9 +1,16 @@
 """Makes the short instruction video the shipped protocols show (protocols/media/instructions.webm).
 
-Not the paper's video (which is not public): an 8-second animation, drawn on a canvas in
-Chromium and recorded with its MediaRecorder (VP8 WebM, which Chromium and Firefox play), of
-what the paper's instructions say: drag from the tip to draw an arrow, confirm, watch the
-robot play back what it learnt. Run: ``.venv/bin/python scripts/make_instruction_video.py``.
+Not the paper's video. The paper links its instruction video online (its footnote:
+https://youtu.be/Ir2DLJAYytY); it is not ours to redistribute, so the package cannot ship it.
+This makes a stand-in: an 8-second animation, drawn on a canvas in Chromium and recorded with
+its MediaRecorder (VP8 WebM, which Chromium and Firefox play), of what the paper's
+instructions say: drag from the tip to draw an arrow, confirm, watch the robot play back what
+it learnt. Run: ``.venv/bin/python scripts/make_instruction_video.py``.
+
+A researcher who has the paper's video (or makes their own) names the file in the protocol's
+video step, relative to the protocol file (``file = "media/my_video.mp4"``,
+mt_widgets/study/steps.py): its sha256 becomes part of the protocol's data and hash, so every
+participant's log says exactly which video they saw; or names its address (``url = ...``).
 """
 
 from __future__ import annotations

@@ -43,6 +43,7 @@ NOTEBOOK_PARAMETERS: dict[str, dict[str, object]] = {
     "tutorials/12_the_uarm.ipynb": {"PORT": SIMULATED_ARM, "DURATION": 3.0},
     "tutorials/appendix_a_widget_api.ipynb": {"DURATION": 2.0},
     "notebooks/study_sim.ipynb": {"LOG_FOLDER": Scratch("study_sim")},
+    "notebooks/study_online.ipynb": {"LOG_FOLDER": Scratch("study_online"), "CHECK_REFUSED_WITHOUT_LINK": True},
     "notebooks/study_uarm.ipynb": {"LOG_FOLDER": Scratch("study_uarm"), "PORT": SIMULATED_ARM},
     "notebooks/analysis.ipynb": {"FAST": True},
     # The switch's own test: the notebook asserts it got these values, not its own.

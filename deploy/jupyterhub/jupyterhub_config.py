@@ -1,31 +1,46 @@
-"""A JupyterHub for a class on one machine: mt-widgets installed once, read-only, for everyone.
+"""A JupyterHub for a real class on one machine: the roster's people, each as their own system user.
 
-Run it from a folder the hub may write its state to::
+Run it as root (it starts every student's server as that student's own user), from a folder the
+hub may write its state to::
 
-    MT_HUB_STATE=/srv/mt-hub MT_WIDGETS_CLASS_FOLDER=/srv/mt-hub/class \\
+    MT_HUB_ROSTER=/srv/mt-hub/roster.csv MT_HUB_STATE=/srv/mt-hub \\
+    MT_WIDGETS_CLASS_FOLDER=/srv/mt-hub/class MT_WIDGETS_EXCHANGE=/srv/nbgrader/exchange \\
         jupyterhub -f deploy/jupyterhub/jupyterhub_config.py
 
-Settings come from environment variables so the same file serves a course and the test suite
-(tests/course/test_hub.py):
+and set the instructors' passwords first (``deploy/jupyterhub/class_admin.py set-password``).
+What it does (deploy/jupyterhub/README.md says why and how to change it):
 
-- ``MT_HUB_PORT`` (8000): the port, on 127.0.0.1 only; put a TLS proxy in front for a real class.
-  ``MT_HUB_PROXY_API_PORT`` (8001) and ``MT_HUB_INTERNAL_PORT`` (8081): the proxy's and the hub's own.
-- ``MT_HUB_STATE`` (./mt-hub-state): the hub's database, cookie secret and proxy token.
-- ``MT_HUB_HOMES`` (<state>/homes): one home folder per student.
-- ``MT_HUB_PASSWORD``: the dummy authenticator's shared password (unset: any password). The
-  dummy authenticator is for trying things out and tests; a course uses its institution's
-  (OAuthenticator, LTI) in its place.
-- ``MT_HUB_API_TOKEN``: a token for the ``class-admin`` service (creating students, starting
-  servers), used by tests and by ``benchmarks/bench_hub.py``.
-- ``MT_WIDGETS_CLASS_FOLDER``: the class folder students' lessons write progress to (the
-  instructor's ``notebooks/class_view.ipynb`` reads it); unset: no progress is recorded.
-- ``MT_WIDGETS_EXCHANGE``: nbgrader's exchange folder (release, submit, collect, feedback).
-- ``MT_HUB_NUMBA_TEMPLATE``: a warm numba cache (``deploy/jupyterhub/warm_numba_cache.py``)
-  copied into a student's empty cache at spawn, so nobody's first episode waits for compiling.
+- **Who comes in** (``roster_authenticator.py``): exactly the roster's logins; a student sets
+  their password at their first login, instructors and TAs have theirs set by
+  ``class_admin.py``; wrong passwords are slowed and, repeated, locked.
+- **Isolation** (``class_hub.py``): each login is a system user with a private home (0700);
+  its server and kernels run as that user with umask 027, never root. The class folder lets a
+  student append to their own progress file only; the course folder (``MT_HUB_COURSE``) is the
+  instructors'; the installation is read-only to students, and the hub refuses to start when
+  students could not read it.
+- **Limits**: cgroup v1 memory and CPU groups per student (``MT_HUB_MEM_LIMIT``, 1G;
+  ``MT_HUB_CPU_LIMIT``, 1.0 core); the hub refuses to start without them unless
+  ``MT_HUB_LIMITS=off``. Idle servers are stopped by jupyterhub-idle-culler after
+  ``MT_HUB_CULL_IDLE_SECONDS`` (3600); saved work stays in the home.
+- **Thirty at once**: kernels talk to their server over IPC sockets in the student's runtime
+  folder (``student-config/jupyter_server_config.py``), not TCP ports that thirty servers
+  starting kernels at once would race for.
 
-Every student's server runs the same Python (this hub's) with the package installed once;
-nothing is written into the installation: numba's cache goes to ``~/.cache/numba`` of each
-student (``NUMBA_CACHE_DIR``) and Python writes no bytecode there (``PYTHONDONTWRITEBYTECODE``).
+Settings (environment variables, so one file serves a course and the tests, tests/course/test_hub.py):
+
+- ``MT_HUB_ROSTER`` (required): the roster CSV (``mt_widgets/classroom/roster.py``).
+- ``MT_HUB_STATE`` (./mt-hub-state): the hub's database, cookie secret, proxy token, password hashes.
+- ``MT_HUB_HOMES`` (/home): where each login's home is made.
+- ``MT_HUB_RUNTIME`` (/run/mt-hub): where each login's Jupyter runtime folder is made (kernel sockets).
+- ``MT_HUB_STUDENT_PYTHON`` (the hub's): the Python students' servers run (``scripts/install-hub.sh``).
+- ``MT_HUB_INSTRUCTORS_GROUP`` (mt-instructors): the system group of instructors and TAs.
+- ``MT_HUB_COURSE``: the instructor's nbgrader course folder, made the instructors' only.
+- ``MT_HUB_PORT`` (8000): the port, on 127.0.0.1 only (README.md: HTTPS for a class beyond the
+  machine). ``MT_HUB_PROXY_API_PORT`` (8001), ``MT_HUB_INTERNAL_PORT`` (8081).
+- ``MT_HUB_API_TOKEN``: a token for the ``class-admin`` service (tests, ``benchmarks/bench_hub.py``).
+- ``MT_WIDGETS_CLASS_FOLDER``, ``MT_WIDGETS_EXCHANGE``: the class folder and nbgrader's exchange.
+- ``MT_HUB_NUMBA_TEMPLATE``: a warm numba cache (``warm_numba_cache.py``) copied into a
+  student's empty cache at spawn, so nobody's first episode waits for compiling.
 """
 
 import os
@@ -35,12 +50,54 @@ import socket
 import sys
 from pathlib import Path
 
-c = get_config()  # noqa: F821 - provided by JupyterHub's config loader
+import jupyterhub
+from jupyterhub.spawner import LocalProcessSpawner
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+import class_hub  # noqa: E402
+from class_hub import CgroupLimits, ClassHubError  # noqa: E402
+from roster_authenticator import RosterAuthenticator  # noqa: E402
+
+import mt_widgets  # noqa: E402
+from mt_widgets.classroom.roster import read_roster  # noqa: E402
+
+c = get_config()  # noqa: F821 - provided by JupyterHub's config loader
+
+if os.geteuid() != 0:
+    raise SystemExit("the class hub runs as root: it starts each student's server as that student's own "
+                     "system user (and never as root)")
+if not os.environ.get("MT_HUB_ROSTER"):
+    raise SystemExit("MT_HUB_ROSTER: expected the class roster (a CSV of logins, mt_widgets/classroom/roster.py)")
+ROSTER = Path(os.environ["MT_HUB_ROSTER"]).resolve()
+roster = read_roster(ROSTER)  # a bad roster stops the hub here, naming every bad line
 STATE = Path(os.environ.get("MT_HUB_STATE", "mt-hub-state")).resolve()
-HOMES = Path(os.environ.get("MT_HUB_HOMES", STATE / "homes")).resolve()
+HOMES = Path(os.environ.get("MT_HUB_HOMES", "/home")).resolve()
+INSTRUCTORS = os.environ.get("MT_HUB_INSTRUCTORS_GROUP", "mt-instructors")
+# Each login's Jupyter runtime folder (its kernels' IPC sockets): short, since a socket's path has
+# at most 107 bytes, and each login's own (0700).
+RUNTIME = Path(os.environ.get("MT_HUB_RUNTIME", "/run/mt-hub")).resolve()
+_longest_socket = len(f"{RUNTIME}/{'x' * 32}/kernel-{'0' * 36}-ipc-99")
+if _longest_socket > 107:
+    raise SystemExit(f"MT_HUB_RUNTIME: {RUNTIME} is too long for kernels' IPC socket paths ({_longest_socket} "
+                     "bytes of at most 107): choose a shorter folder")
 STATE.mkdir(parents=True, exist_ok=True)
+os.chmod(STATE, 0o700)
+RUNTIME.mkdir(parents=True, exist_ok=True)
+os.chmod(RUNTIME, 0o711)
+HOMES.mkdir(parents=True, exist_ok=True)
+
+# -- the installation: every student must read it, none may write it ---------------------------------
+# The Python students' servers and kernels run: the hub's own unless MT_HUB_STUDENT_PYTHON names
+# another (scripts/install-hub.sh makes one when the hub's is out of students' reach, as a pyenv
+# Python under /root is).
+STUDENT_PYTHON = Path(os.environ.get("MT_HUB_STUDENT_PYTHON") or sys.executable)
+_installation = [STUDENT_PYTHON, Path(mt_widgets.__file__).parent, HERE, Path(jupyterhub.__file__).parent]
+_problems = class_hub.installation_problems(_installation)
+if _problems:
+    raise SystemExit("students could not use this installation (they are neither its owner nor its group):\n  "
+                     + "\n  ".join(_problems) + "\n(or set MT_HUB_STUDENT_PYTHON to a Python they can run: "
+                     "scripts/install-hub.sh makes one)")
 
 # -- the hub: loopback only ------------------------------------------------------------------------
 c.JupyterHub.ip = "127.0.0.1"
@@ -56,48 +113,126 @@ c.JupyterHub.concurrent_spawn_limit = int(os.environ.get("MT_HUB_SPAWN_LIMIT", "
 c.JupyterHub.active_server_limit = 0
 
 # -- who comes in ----------------------------------------------------------------------------------
-c.JupyterHub.authenticator_class = "dummy"
-if os.environ.get("MT_HUB_PASSWORD"):
-    c.DummyAuthenticator.password = os.environ["MT_HUB_PASSWORD"]
-c.Authenticator.allow_all = True
-c.Authenticator.admin_users = {"instructor"}
+c.JupyterHub.authenticator_class = RosterAuthenticator
+c.RosterAuthenticator.roster_path = str(ROSTER)
+c.RosterAuthenticator.password_file = str(STATE / "passwords.json")
+c.Authenticator.admin_users = {entry.login for entry in roster.admins}
+c.Authenticator.auth_refresh_age = 300  # a student removed from the roster is logged out within 5 minutes
+c.JupyterHub.services = []
+c.JupyterHub.load_roles = []
 if os.environ.get("MT_HUB_API_TOKEN"):
-    c.JupyterHub.services = [{"name": "class-admin", "api_token": os.environ["MT_HUB_API_TOKEN"]}]
-    c.JupyterHub.load_roles = [{
+    c.JupyterHub.services.append({"name": "class-admin", "api_token": os.environ["MT_HUB_API_TOKEN"]})
+    c.JupyterHub.load_roles.append({
         "name": "class-admin",
         "scopes": ["admin:users", "admin:servers", "tokens", "access:servers", "read:users"],
         "services": ["class-admin"],
-    }]
+    })
+CULL_IDLE_S = int(os.environ.get("MT_HUB_CULL_IDLE_SECONDS", str(class_hub.DEFAULT_CULL_IDLE_S)))
+if CULL_IDLE_S > 0:
+    # Stops servers idle that long; a student's saved notebooks and progress stay in their home.
+    c.JupyterHub.services.append({
+        "name": "idle-culler",
+        "command": [sys.executable, "-m", "jupyterhub_idle_culler", f"--timeout={CULL_IDLE_S}",
+                    f"--cull-every={max(60, CULL_IDLE_S // 10)}"],
+    })
+    c.JupyterHub.load_roles.append({
+        "name": "idle-culler",
+        "scopes": ["list:users", "read:users:activity", "read:servers", "delete:servers"],
+        "services": ["idle-culler"],
+    })
+
+# -- limits ----------------------------------------------------------------------------------------
+LIMITS = None
+if os.environ.get("MT_HUB_LIMITS", "on") != "off":
+    LIMITS = CgroupLimits(class_hub.parse_bytes(os.environ.get("MT_HUB_MEM_LIMIT", class_hub.DEFAULT_MEM_LIMIT)),
+                          float(os.environ.get("MT_HUB_CPU_LIMIT", class_hub.DEFAULT_CPU_LIMIT)),
+                          parent=os.environ.get("MT_HUB_CGROUP", "mt-hub"))
+    _problem = LIMITS.problem()
+    if _problem:
+        raise SystemExit(f"per-student limits cannot be enforced here ({_problem}); on a systemd host use "
+                         "jupyterhub-systemdspawner (deploy/jupyterhub/README.md), or set MT_HUB_LIMITS=off "
+                         "to run a class without them")
+
+# -- accounts and folders, for the whole roster before anyone logs in --------------------------------
+INSTRUCTORS_GID = class_hub.ensure_group(INSTRUCTORS)
+CLASS_FOLDER = Path(os.environ["MT_WIDGETS_CLASS_FOLDER"]) if os.environ.get("MT_WIDGETS_CLASS_FOLDER") else None
+if CLASS_FOLDER is not None:
+    class_hub.secure_class_folder(CLASS_FOLDER, INSTRUCTORS_GID)
+if os.environ.get("MT_HUB_COURSE"):
+    class_hub.secure_course_folder(Path(os.environ["MT_HUB_COURSE"]), INSTRUCTORS_GID)
+
+
+def _prepare_account(login: str, log=None) -> None:
+    """``login``'s system user, home and, for a student, progress files (every student on the roster
+    has them from the hub's start, so that no student can take a classmate's file name first; the
+    class view lists a student who has not started yet with no events)."""
+    entry = read_roster(ROSTER).entry(login)
+    class_hub.ensure_system_user(login, HOMES / login, INSTRUCTORS, entry.is_admin)
+    if CLASS_FOLDER is not None and not entry.is_admin:
+        class_hub.ensure_progress_files(CLASS_FOLDER, login, INSTRUCTORS_GID, log)
+
+
+for _entry in roster.entries:
+    _prepare_account(_entry.login)
 
 # -- each student's server -------------------------------------------------------------------------
-# Local processes (no system accounts needed): each server gets its own home folder. As root,
-# Jupyter servers refuse to start without --allow-root.
-c.JupyterHub.spawner_class = "simple"
-c.SimpleLocalProcessSpawner.home_dir_template = str(HOMES / "{username}")
-c.Spawner.cmd = [str(Path(sys.executable).parent / "jupyterhub-singleuser")]
-c.Spawner.args = ["--allow-root"] if os.geteuid() == 0 else []
+
+
+class ClassSpawner(LocalProcessSpawner):
+    """A student's server as their own system user, inside their cgroups (umask 027 comes from
+    student-config/jupyter_server_config.py, which Zero to JupyterHub's pods load too)."""
+
+    def make_preexec_fn(self, name):
+        drop_root = super().make_preexec_fn(name)
+        join = LIMITS.join_function(name) if LIMITS is not None else None
+
+        def preexec():
+            if join is not None:
+                join()  # while still root: the group's files are root's
+            drop_root()
+
+        return preexec
+
+
+c.JupyterHub.spawner_class = ClassSpawner
+c.Spawner.cmd = [str(STUDENT_PYTHON), "-m", "jupyterhub.singleuser"]
 c.Spawner.default_url = "/lab/tree/index.ipynb"
-c.Spawner.start_timeout = 180
-c.Spawner.http_timeout = 180
-c.Spawner.mem_limit = os.environ.get("MT_HUB_MEM_LIMIT") or None  # enforced by container spawners only
+# A class of thirty starting at once on two cores takes a minute or more (benchmarks/bench_hub.py).
+c.Spawner.start_timeout = 300
+c.Spawner.http_timeout = 300
 
 # Passed on from the hub's environment: the class folder, the exchange, and (tests) the checkout.
 _passed_on = ("MT_WIDGETS_CLASS_FOLDER", "MT_WIDGETS_EXCHANGE", "MT_WIDGETS_FAST")
+# student-site/ first: it leaves out a package that costs every server seconds at start (its docstring).
+_python_path = os.pathsep.join([str(HERE / "student-site"), *filter(None, [os.environ.get("PYTHONPATH")])])
 c.Spawner.environment = {
     # numba's compiled rollouts go to each student's home, never into the shared installation.
-    "NUMBA_CACHE_DIR": lambda spawner: str(Path(spawner.home_dir) / ".cache" / "numba"),
-    "MPLCONFIGDIR": lambda spawner: str(Path(spawner.home_dir) / ".cache" / "matplotlib"),
+    "NUMBA_CACHE_DIR": lambda spawner: str(HOMES / spawner.user.name / ".cache" / "numba"),
+    "MPLCONFIGDIR": lambda spawner: str(HOMES / spawner.user.name / ".cache" / "matplotlib"),
     "PYTHONDONTWRITEBYTECODE": "1",
-    # nbgrader's student side (exchange, course, who submits) comes from this folder.
+    "JUPYTER_RUNTIME_DIR": lambda spawner: str(RUNTIME / spawner.user.name),
+    # nbgrader's student side and the server's settings (IPC kernels, extensions) come from here.
     "JUPYTER_CONFIG_PATH": str(HERE / "student-config"),
+    "MT_HUB_ROLE": lambda spawner: "instructor" if spawner.user.admin else "student",
+    "PYTHONPATH": _python_path,
+    # Students' servers find no node: JupyterLab's import asks yarn (a node process, ~2 s) for the
+    # npm registry at every start when node is on PATH, for building extensions no student builds.
+    "PATH": lambda spawner: os.environ.get("PATH", "") if spawner.user.admin else str(STUDENT_PYTHON.parent),
     **{name: os.environ[name] for name in _passed_on if os.environ.get(name)},
 }
 
 
+def _copy_owned(source: Path, target: Path, uid: int, gid: int) -> None:
+    shutil.copytree(source, target)
+    for path in [target, *target.rglob("*")]:
+        os.chown(path, uid, gid, follow_symlinks=False)
+
+
 def _port_outside_ephemeral_range() -> int:
     """A free port below Linux's ephemeral range (32768-60999). JupyterHub's own choice comes from
-    that range, where every kernel's ZMQ sockets also bind: when a class starts at once, a kernel
-    can take a server's port between the hub choosing it and the server binding it."""
+    that range, where every outgoing connection's local port comes from too: with a class starting
+    at once, a connection can take a server's port between the hub choosing it and the server
+    binding it."""
     for _ in range(500):
         port = random.randint(20000, 32000)
         with socket.socket() as probe:
@@ -109,15 +244,36 @@ def _port_outside_ephemeral_range() -> int:
     raise RuntimeError("no free port between 20000 and 32000 for a student's server")
 
 
-def _prepare_home(spawner) -> None:
-    """Before a student's server starts: its port, and a home with a warm numba cache (if the hub has one)."""
-    spawner.port = _port_outside_ephemeral_range()
-    home = Path(spawner.home_dir)
-    cache = home / ".cache" / "numba"
+def _before_spawn(spawner) -> None:
+    """Before a server starts: the account (the roster may have changed), a warm numba cache, the cgroups."""
+    import pwd
+
+    login = spawner.user.name
+    try:
+        _prepare_account(login, spawner.log)
+    except KeyError:
+        raise ClassHubError(f"{login} is no longer on the roster {ROSTER}") from None
+    user = pwd.getpwnam(login)
+    runtime = RUNTIME / login
+    runtime.mkdir(exist_ok=True)
+    os.chown(runtime, user.pw_uid, user.pw_gid)
+    os.chmod(runtime, 0o700)
+    cache = HOMES / login / ".cache" / "numba"
     template = os.environ.get("MT_HUB_NUMBA_TEMPLATE")
     if template and Path(template).is_dir() and not cache.exists():
-        shutil.copytree(template, cache)
-    cache.mkdir(parents=True, exist_ok=True)
+        for folder in (HOMES / login / ".cache",):
+            folder.mkdir(exist_ok=True)
+            os.chown(folder, user.pw_uid, user.pw_gid)
+        _copy_owned(Path(template), cache, user.pw_uid, user.pw_gid)
+    if LIMITS is not None:
+        LIMITS.create(login)
+    spawner.port = _port_outside_ephemeral_range()
 
 
-c.Spawner.pre_spawn_hook = _prepare_home
+def _after_stop(spawner) -> None:
+    if LIMITS is not None:
+        LIMITS.remove(spawner.user.name)
+
+
+c.Spawner.pre_spawn_hook = _before_spawn
+c.Spawner.post_stop_hook = _after_stop

@@ -54,6 +54,7 @@ c.VoilaKernelManager.kernel_pools_config = {
     "default": {"pool_size": 0},
     "demo.ipynb": {"pool_size": 1},
     "study_sim.ipynb": {"pool_size": 1},
+    "study_online.ipynb": {"pool_size": 1},
 }
 # Refill the pool right after a visitor takes the spare (Voila waits 1 s by default).
 c.VoilaKernelManager.fill_delay = 0.0

@@ -27,7 +27,7 @@ from matplotlib.figure import Figure
 from mt_widgets.core import SKILLS, Box
 from mt_widgets.core.validation import as_bool
 
-from .statistics import GROUPS, PAPER_CHANGES, episodes_frame, participant_changes, phase_summary
+from .statistics import PAPER_CHANGES, episodes_frame, participant_changes, phase_summary, study_groups
 
 #: Okabe-Ito colours, a line style and a marker per group.
 GROUP_STYLE = {
@@ -39,8 +39,15 @@ OPTIMAL_STYLE = {"color": "#009E73"}
 FORMATS = ("png", "svg", "pdf")
 
 
-def _style(group: str) -> dict:
-    return GROUP_STYLE.get(group, {"color": "#555555", "linestyle": ":", "marker": "^"})
+#: Styles of a protocol's groups by position (the first compared group looks like the paper's target).
+_BY_POSITION = (GROUP_STYLE["target"], GROUP_STYLE["control"], {"color": "#555555", "linestyle": ":", "marker": "^"})
+
+
+def _style(group: str, groups=()) -> dict:
+    if group in GROUP_STYLE:
+        return GROUP_STYLE[group]
+    position = list(groups).index(group) if group in groups else len(_BY_POSITION) - 1
+    return _BY_POSITION[min(position, len(_BY_POSITION) - 1)]
 
 
 def save_figure(figure: Figure, path, dpi: int = 150) -> Path:
@@ -65,7 +72,8 @@ def save_figure(figure: Figure, path, dpi: int = 150) -> Path:
 
 # -- Fig. 3a -------------------------------------------------------------------------------------
 
-def plot_error_by_episode(episodes, error_bars: str = "sem", confidence: float = 0.95, ax=None) -> Figure:
+def plot_error_by_episode(episodes, error_bars: str = "sem", confidence: float = 0.95, ax=None,
+                          groups=None) -> Figure:
     """Mean teaching error of each group across every phase and episode (the paper's Fig. 3a).
 
     Args:
@@ -73,6 +81,7 @@ def plot_error_by_episode(episodes, error_bars: str = "sem", confidence: float =
         error_bars: "sem" (standard error), "sd", or "ci" (t confidence interval).
         confidence: coverage when ``error_bars`` is "ci".
         ax: draw into this Axes instead of a new figure.
+        groups: the protocol's groups, in order (None: the paper's, then any others).
 
     Returns:
         The figure. One errorbar line per group (``gid`` = the group), x = 0, 1, ... in
@@ -80,12 +89,13 @@ def plot_error_by_episode(episodes, error_bars: str = "sem", confidence: float =
     """
     if error_bars not in ("sem", "sd", "ci"):
         raise ValueError(f"error_bars: expected 'sem', 'sd' or 'ci', got {error_bars!r}")
-    table = phase_summary(episodes, confidence)
-    frame = episodes_frame(episodes)
+    frame = episodes_frame(episodes, groups)
+    groups = study_groups(frame, groups)
+    table = phase_summary(frame, confidence, groups)
     labels = list(dict.fromkeys(table["label"]))
     position = {label: i for i, label in enumerate(labels)}
     figure, ax = _figure_and_axes(ax, (9, 4))
-    for group in [g for g in GROUPS if g in set(table["group"])]:
+    for group in [g for g in groups if g in set(table["group"])]:
         part = table[table["group"] == group]
         x = np.array([position[label] for label in part["label"]])
         y = part["mean"].to_numpy()
@@ -93,11 +103,13 @@ def plot_error_by_episode(episodes, error_bars: str = "sem", confidence: float =
             yerr = np.vstack([y - part["ci_low"].to_numpy(), part["ci_high"].to_numpy() - y])
         else:
             yerr = part[error_bars].to_numpy()
-        style = _style(group)
+        style = _style(group, groups)
         container = ax.errorbar(x, y, yerr=yerr, capsize=3, label=f"{group} (n = {part['n'].max()})", **style)
         container.lines[0].set_gid(group)
     # Shade the episodes in which some group saw guidance, so the treatment phase stands out.
+    shown_to = []
     if "guidance" in frame.columns:
+        shown_to = sorted(set(frame.loc[frame["guidance"].astype(bool), "group"]), key=list(groups).index)
         guided = frame.groupby(["phase", "episode"])["guidance"].max()
         for (phase, episode), shown in guided.items():
             if shown and f"{phase}E{episode}" in position:
@@ -106,7 +118,8 @@ def plot_error_by_episode(episodes, error_bars: str = "sem", confidence: float =
     ax.set_xticks(range(len(labels)))
     ax.set_xticklabels(labels, rotation=45, ha="right")
     ax.set_ylabel("teaching error $E_{l2}$")
-    ax.set_xlabel("phase and episode (grey: guidance shown to the target group)")
+    ax.set_xlabel("phase and episode" + (f" (grey: guidance shown to the {' and '.join(shown_to)} group)"
+                                         if shown_to else ""))
     what = {"sem": "mean ± SEM", "sd": "mean ± SD", "ci": f"mean, {confidence:.0%} CI"}[error_bars]
     ax.set_title(f"Teaching error across the study ({what})")
     ax.set_ylim(bottom=0)
@@ -123,29 +136,32 @@ def _figure_and_axes(ax, size):
 
 # -- Fig. 3b-d -----------------------------------------------------------------------------------
 
-def plot_changes(episodes, changes=PAPER_CHANGES, seed: int = 0) -> Figure:
+def plot_changes(episodes, changes=PAPER_CHANGES, seed: int = 0, groups=None) -> Figure:
     """Box and strip plots of each participant's change of error, per group (Fig. 3b-d).
 
     Args:
         episodes: episode rows.
         changes: the comparisons, one panel each (default the paper's three).
         seed: seeds the horizontal jitter of the strip points (for reproducible figures).
+        groups: the protocol's groups, in order (None: the paper's, then any others).
 
     Returns:
         The figure. In each panel (title = the change's label) group i is at x = i: a box
         (``gid`` "box-<group>") and a scatter of the participants' changes (``gid`` "strip-<group>").
     """
-    table = participant_changes(episodes, changes)
+    frame = episodes_frame(episodes, groups)
+    order = study_groups(frame, groups)
+    table = participant_changes(frame, changes)
     rng = np.random.default_rng(seed)
     figure = Figure(figsize=(3.2 * len(changes), 3.8), layout="constrained")
     axes = figure.subplots(1, len(changes), sharey=True, squeeze=False)[0]
     for ax, change in zip(axes, changes):
         part = table[table["change"] == change.name]
-        groups = [g for g in GROUPS if g in set(part["group"])]
+        groups = [g for g in order if g in set(part["group"])]
         data = [part.loc[part["group"] == g, "delta"].to_numpy() for g in groups]
         boxes = ax.boxplot(data, positions=range(len(groups)), widths=0.5, showfliers=False, patch_artist=True)
         for i, (group, values) in enumerate(zip(groups, data)):
-            style = _style(group)
+            style = _style(group, order)
             boxes["boxes"][i].set(facecolor=style["color"], alpha=0.25, edgecolor=style["color"])
             boxes["boxes"][i].set_gid(f"box-{group}")
             boxes["medians"][i].set(color=style["color"], linewidth=2)
@@ -167,6 +183,19 @@ def plot_changes(episodes, changes=PAPER_CHANGES, seed: int = 0) -> Figure:
 #: Panels of the trajectory figure, as in the paper's Fig. 5: the training phase, then the
 #: trained skill before and after, then the new skill before and after.
 TRAJECTORY_PANELS = (("P3",), ("P1", "P4"), ("P2", "P5"))
+
+
+def trajectory_panels(protocol) -> tuple[tuple[str, ...], ...]:
+    """The trajectory figure's panels for a protocol: its guided phases first (each on its own),
+    then, per skill, the unguided phases of that skill in order (every session's). For the
+    paper's protocols this is ``TRAJECTORY_PANELS``."""
+    phases = protocol.all_phases
+    guided = [(phase.id,) for phase in phases if phase.guidance]
+    by_skill: dict[str, list[str]] = {}
+    for phase in phases:
+        if not phase.guidance:
+            by_skill.setdefault(phase.skill, []).append(phase.id)
+    return tuple(guided) + tuple(tuple(ids) for ids in by_skill.values())
 
 
 def learnt_trajectories(episodes, participants, phases, duration: float | None = None, record_every: int = 20,
@@ -294,7 +323,9 @@ def plot_trajectories(episodes, participants, panels=TRAJECTORY_PANELS, duration
                 trajectory = rolled[(participant, row.phase, int(row.episode))]
                 drawn.append(trajectory)
                 shade = palette(0.15 + 0.7 * k / max(len(rows) - 1, 1))
-                label = f"{row.phase}E{row.episode}" if row.phase == "P3" else row.phase
+                several = (frame[(frame.participant == participant) & (frame.phase == row.phase)]["episode"].nunique()
+                           > 1)
+                label = f"{row.phase}E{row.episode}" if several else row.phase
                 for target_ax in [ax] + ([inset] if inset is not None else []):
                     target_ax.plot(trajectory.positions[:, 0], trajectory.positions[:, 1], color=shade, lw=1.4,
                                    gid=f"{participant}/{row.phase}E{row.episode}",

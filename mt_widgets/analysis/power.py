@@ -21,8 +21,9 @@ from scipy import stats
 
 from mt_widgets.core.validation import as_bool, as_count, as_fraction
 from mt_widgets.in_silico.engine import run_many_studies
+from mt_widgets.in_silico.plan import resolve_protocol
 
-from .statistics import PAPER_CHANGES, check_alternative, hedges_correction
+from .statistics import check_alternative, hedges_correction
 
 
 def analytic_power(n_per_group: int, effect_size: float, alpha: float = 0.05,
@@ -133,7 +134,7 @@ def _hedges_g_columns(target: np.ndarray, control: np.ndarray) -> np.ndarray:
 def simulated_power(n_per_group: int = 16, n_studies: int = 1000, alpha: float = 0.05,
                     alternative: str = "less", seed: int = 0, parameters=None, changes=None,
                     progress: bool | None = None, protocol=None, share_states: bool = False,
-                    workers: int | None = None) -> SimulatedPower:
+                    workers: int | None = None, forgetting=None, delays: dict | None = None) -> SimulatedPower:
     """Power by simulation: ``n_studies`` in-silico studies of synthetic teachers, each analysed.
 
     Every study draws its own participants and its own query states (a study seed per study),
@@ -147,12 +148,16 @@ def simulated_power(n_per_group: int = 16, n_studies: int = 1000, alpha: float =
         alternative: sidedness for target minus control ("less": the target group improves more).
         seed: the root seed; the same seed gives the same estimate.
         parameters: ``TeacherParameters`` (default: the ones fitted to the paper).
-        changes: ``Change`` comparisons (default the paper's three).
+        changes: ``Change`` comparisons (default: the protocol's analysis plan's; the paper's three
+            for the paper's protocols).
         progress: show a progress bar (default: only for long runs).
         protocol: the ``Protocol`` (default the paper's).
         share_states: give every study the protocol's own query states (faster; the estimate
             then leaves out the chance of the query states).
         workers: processes drawing query states (default: up to 2 for 100 studies or more).
+        forgetting: how teachers forget between the protocol's sessions
+            (``mt_widgets.in_silico.Forgetting``; None: they do not).
+        delays: {session id: seconds} before later sessions (default: each window's earliest).
 
     Returns:
         A ``SimulatedPower``: the power of Student's t-test ("student"), Welch's t-test ("welch")
@@ -162,13 +167,15 @@ def simulated_power(n_per_group: int = 16, n_studies: int = 1000, alpha: float =
     alternative = check_alternative(alternative)
     share_states = as_bool("share_states", share_states)
     progress = as_bool("progress", progress, allow_none=True)
-    changes = PAPER_CHANGES if changes is None else tuple(changes)
+    protocol = resolve_protocol(protocol)
+    changes = protocol.analysis.changes if changes is None else tuple(changes)
     deltas = run_many_studies(n_studies, n_per_group, seed=seed, parameters=parameters, changes=changes,
                               progress=progress, protocol=protocol, share_states=share_states,
-                              workers=workers)
+                              workers=workers, forgetting=forgetting, delays=delays)
+    first, second = protocol.groups[:2]
     power, p_values, effect = {}, {}, {}
     for change in changes:
-        target, control = deltas[change.name]["target"], deltas[change.name]["control"]
+        target, control = deltas[change.name][first], deltas[change.name][second]
         student = stats.ttest_ind(target, control, axis=1, equal_var=True, alternative=alternative).pvalue
         welch = stats.ttest_ind(target, control, axis=1, equal_var=False, alternative=alternative).pvalue
         mwu = stats.mannwhitneyu(target, control, axis=1, alternative=alternative).pvalue

@@ -1,7 +1,10 @@
 """Statistics of a teaching study, as the paper reports them and a little more.
 
 The comparisons (``Change``, ``PAPER_CHANGES``) are the study's analysis plan
-(``mt_widgets.study.analysis_plan``), fixed with the protocol. Everything starts from the tidy
+(``mt_widgets.study.analysis_plan``), fixed with the protocol, and so are the groups: the
+first of a protocol's groups is compared against the second (the paper's target against
+control), whatever their names; ``analyse_protocol`` takes groups, changes, sidedness, alpha,
+the primary test and the baseline check from a protocol and its plan. Everything starts from the tidy
 episode rows (``mt_widgets.study.tidy``: one row per completed episode with ``participant``,
 ``group``, ``phase``, ``episode`` and ``teaching_error``, the paper's E_l2). From them:
 
@@ -36,8 +39,34 @@ from scipy import optimize, special, stats
 from mt_widgets.core.validation import as_fraction
 from mt_widgets.study.analysis_plan import ALTERNATIVES, PAPER_CHANGES, TESTS, Change  # noqa: F401  (re-exported)
 
-#: The two groups of the between-subjects design, in the order tables and figures use.
+#: The paper's two groups, in the order tables and figures use when no protocol says otherwise.
 GROUPS = ("target", "control")
+#: The paper's post-hoc baseline check: P1 against P2.
+PAPER_BASELINE = (("P1", 1), ("P2", 1))
+
+
+def study_groups(frame: pd.DataFrame, groups=None) -> tuple[str, ...]:
+    """The groups in the order the analysis compares them (the first against the second).
+
+    Args:
+        frame: episode rows.
+        groups: the protocol's groups (None: the paper's ``GROUPS`` first, then any others in
+            order of name).
+
+    Raises:
+        ValueError: the rows hold a group that ``groups`` does not name.
+    """
+    present = list(dict.fromkeys(frame["group"].astype(str)))
+    if groups is not None:
+        groups = tuple(str(g) for g in groups)
+        unknown = sorted(set(present) - set(groups))
+        if unknown:
+            raise ValueError(f"episodes: expected groups {groups}, got also {unknown}")
+        return groups
+    others = tuple(sorted(set(present) - set(GROUPS)))
+    if not others:
+        return GROUPS
+    return tuple(g for g in GROUPS if g in present) + others
 
 #: The tests' names as a reader sees them.
 TEST_NAMES = {"student": "Student's t-test", "welch": "Welch's t-test", "mannwhitney": "Mann-Whitney U"}
@@ -52,16 +81,18 @@ def check_alternative(alternative: str) -> str:
     return alternative
 
 
-def episodes_frame(episodes) -> pd.DataFrame:
+def episodes_frame(episodes, groups=None) -> pd.DataFrame:
     """The episode rows as a DataFrame with the columns the statistics need, checked.
 
     Args:
         episodes: a DataFrame or a list of dicts (``read_study``'s first return value), one row
             per completed episode.
+        groups: the protocol's groups (rows of other groups are refused), or None.
 
     Returns:
         A copy with ``episode`` as int, ``teaching_error`` as float and ``participant``,
-        ``group``, ``phase`` as str, sorted by participant, phase order and episode.
+        ``group``, ``phase`` as str, sorted by participant, phase order (sessions in order) and
+        episode, with a ``position`` column: the phase's rank in the protocol.
     """
     frame = episodes.copy() if isinstance(episodes, pd.DataFrame) else pd.DataFrame(list(episodes))
     missing = [column for column in _REQUIRED if column not in frame.columns]
@@ -75,11 +106,10 @@ def episodes_frame(episodes) -> pd.DataFrame:
     frame["phase"] = frame["phase"].astype(str)
     frame["episode"] = frame["episode"].astype(int)
     frame["teaching_error"] = frame["teaching_error"].astype(float)
-    unknown = sorted(set(frame["group"]) - set(GROUPS))
-    if unknown:
-        raise ValueError(f"episodes: expected groups {GROUPS}, got also {unknown}")
-    order = "phase_index" if "phase_index" in frame.columns else "phase"
-    return frame.sort_values(["participant", order, "episode"]).reset_index(drop=True)
+    study_groups(frame, groups)
+    order = _phase_order(frame)
+    frame["position"] = [order[phase] for phase in frame["phase"]]
+    return frame.sort_values(["participant", "position", "episode"], kind="stable").reset_index(drop=True)
 
 
 def confidence_interval(values, confidence: float = 0.95) -> tuple[float, float]:
@@ -100,19 +130,21 @@ def confidence_interval(values, confidence: float = 0.95) -> tuple[float, float]
     return float(low), float(high)
 
 
-def phase_summary(episodes, confidence: float = 0.95) -> pd.DataFrame:
+def phase_summary(episodes, confidence: float = 0.95, groups=None) -> pd.DataFrame:
     """Teaching error per group, phase and episode (the data of the paper's Fig. 3a).
 
     Args:
         episodes: episode rows (see ``episodes_frame``).
         confidence: coverage of the confidence interval of the mean.
+        groups: the protocol's groups, in order (None: see ``study_groups``).
 
     Returns:
         One row per (group, phase, episode) in protocol order, with ``n``, ``mean``, ``sd``
         (sample SD, ddof=1), ``sem``, ``median``, ``ci_low``, ``ci_high`` and ``label``
         ("P3E2").
     """
-    frame = episodes_frame(episodes)
+    frame = episodes_frame(episodes, groups)
+    groups = study_groups(frame, groups)
     rows = []
     order = _phase_order(frame)
     for (group, phase, episode), part in frame.groupby(["group", "phase", "episode"], sort=False):
@@ -121,15 +153,21 @@ def phase_summary(episodes, confidence: float = 0.95) -> pd.DataFrame:
         rows.append({"group": group, "phase": phase, "episode": int(episode), "label": f"{phase}E{episode}",
                      "n": errors.size, "mean": errors.mean(), "sd": _sd(errors), "sem": _sem(errors),
                      "median": float(np.median(errors)), "ci_low": low, "ci_high": high,
-                     "_order": (order[phase], int(episode), GROUPS.index(group))})
+                     "_order": (order[phase], int(episode), groups.index(group))})
     table = pd.DataFrame(rows).sort_values("_order").drop(columns="_order").reset_index(drop=True)
     return table
 
 
 def _phase_order(frame: pd.DataFrame) -> dict[str, int]:
+    """{phase: rank in the protocol}: by session (in the order the rows meet them), then phase_index."""
     if "phase_index" in frame.columns:
-        return {phase: int(index) for phase, index in
-                frame.groupby("phase")["phase_index"].min().items()}
+        sessions = ({s: i for i, s in enumerate(dict.fromkeys(frame["session"]))} if "session" in frame.columns
+                    else None)
+        keys = {}
+        for row in frame[["phase", "phase_index"] + (["session"] if sessions else [])].itertuples(index=False):
+            key = (sessions[row.session] if sessions else 0, int(row.phase_index))
+            keys[row.phase] = min(keys.get(row.phase, key), key)
+        return {phase: rank for rank, phase in enumerate(sorted(keys, key=keys.get))}
     return {phase: i for i, phase in enumerate(sorted(frame["phase"].unique()))}
 
 
@@ -184,7 +222,7 @@ def participant_changes(episodes, changes=PAPER_CHANGES) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def change_summary(changes_table: pd.DataFrame, confidence: float = 0.95) -> pd.DataFrame:
+def change_summary(changes_table: pd.DataFrame, confidence: float = 0.95, groups=None) -> pd.DataFrame:
     """Mean, SD and percentage change per comparison and group (how the paper prints them).
 
     Args:
@@ -208,7 +246,8 @@ def change_summary(changes_table: pd.DataFrame, confidence: float = 0.95) -> pd.
                      "percent_change": 100.0 * float(delta.mean()) / mean_before if mean_before else float("nan")})
     table = pd.DataFrame(rows)
     order = {name: i for i, name in enumerate(dict.fromkeys(changes_table["change"]))}
-    table["_order"] = [(order[c], GROUPS.index(g)) for c, g in zip(table["change"], table["group"])]
+    groups = study_groups(changes_table, groups)
+    table["_order"] = [(order[c], groups.index(g)) for c, g in zip(table["change"], table["group"])]
     return table.sort_values("_order").drop(columns="_order").reset_index(drop=True)
 
 
@@ -294,28 +333,43 @@ def hedges_g(x, y, confidence: float = 0.95, method: str = "noncentral-t") -> Ef
 
 # -- tests ----------------------------------------------------------------------------------------
 
+def _pair(changes_table: pd.DataFrame, groups) -> tuple[str, str]:
+    """The two groups compared: the first against the second."""
+    groups = study_groups(changes_table, groups)
+    if len(groups) == 1:
+        groups = groups + tuple(g for g in GROUPS if g not in groups)[:1]
+    if len(groups) != 2:
+        raise ValueError(f"groups: expected the two groups of a between-subjects comparison, got {list(groups)}")
+    return groups[0], groups[1]
+
+
 def between_group_tests(changes_table: pd.DataFrame, alternative: str = "less",
-                        confidence: float = 0.95) -> pd.DataFrame:
-    """Target against control on each change: Student's t, Welch's t, Mann-Whitney U and Hedges' g.
+                        confidence: float = 0.95, groups=None) -> pd.DataFrame:
+    """The first group against the second on each change (target against control in the paper):
+    Student's t, Welch's t, Mann-Whitney U and Hedges' g.
 
     Args:
         changes_table: ``participant_changes`` output.
         alternative: "two-sided", or one-sided "less" (the target group's change is lower, i.e.
             it improved more: the paper's hypotheses) or "greater", always target minus control.
         confidence: coverage of the interval of g.
+        groups: the protocol's two groups, the first compared against the second (None: the
+            paper's target and control).
 
     Returns:
-        One row per change with ``n_target``, ``n_control``, ``student_t``, ``student_df``,
+        One row per change with ``n_<first group>``, ``n_<second group>`` (``n_target``,
+        ``n_control`` in the paper), ``student_t``, ``student_df``,
         ``student_p``, ``welch_t``, ``welch_df``,
         ``welch_p``, ``mannwhitney_u``, ``mannwhitney_p``, ``hedges_g``, ``g_ci_low``,
         ``g_ci_high`` and ``alternative``. Tests that cannot run (fewer than 2 per group) are NaN.
     """
     alternative = check_alternative(alternative)
+    first, second = _pair(changes_table, groups)
     rows = []
     for name, part in changes_table.groupby("change", sort=False):
-        target = part.loc[part["group"] == "target", "delta"].to_numpy()
-        control = part.loc[part["group"] == "control", "delta"].to_numpy()
-        row = {"change": name, "label": part["label"].iloc[0], "n_target": target.size, "n_control": control.size,
+        target = part.loc[part["group"] == first, "delta"].to_numpy()
+        control = part.loc[part["group"] == second, "delta"].to_numpy()
+        row = {"change": name, "label": part["label"].iloc[0], f"n_{first}": target.size, f"n_{second}": control.size,
                "student_t": np.nan, "student_df": np.nan, "student_p": np.nan, "welch_t": np.nan,
                "welch_df": np.nan, "welch_p": np.nan, "mannwhitney_u": np.nan,
                "mannwhitney_p": np.nan, "hedges_g": np.nan, "g_ci_low": np.nan, "g_ci_high": np.nan,
@@ -362,7 +416,7 @@ def within_group_tests(changes_table: pd.DataFrame, alternative: str = "less") -
     return pd.DataFrame(rows)
 
 
-def posthoc_baseline(episodes, first=("P1", 1), second=("P2", 1)) -> pd.DataFrame:
+def posthoc_baseline(episodes, first=("P1", 1), second=("P2", 1), groups=None) -> pd.DataFrame:
     """The paper's post-hoc check that the baselines do not differ (its P1 vs P2 p-values).
 
     The paper reports two p-values ("no significant difference ... between the two skills and
@@ -373,17 +427,22 @@ def posthoc_baseline(episodes, first=("P1", 1), second=("P2", 1)) -> pd.DataFram
     Args:
         episodes: episode rows.
         first, second: (phase, episode) of the two baseline episodes.
+        groups: the protocol's two groups (None: the paper's).
 
     Returns:
-        One row per test with ``comparison``, ``test``, ``n``, ``statistic``, ``p``.
+        One row per test with ``comparison``, ``test``, ``n``, ``statistic``, ``p``; no rows
+        when the protocol has no such phases.
     """
-    frame = episodes_frame(episodes)
+    frame = episodes_frame(episodes, groups)
+    pair = _pair(frame, groups)
+    if not {first[0], second[0]} <= set(frame["phase"]):
+        return pd.DataFrame(columns=["comparison", "test", "n", "statistic", "p"])
     a = _episode_errors(frame, *first)
     b = _episode_errors(frame, *second)
     groups = frame.groupby("participant")["group"].first()
     label_a, label_b = f"{first[0]}", f"{second[0]}"
     rows = []
-    for group in GROUPS:
+    for group in pair:
         members = [p for p in a.index.intersection(b.index) if groups[p] == group]
         row = {"comparison": f"{label_a} vs {label_b}, {group} group", "test": "paired t", "n": len(members),
                "statistic": np.nan, "p": np.nan}
@@ -392,9 +451,9 @@ def posthoc_baseline(episodes, first=("P1", 1), second=("P2", 1)) -> pd.DataFram
             row.update(statistic=float(result.statistic), p=float(result.pvalue))
         rows.append(row)
     for label, errors in ((label_a, a), (label_b, b)):
-        target = errors[[groups[p] == "target" for p in errors.index]].to_numpy()
-        control = errors[[groups[p] == "control" for p in errors.index]].to_numpy()
-        row = {"comparison": f"target vs control at {label}", "test": "Welch t", "n": target.size + control.size,
+        target = errors[[groups[p] == pair[0] for p in errors.index]].to_numpy()
+        control = errors[[groups[p] == pair[1] for p in errors.index]].to_numpy()
+        row = {"comparison": f"{pair[0]} vs {pair[1]} at {label}", "test": "Welch t", "n": target.size + control.size,
                "statistic": np.nan, "p": np.nan}
         if target.size >= 2 and control.size >= 2:
             result = stats.ttest_ind(target, control, equal_var=False)
@@ -417,7 +476,15 @@ class StudyStatistics:
     baseline: pd.DataFrame
     alternative: str
     alpha: float
-    test: str = "welch"
+    test: str = "student"
+    #: The groups, the first compared against the second.
+    groups: tuple = GROUPS
+    #: {group: what it received, in words} ("guided in P3"), from the protocol.
+    group_notes: dict = None
+    #: The ``Change``s compared (their meanings go into the summary).
+    compared: tuple = PAPER_CHANGES
+    #: The baseline episodes checked (``posthoc_baseline``), or None.
+    baseline_episodes: tuple | None = PAPER_BASELINE
 
     @property
     def primary_p(self) -> pd.Series:
@@ -440,7 +507,8 @@ class StudyStatistics:
 
 
 def analyse_changes(episodes, changes=PAPER_CHANGES, alternative: str = "less", alpha: float = 0.05,
-                    confidence: float = 0.95, test: str = "welch") -> StudyStatistics:
+                    confidence: float = 0.95, test: str = "student", groups=None,
+                    baseline=PAPER_BASELINE, group_notes=None) -> StudyStatistics:
     """Every table of the paper's analysis from the episode rows.
 
     Args:
@@ -451,25 +519,71 @@ def analyse_changes(episodes, changes=PAPER_CHANGES, alternative: str = "less", 
         alpha: the significance level the summary uses.
         confidence: coverage of every confidence interval.
         test: the primary between-group test the summary's verdict uses ("student", "welch" or
-            "mannwhitney"; a study's analysis plan names it); all three are computed.
+            "mannwhitney"; a study's analysis plan names it); all three are computed. The
+            default is Student's t, as ``AnalysisPlan``'s: the test the paper's sample size was
+            planned for (G*Power, d = 0.9, alpha 0.05, power 0.8, one-tailed: 16 per group) is
+            the one its primary verdict should use; Welch's t, robust to unequal variances,
+            is reported beside it.
+        groups: the protocol's two groups, the first compared against the second (None: the
+            paper's target and control).
+        baseline: the two (phase, episode) baselines ``posthoc_baseline`` compares, or None.
+        group_notes: {group: what it received, in words} for the summary.
     """
     check_alternative(alternative)
     if test not in TESTS:
         raise ValueError(f"test: expected one of {list(TESTS)}, got {test!r}")
     alpha = as_fraction("alpha", alpha)
-    frame = episodes_frame(episodes)
+    frame = episodes_frame(episodes, groups)
+    groups = _pair(frame, groups)
+    changes = tuple(changes)
     table = participant_changes(frame, changes)
     return StudyStatistics(
-        phases=phase_summary(frame, confidence),
+        phases=phase_summary(frame, confidence, groups),
         changes=table,
-        change_summary=change_summary(table, confidence),
-        between=between_group_tests(table, alternative, confidence),
+        change_summary=change_summary(table, confidence, groups),
+        between=between_group_tests(table, alternative, confidence, groups),
         within=within_group_tests(table, alternative),
-        baseline=posthoc_baseline(frame),
+        baseline=(posthoc_baseline(frame, *baseline, groups=groups) if baseline is not None
+                  else pd.DataFrame(columns=["comparison", "test", "n", "statistic", "p"])),
         alternative=alternative,
         alpha=alpha,
         test=test,
+        groups=groups,
+        group_notes=dict(group_notes or {}),
+        compared=changes,
+        baseline_episodes=None if baseline is None else tuple(tuple(b) for b in baseline),
     )
+
+
+def protocol_group_notes(protocol) -> dict:
+    """{group: "guided in P3"} from a protocol's phases (every session's); "never guided" else."""
+    notes = {}
+    for group in protocol.groups:
+        guided = [phase.id for phase in protocol.all_phases if group in phase.guidance]
+        notes[group] = ("guided in " + ", ".join(guided)) if guided else "never guided"
+    return notes
+
+
+def analyse_protocol(episodes, protocol, confidence: float = 0.95, **overrides) -> StudyStatistics:
+    """``analyse_changes`` as a protocol and its analysis plan say: its groups (the first against
+    the second), changes, sidedness, alpha, primary test and baseline check.
+
+    Args:
+        episodes: episode rows of a study of ``protocol``.
+        protocol: the ``Protocol`` (``StudyFolder(folder).protocol``).
+        confidence: coverage of every confidence interval.
+        **overrides: any of changes, alternative, alpha, test, baseline to use instead of the plan's.
+    """
+    plan = protocol.analysis
+    known = {"changes", "alternative", "alpha", "test", "baseline"}
+    unknown = sorted(set(overrides) - known)
+    if unknown:
+        raise TypeError(f"analyse_protocol: unexpected arguments {unknown}; expected some of {sorted(known)}")
+    values = {"changes": plan.changes, "alternative": plan.alternative, "alpha": plan.alpha, "test": plan.test,
+              "baseline": plan.baseline}
+    values.update({k: v for k, v in overrides.items() if v is not None})
+    return analyse_changes(episodes, confidence=confidence, groups=protocol.groups[:2],
+                           group_notes=protocol_group_notes(protocol), **values)
 
 
 def _p(p: float) -> str:
@@ -480,18 +594,23 @@ def _p(p: float) -> str:
 
 def plain_language_summary(results: StudyStatistics) -> str:
     """A few sentences a reader without statistics can follow, one paragraph per change."""
-    sided = {"two-sided": "two-sided", "less": "one-sided (target improves more)",
-             "greater": "one-sided (control improves more)"}[results.alternative]
+    first, second = results.groups[:2]
+    notes = results.group_notes or {}
+    sided = {"two-sided": "two-sided", "less": f"one-sided ({first} improves more)",
+             "greater": f"one-sided ({second} improves more)"}[results.alternative]
     n = results.changes.groupby("group")["participant"].nunique()
-    lines = [f"{n.get('target', 0)} participants in the target group (guided in P3) and "
-             f"{n.get('control', 0)} in the control group. Teaching error is the distance between the "
+
+    def note(group):
+        return f" ({notes[group]})" if notes.get(group) else ""
+    lines = [f"{n.get(first, 0)} participants in the {first} group{note(first)} and "
+             f"{n.get(second, 0)} in the {second} group{note(second)}. Teaching error is the distance between the "
              f"learnt and the true skill parameters; a negative change means better teaching. "
              f"Tests are {sided}, at alpha = {results.alpha}."]
     summary = results.change_summary.set_index(["change", "group"])
-    meaning = {c.name: c.meaning for c in PAPER_CHANGES}
+    meaning = {c.name: c.meaning for c in results.compared}
     for _, row in results.between.iterrows():
         parts = []
-        for group in GROUPS:
+        for group in (first, second):
             if (row["change"], group) in summary.index:
                 s = summary.loc[(row["change"], group)]
                 parts.append(f"the {group} group changed by {s['mean']:+.2f} (SD {s['sd']:.2f}, "
@@ -509,7 +628,8 @@ def plain_language_summary(results: StudyStatistics) -> str:
     baseline = results.baseline.dropna(subset=["p"])
     if not baseline.empty:
         smallest = baseline["p"].min()
-        lines.append("Baseline check (P1 vs P2): " + ("no test finds a difference between skills or groups"
+        pair = " vs ".join(phase for phase, _ in results.baseline_episodes) if results.baseline_episodes else ""
+        lines.append(f"Baseline check ({pair}): " + ("no test finds a difference between skills or groups"
                      if smallest >= results.alpha else "some baseline test finds a difference")
                      + f" (smallest {_p(smallest)}).")
     return "\n".join(lines)

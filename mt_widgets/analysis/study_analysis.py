@@ -12,12 +12,12 @@ from pathlib import Path
 
 import pandas as pd
 
-from mt_widgets.study.log import StudyFolder
+from mt_widgets.study.study_folder import StudyFolder
 from mt_widgets.study.tidy import read_study
 
 from .example_studies import EXAMPLE_STUDY
-from .figures import plot_changes, plot_error_by_episode, plot_trajectories, save_figure
-from .statistics import StudyStatistics, analyse_changes
+from .figures import plot_changes, plot_error_by_episode, plot_trajectories, save_figure, trajectory_panels
+from .statistics import StudyStatistics, analyse_protocol
 
 
 @dataclass
@@ -66,11 +66,15 @@ class StudyAnalysis:
 def analyse_study(folder=None, alternative: str | None = None, alpha: float | None = None, changes=None,
                   trajectories_for=None, trajectory_duration: float | None = None,
                   test: str | None = None) -> StudyAnalysis:
-    """Reads a study folder and computes every table and figure of the paper's analysis.
+    """Reads a study folder and computes every table and figure its protocol's analysis plan asks for.
+
+    Groups (the first compared against the second), phases, changes, skills, the primary test
+    and the baseline check all come from the study's protocol (``study.json``) and its
+    ``[analysis]`` table; the paper's protocols give the paper's analysis.
 
     Args:
         folder: a study folder (``study.json`` and participant logs); default ``EXAMPLE_STUDY``.
-        alternative: sidedness of the tests, target minus control ("less": the paper's
+        alternative: sidedness of the tests, first group minus second ("less": the paper's
             one-sided hypotheses; "two-sided"). Default: the study's analysis plan (its
             protocol's ``[analysis]`` table), as are ``alpha``, ``changes`` and ``test``.
         alpha: the significance level of the summary.
@@ -89,15 +93,16 @@ def analyse_study(folder=None, alternative: str | None = None, alpha: float | No
         raise ValueError(f"folder: expected completed episodes in {folder}, found none")
     episodes = pd.DataFrame(episodes)
     demonstrations = pd.DataFrame(demonstrations)
-    plan = StudyFolder(folder).protocol.analysis
-    changes = plan.changes if changes is None else changes
-    statistics = analyse_changes(episodes, changes,
-                                 alternative=plan.alternative if alternative is None else alternative,
-                                 alpha=plan.alpha if alpha is None else alpha, test=plan.test if test is None else test)
-    figures = {"error_by_episode": plot_error_by_episode(episodes), "changes": plot_changes(episodes, changes)}
+    protocol = StudyFolder(folder).protocol
+    statistics = analyse_protocol(episodes, protocol, changes=changes, alternative=alternative, alpha=alpha,
+                                  test=test)
+    groups = statistics.groups
+    figures = {"error_by_episode": plot_error_by_episode(episodes, groups=groups),
+               "changes": plot_changes(episodes, statistics.compared, groups=groups)}
     if trajectories_for is None:
         firsts = episodes.groupby("group")["participant"].first()
-        trajectories_for = [firsts[g] for g in ("target", "control") if g in firsts.index]
+        trajectories_for = [firsts[g] for g in groups if g in firsts.index]
     if trajectories_for:
-        figures["trajectories"] = plot_trajectories(episodes, trajectories_for, duration=trajectory_duration)
+        figures["trajectories"] = plot_trajectories(episodes, trajectories_for, panels=trajectory_panels(protocol),
+                                                    duration=trajectory_duration, skills=protocol.skills)
     return StudyAnalysis(folder, episodes, demonstrations, statistics, figures)

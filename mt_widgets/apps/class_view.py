@@ -10,6 +10,11 @@ In a notebook (``notebooks/class_view.ipynb`` under Voila)::
 
     from mt_widgets.apps.class_view import ClassView
     ClassView("/srv/class/lfd-2025")      # default: $MT_WIDGETS_CLASS_FOLDER
+
+Names: the folder holds pseudonyms only. An instructor who gives the view a names file
+(``names=`` or ``$MT_WIDGETS_CLASS_NAMES``, written from the roster by
+``python -m mt_widgets.classroom.names``, readable by its owner only) sees each student's name
+beside the pseudonym; without one, only pseudonyms are shown.
 """
 
 from __future__ import annotations
@@ -33,6 +38,7 @@ from mt_widgets.classroom import (
     read_class,
     summarise,
 )
+from mt_widgets.classroom.names import NamesFileError, names_from_env, read_names
 from mt_widgets.widgets.theme import OKABE_ITO
 
 _PALETTE = [OKABE_ITO[k] for k in ("blue", "orange", "bluish_green", "reddish_purple", "vermillion", "sky_blue",
@@ -102,10 +108,18 @@ def exercises_figure(summary: ClassSummary) -> Figure:
     return figure
 
 
-def summary_table(summary: ClassSummary) -> str:
-    """The class as an HTML table, stuck students first and marked."""
+def summary_table(summary: ClassSummary, names: dict[str, str] | None = None) -> str:
+    """The class as an HTML table, stuck students first and marked; with ``names``, each name beside its pseudonym."""
+    names = names or {}
     rows = []
     order = sorted(summary.students, key=lambda s: (not s.stuck, s.student))
+
+    def name_cell(student: str) -> str:
+        if not names:
+            return ""
+        name = names.get(student)
+        return f"<td class='student-name'>{html.escape(name)}</td>" if name else "<td><i>not on the roster</i></td>"
+
     for s in order:
         latest = f"{s.errors[-1]:.3f}" if s.errors else "–"
         best = f"{min(s.errors):.3f}" if s.errors else "–"
@@ -114,13 +128,15 @@ def summary_table(summary: ClassSummary) -> str:
             status += f"<br><small>{html.escape(s.last_failure[:160])}</small>"
         style = " style='background:#fde8e8'" if s.stuck else ""
         rows.append(f"<tr{style} class='student-row' data-student='{html.escape(s.student)}'>"
-                    f"<td><code>{html.escape(s.student)}</code></td><td>{html.escape(s.place or '–')}</td>"
+                    f"<td><code>{html.escape(s.student)}</code></td>{name_cell(s.student)}"
+                    f"<td>{html.escape(s.place or '–')}</td>"
                     f"<td>{_ago(s.idle_s)}</td><td>{len(s.errors)}</td><td>{latest}</td><td>{best}</td>"
                     f"<td>{status}</td></tr>")
-    head = ("<tr><th>student</th><th>where</th><th>no progress for</th><th>episodes</th><th>latest error</th>"
+    head = ("<tr><th>student</th>" + ("<th>name</th>" if names else "")
+            + "<th>where</th><th>no progress for</th><th>episodes</th><th>latest error</th>"
             "<th>best error</th><th>status</th></tr>")
-    places = " · ".join(f"{html.escape(place)}: <b>{len(names)}</b>" for place, names in summary.at_place().items()
-                        if names)
+    places = " · ".join(f"{html.escape(place)}: <b>{len(members)}</b>" for place, members in summary.at_place().items()
+                        if members)
     return (f"<div style='margin:4px 0'>Where the class is: {places or 'nobody yet'}</div>"
             f"<table class='class-table' style='border-collapse:collapse;font-size:0.92em' border='1' "
             f"cellpadding='4'>{head}{''.join(rows)}</table>")
@@ -133,15 +149,24 @@ class ClassView(VBox):
         class_folder: the class folder (default ``$MT_WIDGETS_CLASS_FOLDER``).
         refresh_s: seconds between refreshes while the page is open (0: only the button).
         stuck_after_s: seconds without progress after which a student is marked stuck.
+        names: the names file (pseudonym -> name, ``mt_widgets.classroom.names``); default
+            ``$MT_WIDGETS_CLASS_NAMES``; None with neither: pseudonyms only.
     """
 
-    def __init__(self, class_folder=None, refresh_s: float = 5.0, stuck_after_s: float = STUCK_AFTER_S):
+    def __init__(self, class_folder=None, refresh_s: float = 5.0, stuck_after_s: float = STUCK_AFTER_S,
+                 names=None):
         if isinstance(refresh_s, bool) or not isinstance(refresh_s, (int, float)) or refresh_s < 0 \
                 or not math.isfinite(refresh_s):
             raise ValueError(f"refresh_s: expected a number of seconds >= 0, got {refresh_s!r}")
         if isinstance(stuck_after_s, bool) or not isinstance(stuck_after_s, (int, float)) or not stuck_after_s > 0:
             raise ValueError(f"stuck_after_s: expected a positive number of seconds, got {stuck_after_s!r}")
         self.folder = class_folder if class_folder is not None else class_folder_from_env()
+        self.names_problem = ""
+        try:
+            self.names = read_names(names) if names is not None else names_from_env()
+        except (NamesFileError, OSError) as error:
+            # A names file others can read (or none where one was named) shows pseudonyms and says why.
+            self.names, self.names_problem = {}, f"names not shown: {error}"
         self.refresh_s = float(refresh_s)
         self.summary: ClassSummary | None = None
         self.refreshes = 0
@@ -181,10 +206,11 @@ class ClassView(VBox):
             return None
         self.summary = summary
         self.refreshes += 1
-        self.table.value = summary_table(summary)
+        self.table.value = summary_table(summary, self.names)
         self.errors_image.value = _png(errors_figure(summary))
         self.exercises_image.value = _png(exercises_figure(summary))
-        self.problems.value = "".join(f"<div style='color:#8a5300'>{html.escape(p)}</div>" for p in summary.problems)
+        problems = [*summary.problems, *([self.names_problem] if self.names_problem else [])]
+        self.problems.value = "".join(f"<div style='color:#8a5300'>{html.escape(p)}</div>" for p in problems)
         self._say(f"<span class='class-status'>{len(summary.students)} students, {len(summary.stuck)} stuck; "
                   f"updated {summary.now.strftime('%H:%M:%S')} UTC (refresh #{self.refreshes})</span>", raw=True)
         return summary

@@ -4,8 +4,10 @@ With ``A = (Phi^T Phi + lam I)^-1 Phi^T`` (S x N) the learner returns ``Theta_ha
 The optimal demonstration for the query states is ``U_bar = pinv(A) Theta^T``. With Phi of
 full column rank (N >= S) it teaches Theta exactly; it equals the target policy's own
 actions ``Phi Theta^T`` plus ``lam Phi (Phi^T Phi)^-1 Theta^T``, which undoes the ridge
-shrinkage. Below the teaching dimension (rank < S) no demonstration can teach Theta exactly
-and ``U_bar`` is the one with the least error; ``optimal_actions`` then warns.
+shrinkage. When the rank condition fails (rank < S: fewer independent states than features),
+no demonstration on these states can teach every Theta exactly and ``U_bar`` is the one with the
+least error; ``optimal_actions`` then warns. (That is not the teaching dimension, where the
+teacher also picks the states: for ridge regression it is 1.)
 
 Everything is computed from one SVD ``Phi = W diag(s) V^T``: ``A = V diag(s / (s^2 + lam)) W^T``,
 ``pinv(A) = W diag((s^2 + lam) / s) V^T``, and ``rho1 = ||A||_2 = max s / (s^2 + lam)``.
@@ -150,7 +152,7 @@ class TeachingAnalysis:
 
     @property
     def bound(self) -> float:
-        """rho1 * rho2 (+ the residual below the teaching dimension): an upper bound on ``risk``."""
+        """rho1 * rho2 (+ the residual when the rank condition fails): an upper bound on ``risk``."""
         return self.rho1 * self.rho2 + self.residual
 
 

@@ -136,6 +136,13 @@ def is_simulated(arm: SwiftPro) -> bool:
     return port.lower().startswith(("uarm-sim://", "uarmsim://"))
 
 
+def simulated_device(arm: SwiftPro):
+    """The ``SimulatedSwiftPro`` behind an arm on a ``uarm-sim://`` port (for a simulated
+    hand, or a pulled cable, in a tutorial), or None for a real arm or a closed port."""
+    serial_port = getattr(arm._link, "serial", None) if is_simulated(arm) else None
+    return getattr(serial_port, "device", None)
+
+
 def describe_error(error: BaseException) -> str:
     """A sentence for the screen about a connector error: what happened, and that nothing is lost."""
     safe = "Your demonstrations are saved; nothing is lost. Please call the experimenter."
@@ -303,6 +310,12 @@ class UArmBridge:
         target = self.state_to_arm_mm(state_cm)
         with self._busy:
             self._travel_to(target, self._job_generation())
+
+    def return_to(self, state_cm) -> None:
+        """Bring the arm to a query state from wherever it is (e.g. where a hand left it):
+        into the envelope first if it is outside (:meth:`home_if_outside`), then there."""
+        self.home_if_outside()
+        self.show_state(state_cm)
 
     def execute(self, trajectory, on_step: Callable[[int, tuple[float, float]], None] | None = None
                 ) -> ExecutionReport:

@@ -337,7 +337,8 @@ class SwiftPro:
 
         The stop command never waits for a request slot. 4.5+ sends ``S1100`` (clears the
         planner); 4.0-4.4 ``S1000 V0`` (pause: nothing more moves until :meth:`resume`);
-        3.x ``G2203``. Whether the firmware ever answers the cut move is UNCERTAIN, so its
+        3.x ``M2000`` (clears the command queue, quick-stops the steppers; ``G2203`` only waits
+        for the end of motion). Whether the firmware ever answers the cut move is UNCERTAIN, so its
         number is retired here. The :attr:`stop_switch` stays held until :meth:`resume`.
         """
         self._motion.stop()
@@ -375,8 +376,13 @@ class SwiftPro:
         self._request("M2210", ("F", frequency_hz), ("T", duration_ms), timeout=self.timeout + duration_ms / 1000)
 
     def attach(self) -> None:
-        """Power all motors (M17)."""
+        """Power all motors (M17) and make the firmware re-read where the arm is (the
+        dialect's ``refresh_position``: after a move by hand, 3.x would otherwise plan from
+        where it believes the arm still is)."""
         self._request("M17")
+        refresh = self.dialect.refresh_position
+        if refresh is not None:
+            self._request(refresh[0], *refresh[1:])
         self._motion.forget_position()
 
     def detach(self) -> None:

@@ -29,6 +29,10 @@ class Dialect:
         stop_pauses: the stop is a pause (``S1000 V0``): nothing moves until ``resume_command``,
             and the cut move is still at the head of the firmware's queue.
         resume_command: ends the pause, or None where the stop clears the planner.
+        refresh_position: what makes the firmware re-read where the arm is after it was moved
+            by hand, or None where attaching does it (4.x re-reads its encoders on M17; 3.x
+            only on ``update_current_pos``, which M2000 runs: without it the next move lands
+            off by the hand's displacement).
     """
 
     name: str
@@ -38,6 +42,7 @@ class Dialect:
     stop_command: Command
     stop_pauses: bool
     resume_command: Command | None
+    refresh_position: Command | None = None
 
     def device_name(self, payload: str) -> str:
         """The P2201 answer without the ``V`` prefix 3.x puts in front (``VSwiftPro``)."""
@@ -45,7 +50,7 @@ class Dialect:
         return name[1:] if name.startswith("VSwift") else name
 
 
-FIRMWARE_3 = Dialect("3.x", "G0", 60.0, True, ("G2203",), False, None)
+FIRMWARE_3 = Dialect("3.x", "G0", 60.0, True, ("M2000",), False, None, ("M2000",))
 FIRMWARE_4_0 = Dialect("4.0-4.4", "G1", 1.0, False, ("S1000", ("V", 0)), True, ("S1000", ("V", 1)))
 FIRMWARE_4_5 = Dialect("4.5+", "G1", 1.0, False, ("S1100",), False, None)
 

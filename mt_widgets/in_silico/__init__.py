@@ -15,14 +15,22 @@ Depends on ``mt_widgets.core`` and ``mt_widgets.study`` only; no widget library.
 from .engine import InSilicoStudy, run_in_silico, run_many_studies, simulate_changes
 from .fitting import FITTED_FIELDS, fit_loss, fit_to_paper
 from .paper_results import PAPER_RESULTS, implied_baselines, paper_changes, paper_results, paper_targets
-from .plan import default_parameters, episode_plan, experiment_of, paper_fit, resolve_protocol, runs_on_uarm
+from .plan import (
+    default_parameters,
+    episode_plan,
+    experiment_of,
+    paper_fit,
+    resolve_protocol,
+    runs_on_uarm,
+    session_delays,
+)
 from .sessions import SessionTeacher, run_through_sessions
-from .teachers import OPTIMAL_TEACHER, PAPER_FIT, PAPER_FIT_UARM, TeacherParameters, TeacherPopulation
+from .teachers import OPTIMAL_TEACHER, PAPER_FIT, PAPER_FIT_UARM, Forgetting, TeacherParameters, TeacherPopulation
 
 __all__ = [
-    "FITTED_FIELDS", "InSilicoStudy", "OPTIMAL_TEACHER", "PAPER_FIT", "PAPER_FIT_UARM", "PAPER_RESULTS",
+    "FITTED_FIELDS", "Forgetting", "InSilicoStudy", "OPTIMAL_TEACHER", "PAPER_FIT", "PAPER_FIT_UARM", "PAPER_RESULTS",
     "SessionTeacher", "TeacherParameters", "TeacherPopulation", "default_parameters", "episode_plan",
     "experiment_of", "fit_loss", "fit_to_paper", "implied_baselines", "paper_changes", "paper_fit",
     "paper_results", "paper_targets", "resolve_protocol", "run_in_silico", "run_many_studies",
-    "run_through_sessions", "runs_on_uarm", "simulate_changes",
+    "run_through_sessions", "runs_on_uarm", "session_delays", "simulate_changes",
 ]

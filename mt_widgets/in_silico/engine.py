@@ -26,7 +26,6 @@ import pandas as pd
 
 from mt_widgets.core.episode_batch import EpisodeBatch
 from mt_widgets.core.validation import as_bool, as_count
-from mt_widgets.study.analysis_plan import PAPER_CHANGES
 from mt_widgets.study.participants import block_assignment
 
 from .plan import (
@@ -36,10 +35,18 @@ from .plan import (
     participant_id,
     query_states_for,
     resolve_protocol,
+    session_delays,
     teacher_seed,
 )
 from .progress import Progress
-from .teachers import TeacherParameters, TeacherPopulation, along_line_offsets, naive_offsets, position_gain
+from .teachers import (
+    Forgetting,
+    TeacherParameters,
+    TeacherPopulation,
+    along_line_offsets,
+    naive_offsets,
+    position_gain,
+)
 
 # -- the batched engine ----------------------------------------------------------------------------
 
@@ -59,7 +66,8 @@ class _EpisodeResult:
 
 def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study_of: np.ndarray,
               states_by_episode: list[np.ndarray], progress: Progress | None = None,
-              keep_demonstrations: bool = True) -> list[_EpisodeResult]:
+              keep_demonstrations: bool = True, forgetting: Forgetting | None = None,
+              delays: dict | None = None) -> list[_EpisodeResult]:
     """Runs B teachers through the protocol's episodes.
 
     Args:
@@ -70,16 +78,23 @@ def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study
         states_by_episode: per episode, (K, N, state_dim) query states of each of K studies.
         progress: ticked once per episode.
         keep_demonstrations: keep actions, optimal arrows and timings (off for power runs).
+        forgetting: how teachers forget between sessions (None: they do not).
+        delays: seconds before each later session (``session_delays``).
     """
     results = []
+    delays = session_delays(protocol, delays)
+    session = protocol.sessions[0].id
     for e, step in enumerate(episode_plan(protocol)):
+        if step["session"] != session:
+            session = step["session"]
+            population.forget(forgetting, delays[session])
         skill = protocol.skill(step["skill"])
         guided = np.isin(groups, list(step["guidance"]))
         states = states_by_episode[e]
         batch = EpisodeBatch.of(skill, states, protocol.lam, protocol.reproduction_duration_s)
         positions, _ = skill.end_effector(states)
         offsets = naive_offsets(positions, skill.target)[study_of]                  # (B, N, 2)
-        anchor = imagined_line_target(protocol, step["phase_index"])
+        anchor = imagined_line_target(protocol, step["phase_index"], step["session"])
         along = None if anchor is None else along_line_offsets(positions, skill.target, anchor)[study_of]
         optimal = batch.optimal_for(study_of, len(groups))                            # (B, N, R)
         gain = position_gain(skill.theta)
@@ -94,7 +109,8 @@ def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study
                 first[:, d], drawing[:, d] = population.timings(e, d, guided)
             population.see_guidance(skill.key, guided)
         outcome = batch.complete(actions, study_of)
-        population.see_reproduction()
+        if step["reproduced"]:
+            population.see_reproduction()
         results.append(_EpisodeResult(actions if keep_demonstrations else None,
                                       optimal if keep_demonstrations else None, outcome.theta_hat, outcome.error,
                                       outcome.rho1, outcome.rho2, batch, first, drawing))
@@ -131,7 +147,8 @@ class InSilicoStudy:
 
 def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherParameters | None = None,
                   seed: int = 0, groups=None, reproduce: bool = True, record_every: int = 10,
-                  progress: bool | None = None, study_name: str | None = None) -> InSilicoStudy:
+                  progress: bool | None = None, study_name: str | None = None, forgetting: Forgetting | None = None,
+                  delays: dict | None = None) -> InSilicoStudy:
     """Runs one study of synthetic teachers through the whole protocol.
 
     Args:
@@ -146,6 +163,9 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
         record_every: control steps between recorded samples of each reproduction.
         progress: show a progress bar (default: only for runs of more than 1000 participants).
         study_name: the ``study`` column (default: the protocol's name + "-in-silico").
+        forgetting: how teachers forget between the protocol's sessions (``Forgetting``; None:
+            they do not).
+        delays: {session id: seconds} before later sessions (default: each window's earliest).
 
     Returns:
         An ``InSilicoStudy``.
@@ -174,7 +194,8 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
                                         len(plan), max(step["demonstrations"] for step in plan))
     show = progress if progress is not None else n_participants > 1000
     bar = Progress(len(plan), "teaching", show)
-    results = _simulate(protocol, population, groups.astype(str), study_of, states, bar)
+    results = _simulate(protocol, population, groups.astype(str), study_of, states, bar, forgetting=forgetting,
+                        delays=delays)
     teaching_s = time.perf_counter() - started
 
     started = time.perf_counter()
@@ -203,8 +224,9 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
             duration = float(np.sum(r.first_input[p] + r.drawing[p]))
             theta_hats[(pid, step["phase"], step["episode"])] = r.theta_hat[p]
             episode_rows.append({
-                "study": name, "participant": pid, "group": groups[p], "phase": step["phase"],
-                "phase_index": step["phase_index"], "episode": step["episode"], "skill": step["skill"],
+                "study": name, "participant": pid, "group": groups[p], "session": step["session"],
+                "phase": step["phase"], "phase_index": step["phase_index"], "episode": step["episode"],
+                "skill": step["skill"],
                 "guidance": int(guided), "n_demonstrations": step["demonstrations"],
                 "teaching_error": float(r.error[p]), "rho1": float(r.rho1[p]), "rho2": float(r.rho2[p]),
                 "theta_hat": json.dumps(np.round(r.theta_hat[p], 12).tolist()),
@@ -213,8 +235,9 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
             clock += duration
             for d in range(step["demonstrations"]):
                 demonstration_rows.append({
-                    "study": name, "participant": pid, "group": groups[p], "phase": step["phase"],
-                    "phase_index": step["phase_index"], "episode": step["episode"], "index": d,
+                    "study": name, "participant": pid, "group": groups[p], "session": step["session"],
+                    "phase": step["phase"], "phase_index": step["phase_index"], "episode": step["episode"],
+                    "index": d,
                     "skill": step["skill"], "state": json.dumps(states[e][study_of[p], d].tolist()),
                     "action_1": float(r.actions[p, d, 0]), "action_2": float(r.actions[p, d, 1]),
                     "optimal_1": float(r.optimal[p, d, 0]), "optimal_2": float(r.optimal[p, d, 1]),
@@ -227,7 +250,8 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
 
 def run_many_studies(n_studies: int, n_per_group: int, seed: int = 0, parameters: TeacherParameters | None = None,
                      changes=None, progress: bool | None = None, protocol=None, share_states: bool = False,
-                     workers: int | None = None) -> dict:
+                     workers: int | None = None, forgetting: Forgetting | None = None,
+                     delays: dict | None = None) -> dict:
     """Many independent studies at once, reduced to each participant's changes.
 
     Every study has its own participants and its own query states (its own study seed), and
@@ -238,13 +262,15 @@ def run_many_studies(n_studies: int, n_per_group: int, seed: int = 0, parameters
         n_per_group: participants per group in each.
         seed: root seed.
         parameters: ``TeacherParameters`` (default: the protocol's fit, ``default_parameters``).
-        changes: ``Change`` comparisons (default the paper's three).
+        changes: ``Change`` comparisons (default: the protocol's analysis plan's).
         progress: show a progress bar (default: for more than 50 studies).
         protocol: the ``Protocol`` (default the paper's simulation protocol).
         share_states: use the protocol's own query states in every study (isolates the
             teachers' variability; used when fitting).
         workers: processes drawing the studies' query states, the slow part (default: up to
             2 for 100 studies or more, else 1). The result does not depend on it.
+        forgetting: how teachers forget between the protocol's sessions (None: they do not).
+        delays: {session id: seconds} before later sessions (default: each window's earliest).
 
     Returns:
         {change name: {group: (n_studies, n_per_group) array of after - before}}.
@@ -267,7 +293,7 @@ def run_many_studies(n_studies: int, n_per_group: int, seed: int = 0, parameters
     seeds = [teacher_seed(seed, p) for p in range(n_studies * per_study)]
     population = TeacherPopulation.draw(parameters, seeds, len(plan), max(step["demonstrations"] for step in plan))
     return simulate_changes(protocol, population, n_studies, n_per_group, states, changes, bar,
-                            shared=share_states)
+                            shared=share_states, forgetting=forgetting, delays=delays)
 
 
 def _study_query_states(arguments):
@@ -310,7 +336,8 @@ def _states_of_studies(protocol, n_studies: int, seed: int, workers: int | None,
 
 def simulate_changes(protocol, population: TeacherPopulation, n_studies: int, n_per_group: int,
                      states: list[np.ndarray], changes=None, progress: Progress | None = None,
-                     shared: bool | None = None) -> dict:
+                     shared: bool | None = None, forgetting: Forgetting | None = None,
+                     delays: dict | None = None) -> dict:
     """Runs a drawn population as ``n_studies`` studies and returns each participant's changes.
 
     Args:
@@ -321,16 +348,17 @@ def simulate_changes(protocol, population: TeacherPopulation, n_studies: int, n_
         n_per_group: participants per group.
         states: per episode, (n_studies, N, state_dim) query states, or (1, N, state_dim)
             shared by all studies.
-        changes: ``Change`` comparisons (default the paper's three).
+        changes: ``Change`` comparisons (default: the protocol's analysis plan's).
         progress: ticked once per episode.
         shared: whether all studies share one set of states (default: from ``states``).
+        forgetting, delays: as for ``run_many_studies``.
 
     Returns:
         {change name: {group: (n_studies, n_per_group) after - before,
         "before": (n_studies, 2 n_per_group) the earlier episode's errors}}.
     """
     shared = as_bool("shared", shared, allow_none=True)
-    changes = PAPER_CHANGES if changes is None else tuple(changes)
+    changes = protocol.analysis.changes if changes is None else tuple(changes)
     plan = episode_plan(protocol)
     per_study = 2 * n_per_group
     if len(population) != n_studies * per_study:
@@ -338,7 +366,8 @@ def simulate_changes(protocol, population: TeacherPopulation, n_studies: int, n_
     shared = states[0].shape[0] == 1 if shared is None else shared
     groups = np.tile(np.repeat(np.asarray(protocol.groups[:2]), n_per_group), n_studies)
     study_of = np.zeros(n_studies * per_study, dtype=int) if shared else np.repeat(np.arange(n_studies), per_study)
-    results = _simulate(protocol, population, groups, study_of, states, progress, keep_demonstrations=False)
+    results = _simulate(protocol, population, groups, study_of, states, progress, keep_demonstrations=False,
+                        forgetting=forgetting, delays=delays)
     errors = np.stack([r.error for r in results], axis=1)       # (B, episodes)
     index = {(step["phase"], step["episode"]): e for e, step in enumerate(plan)}
     last = {step["phase"]: e for e, step in enumerate(plan)}

@@ -1,16 +1,19 @@
 """A protocol as the in-silico engine runs it: its episodes in order, their query states, and
 which of the paper's experiments (and so which fitted teachers) it replicates.
 
-Everything here reads the protocol the study runner loads (``mt_widgets.study.protocol``), so a
-synthetic study and a real one meet the same episodes and the same query states.
+Everything here reads the protocol the study runner loads (``mt_widgets.study.protocol``), and
+the episodes and their query states come from the one place the session engine takes them
+from (``mt_widgets.study.timeline``), so a synthetic study and a real one meet the same
+episodes, in the same sessions, with the same query states.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from mt_widgets.core import SeedSchedule, UArmPlant
+from mt_widgets.core import UArmPlant
 from mt_widgets.study.protocol import Protocol, load_protocol
+from mt_widgets.study.timeline import episode_query_states, planned_episodes
 
 from .teachers import PAPER_FIT, PAPER_FIT_UARM, TeacherParameters
 
@@ -25,13 +28,21 @@ def resolve_protocol(protocol):
 
 
 def episode_plan(protocol) -> list[dict]:
-    """The protocol's episodes in order: phase, phase_index, episode (1-based), skill, states seed index."""
+    """The protocol's episodes in order, every session's (``mt_widgets.study.timeline.planned_episodes``):
+    session, phase, phase_index, episode (1-based), skill, demonstrations, guidance, states_index,
+    episode_index (0-based), and reproduced (whether the participant watches this episode's
+    reproduction: every episode's, or each phase's last, as the protocol says)."""
     plan = []
-    for phase in protocol.phases:
-        for e in range(phase.episodes):
-            plan.append({"phase": phase.id, "phase_index": phase.index, "episode": e + 1, "skill": phase.skill,
-                         "demonstrations": phase.demonstrations, "guidance": phase.guidance,
-                         "states_index": phase.states_index, "episode_index": e})
+    last = {}
+    for step in planned_episodes(protocol):
+        last[(step.session, step.phase)] = step.episode
+    for step in planned_episodes(protocol):
+        plan.append({"session": step.session, "phase": step.phase, "phase_index": step.phase_index,
+                     "episode": step.episode, "skill": step.skill, "demonstrations": step.demonstrations,
+                     "guidance": step.guidance, "states_index": step.states_index,
+                     "episode_index": step.episode_index,
+                     "reproduced": protocol.reproduce_after == "episode"
+                     or step.episode == last[(step.session, step.phase)]})
     return plan
 
 
@@ -48,13 +59,28 @@ def query_states_for(protocol, step: dict, participant: int | None = None, study
     Returns:
         (demonstrations, state_dim) states.
     """
-    schedule = SeedSchedule(protocol.seed if study_seed is None else study_seed)
-    who = participant if protocol.query_states == "per-participant" else None
-    seed = schedule.seed(step["states_index"], step["episode_index"], who)
-    return protocol.skill(step["skill"]).query_states(seed=seed, n=step["demonstrations"])
+    states, _ = episode_query_states(protocol, step["states_index"], step["episode"], step["demonstrations"],
+                                     step["skill"], participant=participant, study_seed=study_seed)
+    return states
 
 
-def imagined_line_target(protocol, phase_index: int):
+def session_delays(protocol, delays=None) -> dict:
+    """Seconds between the end of each session and the start of the next, by the later session's id.
+
+    Args:
+        protocol: the ``Protocol``.
+        delays: {session id: seconds} for some sessions (a design explored in silico); the others
+            get the earliest time their window allows (the design's planned delay).
+    """
+    delays = {} if delays is None else dict(delays)
+    later = {s.id: s for s in protocol.sessions[1:]}
+    unknown = sorted(set(delays) - set(later))
+    if unknown:
+        raise ValueError(f"delays: expected ids of later sessions {sorted(later)}, got {unknown}")
+    return {sid: float(delays.get(sid, session.window.earliest_s)) for sid, session in later.items()}
+
+
+def imagined_line_target(protocol, phase_index: int, session: str | None = None):
     """The point a novice takes for a line skill's target in phase ``phase_index`` (model item 1b).
 
     It is the point target they last practised or taught on the same robot before this phase
@@ -64,17 +90,20 @@ def imagined_line_target(protocol, phase_index: int):
 
     Args:
         protocol: the ``Protocol``.
-        phase_index: the 0-based index of the phase in ``protocol.phases``.
+        phase_index: the 0-based index of the phase in its session's phases.
+        session: the protocol session's id (None: the first); phases of earlier sessions count
+            as taught before.
 
     Returns:
         (2,) the point in the skill's units, or None (a point skill, or no point taught before).
     """
-    phase = protocol.phases[phase_index]
+    phase = protocol.session(session).phases[phase_index]
     skill = protocol.skill(phase.skill)
     if skill.target is None or skill.target.dimension == 0:
         return None
     before = [protocol.practice.skill] if protocol.practice.duration_s > 0 else []
-    before += [p.skill for p in protocol.phases[:phase_index]]
+    everything = protocol.all_phases
+    before += [p.skill for p in everything[:everything.index(phase)]]
     anchor = None
     for key in before:
         other = protocol.skill(key)

@@ -7,13 +7,23 @@ study writes; the shipped example studies (``mt_widgets.analysis.example_studies
 
 from __future__ import annotations
 
+import datetime as _dt
+
 import numpy as np
 
 from mt_widgets.core.validation import as_bool, as_count
-from mt_widgets.study.log import StudyFolder
 from mt_widgets.study.session import Session
+from mt_widgets.study.study_folder import StudyFolder
 
-from .plan import default_parameters, episode_plan, imagined_line_target, participant_id, resolve_protocol, teacher_seed
+from .plan import (
+    default_parameters,
+    episode_plan,
+    imagined_line_target,
+    participant_id,
+    resolve_protocol,
+    session_delays,
+    teacher_seed,
+)
 from .progress import Progress
 from .teachers import TeacherParameters, TeacherPopulation, along_line_offsets, naive_offsets, position_gain
 
@@ -39,7 +49,8 @@ class SessionTeacher:
             seed.entropy, spawn_key=tuple(seed.spawn_key) + (7,)) if isinstance(seed, np.random.SeedSequence)
             else np.random.SeedSequence(int(seed), spawn_key=(7,)))
         self.plan = episode_plan(protocol)
-        self._episode_of = {(step["phase_index"], step["episode"]): e for e, step in enumerate(self.plan)}
+        self._episode_of = {(step["session"], step["phase_index"], step["episode"]): e
+                            for e, step in enumerate(self.plan)}
         parameters = default_parameters(protocol) if parameters is None else parameters
         self.population = TeacherPopulation.draw(parameters, [seed], len(self.plan),
                                                  max(step["demonstrations"] for step in self.plan))
@@ -54,7 +65,8 @@ class SessionTeacher:
                 self.demonstrate(session, step)
             elif step.kind == "episode_end":
                 results.append(session.finish_episode())
-                self.population.see_reproduction()
+                if self.plan[self._episode_of[(session.plan.id, step.phase_index, step.episode)]]["reproduced"]:
+                    self.population.see_reproduction()
             elif step.kind == "practice":
                 session.finish_practice(duration_s=float(step.duration_s or 0.0))
             elif step.kind == "video":
@@ -86,14 +98,14 @@ class SessionTeacher:
     def demonstrate(self, session, step) -> None:
         """Draws one arrow for the current query state and submits it with its timings."""
         skill = self.protocol.skill(step.skill)
-        e = self._episode_of[(step.phase_index, step.episode)]
+        e = self._episode_of[(session.plan.id, step.phase_index, step.episode)]
         if self._episode is None or self._episode[0] != e:
             # What the teacher works from for this episode: where the target is from each tip
             # position, and the optimal arrows its understanding blends in.
             positions, _ = skill.end_effector(step.query_states)
             # The session's own episode: no second TeachingEpisode (and SVD) per study episode.
             optimal = step.teaching_episode.optimal_actions
-            anchor = imagined_line_target(self.protocol, step.phase_index)
+            anchor = imagined_line_target(self.protocol, step.phase_index, session.plan.id)
             along = None if anchor is None else along_line_offsets(positions, skill.target, anchor)
             self._episode = (e, naive_offsets(positions, skill.target), optimal, along)
         _, offsets, optimal, along = self._episode
@@ -109,7 +121,8 @@ class SessionTeacher:
 
 
 def run_through_sessions(folder, n_participants: int = 8, protocol=None, parameters: TeacherParameters | None = None,
-                         seed: int = 0, groups=None, progress: bool | None = None):
+                         seed: int = 0, groups=None, progress: bool | None = None, forgetting=None,
+                         delays: dict | None = None):
     """Runs synthetic teachers through the session engine into a real study folder.
 
     Every participant is enrolled, assigned to a group (by the protocol's randomisation unless
@@ -126,6 +139,11 @@ def run_through_sessions(folder, n_participants: int = 8, protocol=None, paramet
         seed: root seed of the teachers.
         groups: a group per participant, or None for the protocol's randomisation.
         progress: show a progress bar (default: for more than 16 participants).
+        forgetting: how teachers forget between the protocol's sessions (``Forgetting``; None:
+            they do not).
+        delays: {session id: seconds} after the previous session's end at which each teacher
+            comes back (default: each window's earliest); the arrival is checked against the
+            window as a person's is (``Session.arrive`` with that time as ``now``).
 
     Returns:
         The ``StudyFolder``.
@@ -137,11 +155,23 @@ def run_through_sessions(folder, n_participants: int = 8, protocol=None, paramet
         raise ValueError(f"groups: expected {n_participants} group names, got {len(list(groups))}")
     study = StudyFolder.create(folder, protocol)
     bar = Progress(n_participants, "participants", progress if progress is not None else n_participants > 16)
+    delays = session_delays(protocol, delays)
     for p in range(n_participants):
         session = Session.start(study, participant_id(p), group=None if groups is None else list(groups)[p])
+        teacher = SessionTeacher(protocol, parameters, teacher_seed(seed, p))
         try:
-            SessionTeacher(protocol, parameters, teacher_seed(seed, p)).run(session)
+            teacher.run(session)
         finally:
             session.close()
+        for later in protocol.sessions[1:]:
+            if not session.completed:
+                break
+            ended = _dt.datetime.fromisoformat(session.events[-1]["time"].replace("Z", "+00:00"))
+            teacher.population.forget(forgetting, delays[later.id])
+            session = Session.arrive(study, participant_id(p), now=ended + _dt.timedelta(seconds=delays[later.id]))
+            try:
+                teacher.run(session)
+            finally:
+                session.close()
         bar.update()
     return study

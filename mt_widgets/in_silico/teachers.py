@@ -44,6 +44,16 @@ The model follows what the paper observed of its participants:
    of what they learnt: ``w`` is multiplied by ``retention`` in unguided episodes and by
    ``transfer`` on a skill they were never guided on.
 
+7. **They forget between sessions** (``Forgetting``, off unless given). Between the end of one
+   protocol session and the start of the next, a delay of ``t`` days later, what a teacher
+   understood decays toward the novice they were: ``w <- w * 2 ** (-t / half_life_days)``, an
+   exponential forgetting curve (Ebbinghaus' shape; Murre and Dros, 2015, PLoS ONE 10(7):
+   e0120644, replicate it). Their magnitude habit, learning rate and which skills they were
+   guided on stay. The half-life is a design assumption for piloting and powering a follow-up
+   study, **not fitted to any data**: the paper has one session, so nothing here says how
+   fast its participants forget. ``paper-sim-followup``'s power is reported for a stated
+   half-life (``mt_widgets/study/protocols/paper_sim_followup.toml``).
+
 An **optimal teacher** (``OPTIMAL_TEACHER``) starts with ``w = 1`` and no noise: it draws the
 optimal arrows and teaches the skill exactly.
 
@@ -359,6 +369,33 @@ class TeacherPopulation:
     def see_reproduction(self) -> None:
         """After an episode: watching the robot reproduce the learnt skill teaches a little."""
         self.understanding = self.understanding + self.parameters.reproduction_learning * (1 - self.understanding)
+
+    def forget(self, forgetting: Forgetting | None, delay_s: float) -> None:
+        """Between sessions ``delay_s`` apart: understanding decays (``Forgetting``); None keeps it."""
+        if forgetting is not None:
+            self.understanding = self.understanding * forgetting.retained(delay_s)
+
+
+@dataclass(frozen=True)
+class Forgetting:
+    """Forgetting between protocol sessions (model item 7 of the module docstring).
+
+    Attributes:
+        half_life_days: days after which half of what a teacher understood is gone (> 0;
+            ``math.inf``: no forgetting). A design assumption, not fitted to data.
+    """
+
+    half_life_days: float
+
+    def __post_init__(self):
+        value = self.half_life_days
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
+            raise ValueError(f"half_life_days: expected a number of days > 0 (math.inf: no forgetting), got {value!r}")
+
+    def retained(self, delay_s: float) -> float:
+        """The fraction of understanding kept after ``delay_s`` seconds."""
+        delay_s = as_positive("delay_s", delay_s, allow_zero=True)
+        return float(2.0 ** (-(delay_s / 86400.0) / self.half_life_days))
 
 
 def with_parameters(base: TeacherParameters, **changes) -> TeacherParameters:

@@ -7,10 +7,13 @@ analysis (``mt_widgets.analysis``) are packages of their own above this one.
 
 from .analysis_plan import PAPER_CHANGES, AnalysisPlan, Change
 from .bids import export_bids
-from .log import LogError, LogFolderError, MemoryLog, ParticipantLog, StudyFolder, check_folder_writable, read_events
-from .participants import ParticipantIdError, block_assignment, validate_participant_id
+from .log import LogError, LogFolderError, MemoryLog, ParticipantLog, check_folder_writable, read_events, read_log
+from .online import OnlineSettings, outcome_of
+from .participants import ParticipantIdError, block_assignment, validate_participant_id, validate_url_participant_id
 from .protocol import BUILTIN_PROTOCOLS, Phase, Practice, Protocol, ProtocolError, load_protocol, parse_protocol
-from .session import EpisodeResult, Feedback, Session, SessionStateError, Step, timeline
+from .session import EpisodeResult, Feedback, Session, SessionStateError, Step, WindowError, timeline
+from .session_plan import ProtocolSession, Window
+from .study_folder import StudyFolder
 from .tidy import DEMONSTRATION_COLUMNS, EPISODE_COLUMNS, export_study, read_study
 
 __all__ = [
@@ -19,4 +22,6 @@ __all__ = [
     "Phase", "Practice", "Protocol", "ProtocolError", "Session", "SessionStateError", "Step", "StudyFolder",
     "block_assignment", "check_folder_writable", "export_bids", "export_study", "load_protocol", "parse_protocol",
     "read_events", "read_study", "timeline", "validate_participant_id",
+    "OnlineSettings", "read_log", "ProtocolSession", "Window", "WindowError", "outcome_of",
+    "validate_url_participant_id",
 ]

@@ -62,6 +62,12 @@ class AnalysisPlan:
         effect_size: the Cohen's d the sample size was planned for.
         power: the power planned for.
         changes: the comparisons (``Change``), by default the paper's three.
+        baseline: the two (phase, episode) episodes of the post-hoc baseline check (the
+            paper's P1 against P2), or None for none; a protocol without those phases gets no
+            check.
+
+    The first of the protocol's groups is compared against the second (``alternative`` is
+    first minus second), whatever their names.
     """
 
     test: str = "student"
@@ -70,6 +76,7 @@ class AnalysisPlan:
     effect_size: float = 0.9
     power: float = 0.8
     changes: tuple = PAPER_CHANGES
+    baseline: tuple | None = (("P1", 1), ("P2", 1))
 
     def __post_init__(self):
         if self.test not in TESTS:
@@ -86,4 +93,5 @@ class AnalysisPlan:
         return {"test": self.test, "alternative": self.alternative, "alpha": self.alpha,
                 "effect_size": self.effect_size, "power": self.power,
                 "changes": [{"name": c.name, "before": list(c.before), "after": list(c.after), "label": c.label,
-                             "meaning": c.meaning} for c in self.changes]}
+                             "meaning": c.meaning} for c in self.changes],
+                "baseline": None if self.baseline is None else [list(b) for b in self.baseline]}

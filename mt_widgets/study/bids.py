@@ -7,6 +7,11 @@ The layout (Brain Imaging Data Structure, behavioural data, https://bids-specifi
     participants.tsv / .json         one row per participant kept: group, and each demographics answer
     sub-<label>/beh/sub-<label>_task-<task>_beh.tsv / .json
                                      one row per demonstration, with its episode's results
+    sub-<label>/ses-<session>/beh/sub-<label>_ses-<session>_task-<task>_beh.tsv / .json
+                                     the same, per protocol session, when the protocol has several
+    sub-<label>/sub-<label>_sessions.tsv / .json
+                                     (several sessions) each session the participant ran, with
+                                     where it fell in its window and the delay since the last
     phenotype/<step>.tsv / .json     answers to each questionnaire and screener step
     code/protocol.<toml|json>        the protocol as written (its sha256 is in dataset_description)
 
@@ -25,7 +30,8 @@ from pathlib import Path
 
 import mt_widgets
 
-from .log import StudyFolder, read_events
+from .log import read_log
+from .study_folder import StudyFolder
 from .tidy import excluded_participants, participant_logs
 
 BIDS_VERSION = "1.9.0"
@@ -127,14 +133,24 @@ def export_bids(study_folder, out_folder) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     task = bids_label(protocol.name, "protocol name")
     excluded = excluded_participants(study.folder)
-    demographics = [item for step in protocol.steps if step.kind == "demographics" for item in step.items]
-    asked = [step for step in protocol.steps if step.kind in ("questionnaire", "eligibility")]
+    every_step = [step for session in protocol.sessions for step in session.steps]
+    demographics = [item for step in every_step if step.kind == "demographics" for item in step.items]
+    asked = [step for step in every_step if step.kind in ("questionnaire", "eligibility")]
     participants, labels, phenotype = [], {}, {step.id: [] for step in asked}
+    several = len(protocol.sessions) > 1
     for path in participant_logs(study.folder):
-        events, _ = read_events(path)
-        if not events or events[0]["type"] != "session_started":
+        if "." in path.stem:
+            continue  # a later session's log: exported with its participant's first session below
+        first = read_log(path, protocol.sessions[0].id)
+        if not first or first[0]["type"] != "session_started":
             continue
-        pid = events[0]["participant"]
+        pid = first[0]["participant"]
+        by_session = {protocol.sessions[0].id: first}
+        for later in protocol.sessions[1:]:
+            later_path = study.log_path(pid, later.id)
+            if later_path.exists():
+                by_session[later.id] = read_log(later_path, protocol.sessions[0].id)
+        events = [e for log in by_session.values() for e in log]
         if pid in excluded or any(e["type"] in ("withdrawn", "consent_declined", "screened_out") for e in events):
             continue
         label = bids_label(pid, "participant_id")
@@ -143,16 +159,30 @@ def export_bids(study_folder, out_folder) -> Path:
                              f"give the same BIDS label sub-{label}; rename one before exporting")
         labels[pid] = label
         answers = {e["step"]: e.get("answers", {}) for e in events if e["type"] == "step_done"}
+        last = by_session.get(protocol.sessions[-1].id, [])
         row = {"participant_id": f"sub-{label}", "group": events[0]["group"],
-               "completed": any(e["type"] == "session_finished" for e in events)}
-        for step in protocol.steps:
+               "completed": any(e["type"] == "session_finished" for e in last)}
+        for step in every_step:
             if step.kind == "demographics":
                 row.update({item.id: answers.get(step.id, {}).get(item.id) for item in step.items})
         participants.append(row)
         for step in asked:
             if step.id in answers:
                 phenotype[step.id].append({"participant_id": f"sub-{label}", **answers[step.id]})
-        _write_participant(out, label, task, events, _beh_sidecar(protocol))
+        if several:
+            rows = []
+            for session_id, log in by_session.items():
+                session_label = protocol.session(session_id).bids_label
+                window = log[0].get("window") or {}
+                rows.append({"session_id": f"ses-{session_label}",
+                             "window_status": window.get("status", "first session"),
+                             "delay_days": (window["delay_s"] / 86400.0) if "delay_s" in window else None})
+                _write_participant(out, label, task, log, _beh_sidecar(protocol), session=session_label)
+            _tsv(out / f"sub-{label}" / f"sub-{label}_sessions.tsv", ["session_id", "window_status", "delay_days"],
+                 rows)
+            _json(out / f"sub-{label}" / f"sub-{label}_sessions.json", _SESSIONS_SIDECAR)
+        else:
+            _write_participant(out, label, task, events, _beh_sidecar(protocol))
     columns = ["participant_id", "group", "completed"] + [item.id for item in demographics]
     _tsv(out / "participants.tsv", columns, participants)
     _json(out / "participants.json", {
@@ -191,7 +221,18 @@ def export_bids(study_folder, out_folder) -> Path:
     return out
 
 
-def _write_participant(out: Path, label: str, task: str, events: list[dict], sidecar: dict) -> None:
+_SESSIONS_SIDECAR = {
+    "session_id": {"Description": "The protocol session (ses-<its id without '-' and '_'>)."},
+    "window_status": {"Description": "Where the session started in its window after the previous session.",
+                      "Levels": {"first session": "the protocol's first session (no window)",
+                                 "open": "inside the window", "early": "before the window, flagged",
+                                 "late": "after the window, flagged"}},
+    "delay_days": {"Description": "Time from the end of the previous session to this one's start.", "Units": "d"},
+}
+
+
+def _write_participant(out: Path, label: str, task: str, events: list[dict], sidecar: dict,
+                       session: str | None = None) -> None:
     started, finished, rows = {}, {}, []
     for event in events:
         if event["type"] == "episode_started":
@@ -205,11 +246,11 @@ def _write_participant(out: Path, label: str, task: str, events: list[dict], sid
         episode, done = started[key], finished.get(key, {})
         row = {"phase": event["phase"], "phase_index": event["phase_index"], "episode": event["episode"],
                "trial": event["index"], "skill": episode["skill"], "guidance_shown": bool(event["guidance_shown"]),
-               "guidance_modality": episode.get("guidance_modality", "arrows+words"),
+               "guidance_modality": episode["guidance_modality"],
                "action_1": event["action"][0], "action_2": event["action"][1],
                "optimal_1": event["optimal"][0], "optimal_2": event["optimal"][1],
-               "time_to_first_input": event.get("time_to_first_input_s"),
-               "drawing_duration": event.get("drawing_duration_s"), "response_time": event.get("response_time_s"),
+               "time_to_first_input": event["time_to_first_input_s"],
+               "drawing_duration": event["drawing_duration_s"], "response_time": event["response_time_s"],
                "teaching_error": done.get("teaching_error"), "rho1": done.get("rho1"), "rho2": done.get("rho2"),
                "reproduction_diverged": done["reproduction"]["diverged"] if done else None}
         row.update({f"state_{i + 1}": value for i, value in enumerate(event["state"])})
@@ -218,8 +259,9 @@ def _write_participant(out: Path, label: str, task: str, events: list[dict], sid
     columns = ["phase", "phase_index", "episode", "trial", "skill", "guidance_shown", "guidance_modality",
                *state_columns, "action_1", "action_2", "optimal_1", "optimal_2", "time_to_first_input",
                "drawing_duration", "response_time", "teaching_error", "rho1", "rho2", "reproduction_diverged"]
-    folder = out / f"sub-{label}" / "beh"
+    folder = out / f"sub-{label}" / (f"ses-{session}" if session else "") / "beh"
     folder.mkdir(parents=True)
-    _tsv(folder / f"sub-{label}_task-{task}_beh.tsv", columns, rows)
+    stem = f"sub-{label}" + (f"_ses-{session}" if session else "") + f"_task-{task}_beh"
+    _tsv(folder / f"{stem}.tsv", columns, rows)
     # Each file carries its own full data dictionary (the task-level one is the same, inherited).
-    _json(folder / f"sub-{label}_task-{task}_beh.json", sidecar)
+    _json(folder / f"{stem}.json", sidecar)

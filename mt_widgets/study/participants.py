@@ -11,11 +11,21 @@ block holds every group equally often, in an order drawn from a numpy ``SeedSequ
 protocol's assignment seed and the block number. So the k-th enrolment always gets the same
 group for a given protocol (reproducible), and after every complete block the groups are
 exactly balanced.
+
+IDs from a URL (an online participant, ``mt_widgets.study.online``) are checked by
+``validate_url_participant_id`` first: the message is for the participant (who did not type
+the ID), says that nothing was recorded, and never echoes control characters back.
+
+A returning participant (a protocol with more than one session) is recognised by their ID or
+by the re-entry code shown at the end of their previous session: ``new_reentry_code`` draws
+one (``XXXX-XXXX`` from an alphabet without look-alike characters), ``normalise_reentry_code``
+reads one typed back (case, spaces and the dash do not matter).
 """
 
 from __future__ import annotations
 
 import re
+import secrets
 import unicodedata
 
 import numpy as np
@@ -94,3 +104,67 @@ def block_assignment(index: int, groups, block_size: int, seed: int) -> str:
     rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(block,)))
     order = rng.permutation(np.repeat(np.arange(len(groups)), block_size // len(groups)))
     return groups[int(order[position])]
+
+
+#: Letters and digits of a re-entry code: no 0/O, 1/I/L, so a code read off a screen is typed back right.
+REENTRY_ALPHABET = "ABCDEFGHJKMNPQRSTUVWXYZ23456789"
+_REENTRY = re.compile(r"^[" + REENTRY_ALPHABET + r"]{8}$")
+
+
+def validate_url_participant_id(value, parameter: str = "participant") -> str:
+    """Checks a participant ID that came in a URL, before anything is written for it.
+
+    Args:
+        value: the parameter's value (None when the URL lacks it).
+        parameter: the parameter's name, for the message ("PROLIFIC_PID").
+
+    Returns:
+        The ID, which also passes ``validate_participant_id`` (it names a log file).
+
+    Raises:
+        ParticipantIdError: missing, empty, over-long, path-like ('/', '\\', ':', '..', a
+            leading '.' or '~'), control characters, or otherwise not a plain code; the
+            message is meant for the participant and says that nothing was recorded.
+    """
+    tail = " Please open the study with the link exactly as you were given it. Nothing was recorded."
+    if value is None:
+        raise ParticipantIdError(f"{parameter}: this link does not say who you are (no {parameter} in it).{tail}")
+    if not isinstance(value, str):
+        raise ParticipantIdError(f"{parameter}: expected text, got {type(value).__name__}.{tail}")
+    if value.strip() == "":
+        raise ParticipantIdError(f"{parameter}: this link gives an empty {parameter}.{tail}")
+    if len(value) > MAX_ID_LENGTH:
+        raise ParticipantIdError(f"{parameter}: this link's {parameter} is {len(value)} characters long, expected "
+                                 f"at most {MAX_ID_LENGTH}.{tail}")
+    if any(ord(ch) < 32 or 127 <= ord(ch) < 160 for ch in value):
+        raise ParticipantIdError(f"{parameter}: this link's {parameter} holds control characters.{tail}")
+    if any(ch in value for ch in "/\\:") or ".." in value or value[0] in ".~":
+        raise ParticipantIdError(f"{parameter}: this link's {parameter} looks like a file path, not an ID.{tail}")
+    try:
+        return validate_participant_id(value)
+    except ParticipantIdError as error:
+        reason = str(error).split(": ", 1)[-1]
+        raise ParticipantIdError(f"{parameter}: this link's {parameter} is not a usable ID ({reason}).{tail}") \
+            from None
+
+
+def new_reentry_code() -> str:
+    """A fresh re-entry code, e.g. "K7QM-3XRD" (40 bits from ``secrets``)."""
+    raw = "".join(secrets.choice(REENTRY_ALPHABET) for _ in range(8))
+    return raw[:4] + "-" + raw[4:]
+
+
+def normalise_reentry_code(code) -> str:
+    """A re-entry code as stored ("K7QM-3XRD") from what a participant typed ("k7qm 3xrd").
+
+    Raises:
+        TypeError: not text.
+        ValueError: not a code of this form, with a message for the participant.
+    """
+    if not isinstance(code, str):
+        raise TypeError(f"code: expected text, got {type(code).__name__}")
+    plain = re.sub(r"[\s-]", "", code).upper()
+    if not _REENTRY.match(plain):
+        raise ValueError("code: expected the 8-character code shown at the end of your last session (like "
+                         "K7QM-3XRD), got something else; check it and type it again")
+    return plain[:4] + "-" + plain[4:]

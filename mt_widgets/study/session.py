@@ -1,13 +1,8 @@
 """The session engine: a headless state machine that runs one participant through a protocol.
 
-The engine knows nothing of the paper beyond the protocol file. A protocol unrolls into a
-fixed timeline of steps::
-
-    welcome -> the protocol's [[before]] steps (consent right after the welcome when they
-    have none) -> instructions -> practice (if duration_s > 0)
-    -> for each phase: phase_intro
-         -> for each episode: demonstration x N -> episode_end -> reproduction
-    -> the protocol's [[after]] steps -> thank_you
+The engine knows nothing of the paper beyond the protocol file. A protocol session unrolls
+into a fixed timeline of steps (``mt_widgets.study.timeline``, which also draws each episode's
+query states); the log is replayed against it (``mt_widgets.study.replay``).
 
 A session can also end early: consent declined, screened out by an eligibility step, or
 withdrawn (``withdraw``, at any step). Then ``finished`` is True, ``ended`` names why, the
@@ -42,34 +37,32 @@ Driver API (the widget app, scripts and synthetic teachers all use this)::
 
 ``Session.lesson(protocol, group=...)`` runs the same engine unlogged, in memory, for lessons.
 
-Event types (besides ``seq``, ``type``, ``time``, ``participant``, ``study``):
+Sessions and returning participants (a protocol with ``[[sessions]]``,
+``mt_widgets.study.session_plan``)::
 
-- ``session_started``: software_version, protocol_hash, protocol_name, group, enrolment
-  (the enrolment record), lam, numpy_version, python_version.
-- ``session_resumed``: software_version, protocol_hash, at (the step resumed at),
-  repaired_torn_line (bytes of a torn last line ended by this resume; 0 if none).
-- ``screen_done``: screen (welcome, instructions, phase_intro, reproduction), phase_index,
-  phase, episode (where they apply).
-- ``consent_given``: step (the consent step's id, absent for the default consent);
-  ``consent_declined``: step.
-- ``step_done``: step (id), kind, and by kind: answers {item: value} (eligibility adds
-  eligible (bool)); watched_to_end (bool) and plays (int) for a video.
-- ``screened_out``: step, answers (the eligibility answers that ended the session).
-- ``withdrawn``: reason, data ("exclude" or "delete", the protocol's policy), at (the step).
-- ``practice_started``: skill, duration_s; ``practice_finished``: duration_s (as measured
-  by the caller, seconds).
-- ``episode_started``: phase, phase_index, episode (1-based), skill, guidance (bool),
-  n_demonstrations, query_states (N x state_dim), features (N x S), theta (R x S), lam,
-  optimal (N x R), exact (bool), guidance_modality, seed {study_seed, spawn_key}.
-- ``demonstration``: phase, phase_index, episode, index (0-based), state, action, optimal,
-  guidance_shown (bool), time_to_first_input_s, drawing_duration_s, response_time_s (from
-  the state's appearance to the submission, measured by the engine), input (method, redraws,
-  ... as given by the caller).
-- ``episode_finished``: phase, phase_index, episode, skill, guidance, actions (N x R),
-  optimal, theta_hat (R x S), teaching_error, rho1, rho2, bound, residual, contributions
-  (N,), exact, reproduction {diverged, diverged_at, final_position, duration_s}, started_at,
-  duration_s (wall clock from episode_started, interruptions included).
-- ``session_finished``.
+    session = Session.arrive(study, "P07", now=now)          # or reentry_code="K7QM-3XRD"
+    # a new ID: enrolled and started on the first session; an unfinished session: resumed;
+    # a finished one followed by another: the next one if ``now`` is in its window, else the
+    # protocol's rule: WindowError (.message, .check.opens_at) or started and flagged
+    # (session.window["status"] == "late"). session.plan is the ProtocolSession shown.
+    step = session.current_step()                             # at the end: step.kind == "thank_you",
+    step.reentry_code, step.next_session                      # the code to come back with
+
+    study.participants()                                      # blinded rows: no group, no code
+
+Online participants (``[online]``, ``mt_widgets.study.online``)::
+
+    arrival = protocol.online.participant_from_url(query)     # ParticipantIdError: nothing written
+    session = Session.arrive(study, arrival.participant_id, parameters=arrival.parameters)
+    ...
+    protocol.online.completion_url(outcome_of(session))       # completed / screened_out / ...
+
+A later session's log is ``<ID>.ses-<session>.jsonl`` beside ``<ID>.jsonl`` (the first), with
+the same event types; its ``session_started`` adds ``session``, and when the arrival was
+checked against a window, ``window`` (``WindowCheck.as_dict()``) and ``arrived_at``.
+
+The events it writes, the schema version they carry and the migration of older logs:
+``mt_widgets.study.schema``.
 """
 
 from __future__ import annotations
@@ -83,12 +76,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import mt_widgets
-from mt_widgets.core import SeedSchedule, TeachingEpisode
-from mt_widgets.core.validation import as_count, as_positive
+from mt_widgets.core import TeachingEpisode
+from mt_widgets.core.validation import as_bool, as_count, as_positive
 
-from .log import LogError, MemoryLog, ParticipantLog, StudyFolder, to_jsonable
+from .log import LogError, MemoryLog, ParticipantLog, read_events, to_jsonable
 from .protocol import Phase, Protocol
+from .replay import describe, replay
+from .schema import LOG_FORMAT, migrate_events
+from .session_plan import as_utc
 from .steps import StudyStep
+from .study_folder import StudyFolder
+from .timeline import ENDING_EVENTS, Slot, StepKind, episode_query_states, timeline  # noqa: F401 (ENDING_EVENTS: public here since format 1)
 
 #: Timing keys ``submit_demonstration`` reads (seconds, None when unknown).
 TIMING_KEYS = ("time_to_first_input_s", "drawing_duration_s")
@@ -98,42 +96,18 @@ class SessionStateError(RuntimeError):
     """A driver call that does not fit the current step (e.g. a second submission)."""
 
 
-@dataclass(frozen=True)
-class _Slot:
-    kind: str
-    phase_index: int | None = None
-    episode: int | None = None   # 1-based within the phase
-    index: int | None = None     # 0-based demonstration within the episode
+class WindowError(LogError):
+    """A participant who came back outside their next session's window, where the protocol refuses.
 
-
-#: Events that end a session before the thank-you, and the text key each ends with.
-ENDING_EVENTS = {"consent_declined": "declined", "screened_out": "ineligible", "withdrawn": "withdrawn"}
-
-
-def timeline(protocol: Protocol, around_task: bool = True) -> list[_Slot]:
-    """The protocol unrolled into the steps a participant goes through, in order.
-
-    A step of the protocol's ``before`` / ``after`` lists is ``_Slot("step", index=i)`` with i
-    its index in ``protocol.steps``. ``around_task=False`` leaves those steps out (a lesson
-    runs the task only: welcome, the default consent, instructions, practice, the phases).
+    Attributes:
+        check: the ``WindowCheck`` (status "early" or "late", opens_at, closes_at, delay_s).
+        session: the id of the session refused.
+        message: the words for the participant (the protocol's too_early_text / too_late_text).
     """
-    before = protocol.before if around_task else ()
-    slots = [_Slot("welcome")]
-    if not any(step.kind == "consent" for step in before):
-        slots.append(_Slot("consent"))
-    slots += [_Slot("step", index=i) for i in range(len(before))]
-    slots.append(_Slot("instructions"))
-    if protocol.practice.duration_s > 0:
-        slots.append(_Slot("practice"))
-    for phase in protocol.phases:
-        slots.append(_Slot("phase_intro", phase.index))
-        for episode in range(1, phase.episodes + 1):
-            slots += [_Slot("demonstration", phase.index, episode, i) for i in range(phase.demonstrations)]
-            slots += [_Slot("episode_end", phase.index, episode), _Slot("reproduction", phase.index, episode)]
-    if around_task:
-        slots += [_Slot("step", index=len(protocol.before) + j) for j in range(len(protocol.after))]
-    slots.append(_Slot("thank_you"))
-    return slots
+
+    def __init__(self, check, session: str):
+        self.check, self.session, self.message = check, session, check.message
+        super().__init__(check.message)
 
 
 @dataclass(frozen=True)
@@ -206,6 +180,9 @@ class Step:
             is built (one SVD) and rolled out once. A view demonstrates into it (after a resume
             it first restores the step's ``actions``); without a view the session records the
             logged actions into it when it finishes the episode.
+        reentry_code: at the thank-you of a session that another follows, the code the
+            participant notes to come back with (their ID works too); None otherwise.
+        next_session: there too, {"id": the next session, "window": when, in words}.
     """
 
     kind: str
@@ -228,6 +205,8 @@ class Step:
     practice_reproduction: bool = True
     ended: str | None = None
     teaching_episode: TeachingEpisode | None = field(default=None, repr=False, compare=False)
+    reentry_code: str | None = None
+    next_session: dict | None = None
 
 
 def _parse_time(stamp: str) -> float:
@@ -243,36 +222,45 @@ class Session:
     """One participant's run through a protocol. Build with ``start``, ``resume`` or ``lesson``."""
 
     def __init__(self, protocol: Protocol, log, group: str, enrolment: dict, folder: StudyFolder | None = None,
-                 around_task: bool = True):
+                 around_task: bool = True, session: str | None = None):
         self.protocol, self.log, self.group, self.enrolment, self.folder = protocol, log, group, enrolment, folder
-        self._slots = timeline(protocol, around_task)
-        self._position = 0
-        self._episodes: dict[tuple[int, int], dict] = {}
-        self._actions: dict[tuple[int, int], list[np.ndarray]] = {}
-        self._finished_episodes: dict[tuple[int, int], dict] = {}
+        #: The ``ProtocolSession`` this engine runs (the participant sees this session only).
+        self.plan = protocol.session(session)
+        #: Where the arrival fell in the session's window (``WindowCheck.as_dict()``), or None.
+        self.window: dict | None = None
+        self._slots = timeline(protocol, around_task, self.plan.id)
+        replayed = replay(migrate_events(log.events, protocol.sessions[0].id, str(log.path or "<memory>")),
+                          self._slots, self.plan)
+        self._position = replayed.position
+        self._episodes: dict[tuple[int, int], dict] = replayed.episodes
+        self._actions: dict[tuple[int, int], list[np.ndarray]] = replayed.actions
+        self._finished_episodes: dict[tuple[int, int], dict] = replayed.finished
         self._teaching_episodes: dict[tuple[int, int], TeachingEpisode] = {}
-        self._ended: str | None = None
+        self._ended: str | None = replayed.ended
         self._entered_at = time.monotonic()
-        self._replay(log.events)
 
     # -- construction -----------------------------------------------------------------------------
     @classmethod
-    def start(cls, study: StudyFolder, participant_id: str, group: str | None = None) -> Session:
-        """Enrols a new participant (validating the ID, assigning the group) and starts their log.
+    def start(cls, study: StudyFolder, participant_id: str, group: str | None = None,
+              parameters: dict | None = None) -> Session:
+        """Enrols a new participant (validating the ID, assigning the group) and starts their log
+        of the protocol's first session.
 
         Args:
             study: the study folder.
             participant_id: a new pseudonymous ID.
             group: None for the protocol's block randomisation, or the experimenter's choice.
+            parameters: identifying URL parameters to record with the enrolment (online).
         """
         if not isinstance(study, StudyFolder):
             raise ValueError(f"study: expected a StudyFolder, got {type(study).__name__}")
-        enrolment = study.enrol(participant_id, group)
+        enrolment = study.enrol(participant_id, group, parameters=parameters)
         log = ParticipantLog.create(study.log_path(participant_id), study.meta["study"])
         return cls._begin(study, log, enrolment)
 
     @classmethod
-    def resume(cls, study: StudyFolder, participant_id: str, lock_timeout_s: float = 3.0) -> Session:
+    def resume(cls, study: StudyFolder, participant_id: str, lock_timeout_s: float = 3.0,
+               session: str | None = None) -> Session:
         """Continues an enrolled participant at the first step their log does not record.
 
         Args:
@@ -281,46 +269,131 @@ class Session:
             lock_timeout_s: how long to wait for the participant's lock, which a writer holds
                 only while it writes one event. An older session of the same participant (a
                 reloaded page's kernel still alive) is taken over: its next write is refused.
+            session: which protocol session (None: the latest one the participant started).
         """
         if not isinstance(study, StudyFolder):
             raise ValueError(f"study: expected a StudyFolder, got {type(study).__name__}")
         enrolment = study.enrolment(participant_id)
+        cls._refuse_lost(study, participant_id)
+        if session is None:
+            started = [s.id for s in study.protocol.sessions if study.log_path(participant_id, s.id).exists()]
+            session = started[-1] if started else study.protocol.sessions[0].id
+        path = study.log_path(participant_id, session)
+        try:
+            log = ParticipantLog.open(path, lock_timeout_s=lock_timeout_s)
+        except LogError:
+            if path.exists() or session != study.protocol.sessions[0].id:
+                raise
+            # Enrolled, then stopped before the log was created: start the log now.
+            log = ParticipantLog.create(path, study.meta["study"], lock_timeout_s=lock_timeout_s)
+        log.study = study.meta["study"]
+        if not log.events:
+            return cls._begin(study, log, enrolment, session)
+        first = log.events[0]
+        if first.get("type") != "session_started" or first.get("protocol_hash") != study.protocol.hash:
+            log.close()
+            raise LogError(f"participant {participant_id!r}: the log was not started with this study's protocol "
+                           f"({study.protocol.hash[:19]}...); it will not be continued")
+        session_ = cls(study.protocol, log, first["group"], enrolment, study, session=session)
+        session_.window = first.get("window")
+        log.append("session_resumed", format=LOG_FORMAT, software_version=mt_widgets.__version__,
+                   protocol_hash=study.protocol.hash,
+                   at=session_._describe(session_._slot), repaired_torn_line=log.repaired_torn_bytes)
+        session_._enter()
+        return session_
+
+    @staticmethod
+    def _refuse_lost(study: StudyFolder, participant_id: str) -> None:
         left = study.outcomes().get(participant_id)
         if left is not None:
             what = {"withdrawn": "withdrew from the study", "declined": "declined consent",
                     "ineligible": "was screened out as ineligible", "dropped_out": "was marked as dropped out"}
             raise LogError(f"participant_id: {participant_id!r} {what[left['outcome']]} ({left['at']}); their "
                            f"session cannot be resumed. Enrol a new participant ID for a new person.")
-        path = study.log_path(participant_id)
-        try:
-            log = ParticipantLog.open(path, lock_timeout_s=lock_timeout_s)
-        except LogError:
-            if path.exists():
-                raise
-            # Enrolled, then stopped before the log was created: start the log now.
-            log = ParticipantLog.create(path, study.meta["study"], lock_timeout_s=lock_timeout_s)
-        log.study = study.meta["study"]
-        if not log.events:
-            return cls._begin(study, log, enrolment)
-        first = log.events[0]
-        if first.get("type") != "session_started" or first.get("protocol_hash") != study.protocol.hash:
-            log.close()
-            raise LogError(f"participant {participant_id!r}: the log was not started with this study's protocol "
-                           f"({study.protocol.hash[:19]}...); it will not be continued")
-        session = cls(study.protocol, log, first["group"], enrolment, study)
-        log.append("session_resumed", software_version=mt_widgets.__version__, protocol_hash=study.protocol.hash,
-                   at=session._describe(session._slot), repaired_torn_line=log.repaired_torn_bytes)
-        session._enter()
-        return session
 
     @classmethod
-    def _begin(cls, study, log, enrolment) -> Session:
-        log.append("session_started", software_version=mt_widgets.__version__, protocol_hash=study.protocol.hash,
-                   protocol_name=study.protocol.name, group=enrolment["group"], enrolment=enrolment,
-                   lam=study.protocol.lam, numpy_version=np.__version__, python_version=platform.python_version())
-        session = cls(study.protocol, log, enrolment["group"], enrolment, study)
-        session._enter()
-        return session
+    def arrive(cls, study: StudyFolder, participant_id: str | None = None, *, reentry_code: str | None = None,
+               now=None, group: str | None = None, parameters: dict | None = None,
+               enrol_new: bool = True) -> Session:
+        """The right session for a participant who arrives now: starts, resumes or refuses.
+
+        - A new ID (when ``enrol_new``): enrolled (randomised unless ``group``) and started on
+          the first session.
+        - An enrolled participant (by ID, or by the re-entry code shown at the end of their
+          previous session) whose current session is unfinished: resumed there.
+        - One whose session is finished and whom another session follows: that session
+          starts if ``now`` is inside its window; outside it, the protocol's rule: "refuse"
+          raises ``WindowError`` with the words to show (nothing is written), "flag" starts it
+          and the ``session_started`` event (and ``session.window``) says it is early or late.
+        - One who completed the last session: that session, finished (its thank-you).
+
+        The group is the enrolment's, in every session.
+
+        Args:
+            study: the study folder.
+            participant_id: the participant's ID, or None when ``reentry_code`` is given.
+            reentry_code: the code shown at the end of a previous session ("K7QM-3XRD").
+            now: the arrival time, an aware datetime (None: the clock; tests pass their own).
+            group: the experimenter's choice for a new participant (None: randomised).
+            parameters: identifying URL parameters recorded with a new enrolment.
+            enrol_new: False refuses an ID that is not enrolled (a follow-up-only page).
+
+        Raises:
+            WindowError: outside the window of a session whose protocol says "refuse".
+            LogError: an unknown code, an unknown ID when ``enrol_new`` is False, or a participant
+                who withdrew, declined or was screened out.
+        """
+        if not isinstance(study, StudyFolder):
+            raise ValueError(f"study: expected a StudyFolder, got {type(study).__name__}")
+        enrol_new = as_bool("enrol_new", enrol_new)
+        now = as_utc(now)
+        if (participant_id is None) == (reentry_code is None):
+            raise ValueError("participant_id, reentry_code: expected exactly one of them")
+        if reentry_code is not None:
+            participant_id = study.participant_for_code(reentry_code)
+        if participant_id not in study.participant_ids():
+            if not enrol_new:
+                raise LogError(f"participant_id: {participant_id!r} is not enrolled in this study")
+            return cls.start(study, participant_id, group=group, parameters=parameters)
+        cls._refuse_lost(study, participant_id)
+        sessions = study.protocol.sessions
+        for position, plan in enumerate(sessions):
+            path = study.log_path(participant_id, plan.id)
+            if not path.exists():
+                if position == 0:
+                    return cls.resume(study, participant_id, session=plan.id)
+                break
+            events, _ = read_events(path)
+            finished = [e for e in events if e["type"] == "session_finished"]
+            if not finished or position == len(sessions) - 1:
+                return cls.resume(study, participant_id, session=plan.id)
+            previous_end = finished[0]["time"]
+        else:  # pragma: no cover - the loop returns at the last session
+            raise AssertionError("unreachable")
+        check = plan.window.check(_dt.datetime.fromisoformat(previous_end.replace("Z", "+00:00")), now)
+        if check.action == "refuse":
+            raise WindowError(check, plan.id)
+        enrolment = study.enrolment(participant_id)
+        log = ParticipantLog.create(path, study.meta["study"])
+        return cls._begin(study, log, enrolment, plan.id, window=check.as_dict(), arrived_at=now)
+
+    @classmethod
+    def _begin(cls, study, log, enrolment, session: str | None = None, window: dict | None = None,
+               arrived_at=None) -> Session:
+        plan = study.protocol.session(session)
+        extra = {}
+        if window is not None:
+            extra.update(window=window, arrived_at=as_utc(arrived_at).isoformat(timespec="milliseconds")
+                         .replace("+00:00", "Z"))
+        log.append("session_started", format=LOG_FORMAT, session=plan.id, software_version=mt_widgets.__version__,
+                   protocol_hash=study.protocol.hash, protocol_name=study.protocol.name, group=enrolment["group"],
+                   enrolment=enrolment,
+                   lam=study.protocol.lam, numpy_version=np.__version__, python_version=platform.python_version(),
+                   **extra)
+        session_ = cls(study.protocol, log, enrolment["group"], enrolment, study, session=plan.id)
+        session_.window = window
+        session_._enter()
+        return session_
 
     @classmethod
     def lesson(cls, protocol: Protocol, group: str | None = None, participant: str = "lesson") -> Session:
@@ -339,100 +412,43 @@ class Session:
             raise ValueError(f"group: expected one of {list(protocol.groups)}, got {group!r}")
         log = MemoryLog(participant, protocol.name)
         enrolment = {"participant": participant, "index": 0, "group": group, "method": "lesson"}
-        log.append("session_started", software_version=mt_widgets.__version__, protocol_hash=protocol.hash,
-                   protocol_name=protocol.name, group=group, enrolment=enrolment, lam=protocol.lam,
+        log.append("session_started", format=LOG_FORMAT, session=protocol.sessions[0].id,
+                   software_version=mt_widgets.__version__, protocol_hash=protocol.hash, protocol_name=protocol.name,
+                   group=group, enrolment=enrolment, lam=protocol.lam,
                    numpy_version=np.__version__, python_version=platform.python_version())
         # A lesson is the task only: the study's video, forms and questionnaires are for participants.
         session = cls(protocol, log, group, enrolment, around_task=False)
         session._enter()
         return session
 
-    # -- replay --------------------------------------------------------------------------------------
-    def _completes(self, event: dict) -> _Slot | None:
-        kind = event["type"]
-        if kind == "screen_done":
-            return _Slot(event["screen"], event.get("phase_index"), event.get("episode"))
-        if kind == "consent_given":
-            return self._step_slot(event["step"]) if event.get("step") else _Slot("consent")
-        if kind == "step_done":
-            return self._step_slot(event["step"])
-        if kind == "practice_finished":
-            return _Slot("practice")
-        if kind == "demonstration":
-            return _Slot("demonstration", event["phase_index"], event["episode"], event["index"])
-        if kind == "episode_finished":
-            return _Slot("episode_end", event["phase_index"], event["episode"])
-        return None
-
-    def _step_slot(self, step_id: str) -> _Slot:
-        ids = [step.id for step in self.protocol.steps]
-        if step_id not in ids:
-            raise LogError(f"step {step_id!r} in the log is not a step of this protocol ({ids})")
-        return _Slot("step", index=ids.index(step_id))
-
-    def _replay(self, events: list[dict]) -> None:
-        for event in events:
-            if event["type"] in ENDING_EVENTS:
-                self._ended = ENDING_EVENTS[event["type"]]
-                continue
-            slot = self._completes(event)
-            if event["type"] == "episode_started":
-                self._episodes[(event["phase_index"], event["episode"])] = event
-                continue
-            if slot is None:
-                continue
-            expected = self._slots[self._position] if self._position < len(self._slots) else None
-            if slot != expected:
-                raise LogError(f"event seq {event['seq']} ({event['type']}) completes {self._describe(slot)}, "
-                               f"but the protocol expects {self._describe(expected)} next; the log does not match "
-                               f"this protocol or holds a duplicate")
-            if slot.kind == "demonstration":
-                self._actions.setdefault((slot.phase_index, slot.episode), []).append(np.asarray(event["action"]))
-            if slot.kind == "episode_end":
-                self._finished_episodes[(slot.phase_index, slot.episode)] = event
-            self._position += 1
-
-    def _describe(self, slot: _Slot | None) -> str:
-        if slot is None:
-            return "the end of the protocol"
-        if slot.kind == "step":
-            step = self.protocol.steps[slot.index]
-            return f"{step.kind} step {step.id!r}"
-        where = []
-        if slot.phase_index is not None:
-            where.append(self.protocol.phases[slot.phase_index].id)
-        if slot.episode is not None:
-            where.append(f"episode {slot.episode}")
-        if slot.index is not None:
-            where.append(f"demonstration {slot.index + 1}")
-        return slot.kind + (f" ({', '.join(where)})" if where else "")
+    def _describe(self, slot: Slot | None) -> str:
+        return describe(slot, self.plan)
 
     # -- entering a step ----------------------------------------------------------------------------
     @property
-    def _slot(self) -> _Slot:
+    def _slot(self) -> Slot:
         return self._slots[self._position]
 
-    def _phase(self, slot: _Slot) -> Phase:
-        return self.protocol.phases[slot.phase_index]
+    def _phase(self, slot: Slot) -> Phase:
+        return self.plan.phases[slot.phase_index]
 
     def _enter(self) -> None:
         """Logs what a step needs before it is shown (query states, practice start, the end)."""
         slot = self._slot
         self._entered_at = time.monotonic()
-        if slot.kind == "demonstration" and (slot.phase_index, slot.episode) not in self._episodes:
+        if slot.kind == StepKind.DEMONSTRATION and (slot.phase_index, slot.episode) not in self._episodes:
             self._start_episode(slot)
-        elif slot.kind == "practice":
+        elif slot.kind == StepKind.PRACTICE:
             self.log.append("practice_started", skill=self.protocol.practice.skill,
                             duration_s=self.protocol.practice.duration_s)
-        elif slot.kind == "thank_you" and not any(e["type"] == "session_finished" for e in self.log.events):
+        elif slot.kind == StepKind.THANK_YOU and not any(e["type"] == "session_finished" for e in self.log.events):
             self.log.append("session_finished")
 
-    def _start_episode(self, slot: _Slot) -> None:
+    def _start_episode(self, slot: Slot) -> None:
         phase = self._phase(slot)
         skill = self.protocol.skills[phase.skill]
-        participant = self.enrolment["index"] if self.protocol.query_states == "per-participant" else None
-        seed = SeedSchedule(self.protocol.seed).seed(phase.states_index, slot.episode - 1, participant)
-        states = skill.query_states(seed=seed, n=phase.demonstrations)
+        states, seed = episode_query_states(self.protocol, phase.states_index, slot.episode, phase.demonstrations,
+                                            phase.skill, participant=self.enrolment["index"])
         teaching = self._new_teaching_episode(skill, states)
         event = self.log.append(
             "episode_started", phase=phase.id, phase_index=phase.index, episode=slot.episode, skill=phase.skill,
@@ -454,12 +470,12 @@ class Session:
     def finished(self) -> bool:
         """True when nothing is left to do: at the thank-you step (every step of the protocol is
         logged), or once the session ended early (``ended``)."""
-        return self._ended is not None or self._slot.kind == "thank_you"
+        return self._ended is not None or self._slot.kind == StepKind.THANK_YOU
 
     @property
     def completed(self) -> bool:
         """True at the thank-you step of a session that did not end early."""
-        return self._ended is None and self._slot.kind == "thank_you"
+        return self._ended is None and self._slot.kind == StepKind.THANK_YOU
 
     @property
     def ended(self) -> str | None:
@@ -475,39 +491,43 @@ class Session:
         done = len(self._finished_episodes)
         slot = self._slot
         in_episode = len(self._actions.get((slot.phase_index, slot.episode), [])) if slot.episode else 0
-        return {"episodes_done": done, "episodes_total": self.protocol.n_episodes,
+        return {"episodes_done": done, "episodes_total": self.plan.n_episodes,
                 "demonstrations_done": in_episode}
 
     def current_step(self) -> Step:
         """The step to show now (see ``Step``)."""
         slot = self._slot
-        texts = self.protocol.texts
+        texts = self.plan.texts
         if self._ended is not None:
             return Step("ended", texts[self._ended], ended=self._ended)
+        if slot.kind == StepKind.THANK_YOU and self.plan.index + 1 < len(self.protocol.sessions):
+            upcoming = self.protocol.sessions[self.plan.index + 1]
+            return Step("thank_you", texts["thank_you"], reentry_code=self.enrolment.get("reentry_code"),
+                        next_session={"id": upcoming.id, "window": upcoming.window.describe()})
         if slot.kind in ("welcome", "consent", "instructions", "thank_you"):
             return Step(slot.kind, texts[slot.kind])
-        if slot.kind == "step":
-            step = self.protocol.steps[slot.index]
+        if slot.kind == StepKind.STEP:
+            step = self.plan.steps[slot.index]
             return Step(step.kind, step.text, study_step=step)
-        if slot.kind == "practice":
+        if slot.kind == StepKind.PRACTICE:
             practice = self.protocol.practice
             return Step("practice", practice.text, skill=practice.skill, duration_s=practice.duration_s,
                         practice_reproduction=practice.reproduction)
         phase = self._phase(slot)
         common = dict(phase=phase.id, phase_index=phase.index, n_episodes=phase.episodes,
                       n_demonstrations=phase.demonstrations, skill=phase.skill)
-        if slot.kind == "phase_intro":
+        if slot.kind == StepKind.PHASE_INTRO:
             return Step("phase_intro", phase.instructions, **common)
         key = (slot.phase_index, slot.episode)
         started = self._episodes[key]
         states = np.asarray(started["query_states"], dtype=float)
         actions = tuple(self._actions.get(key, []))
         common.update(episode=slot.episode, query_states=states, actions=actions, guidance=started["guidance"],
-                      guidance_modality=started.get("guidance_modality", "arrows+words"),
+                      guidance_modality=started["guidance_modality"],
                       teaching_episode=self._teaching_episode(key))
-        if slot.kind == "demonstration":
+        if slot.kind == StepKind.DEMONSTRATION:
             return Step("demonstration", **common, index=slot.index, state=states[slot.index])
-        if slot.kind == "episode_end":
+        if slot.kind == StepKind.EPISODE_END:
             return Step("episode_end", **common)
         return Step("reproduction", texts["reproduction"], **common, result=self._result(key))
 
@@ -540,11 +560,11 @@ class Session:
                              event["reproduction"]["diverged"], self._teaching_episode(key))
 
     # -- driving --------------------------------------------------------------------------------------
-    def _expect(self, call: str, *kinds: str) -> _Slot:
+    def _expect(self, call: str, *kinds: str) -> Slot:
         slot = self._slot
         if self._ended is not None:
             raise SessionStateError(f"{call}: the session ended ({self._ended}); nothing more is recorded")
-        kind = self.protocol.steps[slot.index].kind if slot.kind == "step" else slot.kind
+        kind = self.plan.steps[slot.index].kind if slot.kind == StepKind.STEP else slot.kind
         if kind not in kinds:
             raise SessionStateError(f"{call}: expected the current step to be {' or '.join(kinds)}, it is "
                                     f"{self._describe(slot)}")
@@ -562,13 +582,13 @@ class Session:
         """
         slot = self._expect("advance", "welcome", "consent", "instructions", "phase_intro", "reproduction", "text",
                             "information")
-        if slot.kind == "step":
-            step = self.protocol.steps[slot.index]
+        if slot.kind == StepKind.STEP:
+            step = self.plan.steps[slot.index]
             if step.kind == "consent":
                 self.log.append("consent_given", step=step.id)
             else:
                 self.log.append("step_done", step=step.id, kind=step.kind)
-        elif slot.kind == "consent":
+        elif slot.kind == StepKind.CONSENT:
             self.log.append("consent_given")
         else:
             fields = {}
@@ -583,7 +603,7 @@ class Session:
     def decline_consent(self) -> Step:
         """"I do not agree": ends the session (logged; the participant is kept out of the analysis)."""
         slot = self._expect("decline_consent", "consent")
-        step_id = self.protocol.steps[slot.index].id if slot.kind == "step" else None
+        step_id = self.plan.steps[slot.index].id if slot.kind == StepKind.STEP else None
         self.log.append("consent_declined", step=step_id)
         self._end("declined", step=step_id)
         return self.current_step()
@@ -598,7 +618,7 @@ class Session:
             The next step; an "ended" step when an eligibility answer screens the participant out.
         """
         slot = self._expect("submit_answers", "eligibility", "demographics", "questionnaire")
-        step = self.protocol.steps[slot.index]
+        step = self.plan.steps[slot.index]
         answers = step.check_answers(answers)
         if step.kind == "eligibility":
             eligible = all(item.is_eligible(answers[item.id]) for item in step.items)
@@ -620,7 +640,7 @@ class Session:
             plays: how many times it was started (replays included).
         """
         slot = self._expect("finish_video", "video")
-        step = self.protocol.steps[slot.index]
+        step = self.plan.steps[slot.index]
         if not isinstance(watched_to_end, bool):
             raise TypeError(f"watched_to_end: expected a bool, got {type(watched_to_end).__name__}")
         plays = as_count("plays", plays, minimum=0)
@@ -646,9 +666,9 @@ class Session:
         self.log.append("withdrawn", reason=reason, data=policy, at=at)
         self._end("withdrawn", reason=reason, data=policy, step_reached=at)
         if policy == "delete" and self.folder is not None:
-            path = self.folder.log_path(self.participant)
             self.log.close()
-            path.unlink(missing_ok=True)
+            for plan in self.protocol.sessions:
+                self.folder.log_path(self.participant, plan.id).unlink(missing_ok=True)
         return self.current_step()
 
     def _end(self, ending: str, **fields) -> None:
@@ -714,11 +734,12 @@ class Session:
         self.log.append("demonstration", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
                         index=slot.index, state=np.asarray(started["query_states"])[slot.index], action=action,
                         optimal=optimal, guidance_shown=started["guidance"], **measured,
-                        response_time_s=time.monotonic() - self._entered_at, input=timings)
+                        response_time_s=time.monotonic() - self._entered_at, input=timings,
+                        modality="hand" if timings.get("method") == "hand" else "drawn")
         self._actions.setdefault(key, []).append(action)
         self._complete()
         return Feedback(slot.index, started["guidance"], optimal.copy() if started["guidance"] else None, action,
-                        started.get("guidance_modality", "arrows+words"))
+                        started["guidance_modality"])
 
     def finish_episode(self, episode: TeachingEpisode | None = None) -> EpisodeResult:
         """Records the finished episode (what was learnt, its error and its reproduction) in the log.

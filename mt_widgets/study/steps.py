@@ -177,7 +177,7 @@ class StudyStep:
 
 
 def parse_steps(check, raw: dict, position: str, protocol_folder: Path | None, ids: set,
-                check_files: bool = True) -> tuple[StudyStep, ...]:
+                check_files: bool = True, prefix: tuple = ()) -> tuple[StudyStep, ...]:
     """Validates the ``[[before]]`` or ``[[after]]`` tables of a protocol.
 
     Args:
@@ -189,14 +189,15 @@ def parse_steps(check, raw: dict, position: str, protocol_folder: Path | None, i
             a relative file cannot be found).
         ids: the step ids taken so far (updated).
         check_files: refuse a video file that does not exist.
+        prefix: where ``raw`` is in the protocol (("sessions", 1) for a later session's steps).
     """
     check_files = as_bool("check_files", check_files)
     entries = raw.get(position, [])
     if not isinstance(entries, list) or any(not isinstance(e, dict) for e in entries):
-        check.fail((position,), f"expected a list of [[{position}]] tables, got {type(entries).__name__}")
+        check.fail(prefix + (position,), f"expected a list of [[{position}]] tables, got {type(entries).__name__}")
     steps = []
     for i, entry in enumerate(entries):
-        path = (position, i)
+        path = prefix + (position, i)
         step_id = check.get(entry, path + ("id",), "text", name=True)
         if step_id in ids:
             check.fail(path + ("id",), f"expected a unique step id, got {step_id!r} again")

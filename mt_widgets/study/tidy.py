@@ -3,12 +3,13 @@
 Rows are rebuilt from the logs alone (``study.json`` and each ``<participant>.jsonl``), with
 the standard library: analysis code may load the CSVs with pandas, the runner never needs it.
 
-episodes.csv columns (``EPISODE_COLUMNS``): study, participant, group, phase, phase_index
+episodes.csv columns (``EPISODE_COLUMNS``): study, participant, group, session (the protocol
+session's id, "main" for a one-session protocol), phase, phase_index
 (0-based), episode (1-based within the phase), skill, guidance (0/1), n_demonstrations,
 teaching_error, rho1, rho2, theta_hat (JSON list of rows), reproduction_diverged (0/1),
 started_at (ISO 8601 UTC), duration_s.
 
-demonstrations.csv columns (``DEMONSTRATION_COLUMNS``): study, participant, group, phase,
+demonstrations.csv columns (``DEMONSTRATION_COLUMNS``): study, participant, group, session, phase,
 phase_index, episode, index (0-based), skill, state (JSON list), action_1, action_2,
 optimal_1, optimal_2, guidance_shown (0/1), time_to_first_input_s, drawing_duration_s
 (empty when unknown).
@@ -26,13 +27,15 @@ import csv
 import json
 from pathlib import Path
 
-from .log import OUTCOME_FILE, STUDY_FILE, read_events
+from .log import read_log
+from .schema import migrate_study_meta
+from .study_folder import OUTCOME_FILE, STUDY_FILE
 
-EPISODE_COLUMNS = ("study", "participant", "group", "phase", "phase_index", "episode", "skill", "guidance",
+EPISODE_COLUMNS = ("study", "participant", "group", "session", "phase", "phase_index", "episode", "skill", "guidance",
                    "n_demonstrations", "teaching_error", "rho1", "rho2", "theta_hat", "reproduction_diverged",
                    "started_at", "duration_s")
-DEMONSTRATION_COLUMNS = ("study", "participant", "group", "phase", "phase_index", "episode", "index", "skill",
-                         "state", "action_1", "action_2", "optimal_1", "optimal_2", "guidance_shown",
+DEMONSTRATION_COLUMNS = ("study", "participant", "group", "session", "phase", "phase_index", "episode", "index",
+                         "skill", "state", "action_1", "action_2", "optimal_1", "optimal_2", "guidance_shown",
                          "time_to_first_input_s", "drawing_duration_s")
 
 
@@ -61,7 +64,8 @@ def read_study(study_folder) -> tuple[list[dict], list[dict]]:
     Returns:
         (episodes, demonstrations): lists of dicts keyed by ``EPISODE_COLUMNS`` and
         ``DEMONSTRATION_COLUMNS``; numbers as Python numbers, JSON columns as JSON text,
-        unknown timings as None. Sorted by participant, then by order in the protocol.
+        unknown timings as None. Sorted by participant, then by order in the protocol
+        (sessions, then each session's order).
 
     Raises:
         FileNotFoundError: the folder has no ``study.json``.
@@ -69,17 +73,21 @@ def read_study(study_folder) -> tuple[list[dict], list[dict]]:
     folder = Path(study_folder)
     if not (folder / STUDY_FILE).is_file():
         raise FileNotFoundError(f"study_folder: expected a study folder with {STUDY_FILE}, got {folder}")
-    study = json.loads((folder / STUDY_FILE).read_text(encoding="utf-8"))["study"]
+    meta = migrate_study_meta(json.loads((folder / STUDY_FILE).read_text(encoding="utf-8")), str(folder / STUDY_FILE))
+    study = meta["study"]
+    sessions = [entry["id"] for entry in meta["protocol"].get("sessions", [])]
+    first_session = meta["protocol"].get("session", "main")  # the protocol's own default (protocol.py)
+    order = {name: i for i, name in enumerate([first_session, *sessions])}
     episodes: list[dict] = []
     demonstrations: list[dict] = []
     excluded = excluded_participants(folder)
     for path in participant_logs(folder):
-        events, _ = read_events(path)
+        events = read_log(path, first_session)
         if not events or events[0]["type"] != "session_started" or events[0]["participant"] in excluded:
             continue
         if any(event["type"] in ("withdrawn", "consent_declined", "screened_out") for event in events):
             continue
-        participant, group = events[0]["participant"], events[0]["group"]
+        participant, group, session = events[0]["participant"], events[0]["group"], events[0]["session"]
         started = {}
         for event in events:
             kind = event["type"]
@@ -88,24 +96,29 @@ def read_study(study_folder) -> tuple[list[dict], list[dict]]:
             elif kind == "demonstration":
                 episode = started[(event["phase_index"], event["episode"])]
                 demonstrations.append({
-                    "study": study, "participant": participant, "group": group, "phase": event["phase"],
-                    "phase_index": event["phase_index"], "episode": event["episode"], "index": event["index"],
+                    "study": study, "participant": participant, "group": group, "session": session,
+                    "phase": event["phase"], "phase_index": event["phase_index"], "episode": event["episode"],
+                    "index": event["index"],
                     "skill": episode["skill"], "state": json.dumps(event["state"]),
                     "action_1": event["action"][0], "action_2": event["action"][1],
                     "optimal_1": event["optimal"][0], "optimal_2": event["optimal"][1],
                     "guidance_shown": int(bool(event["guidance_shown"])),
-                    "time_to_first_input_s": event.get("time_to_first_input_s"),
-                    "drawing_duration_s": event.get("drawing_duration_s")})
+                    "time_to_first_input_s": event["time_to_first_input_s"],
+                    "drawing_duration_s": event["drawing_duration_s"]})
             elif kind == "episode_finished":
                 episodes.append({
-                    "study": study, "participant": participant, "group": group, "phase": event["phase"],
-                    "phase_index": event["phase_index"], "episode": event["episode"], "skill": event["skill"],
+                    "study": study, "participant": participant, "group": group, "session": session,
+                    "phase": event["phase"], "phase_index": event["phase_index"], "episode": event["episode"],
+                    "skill": event["skill"],
                     "guidance": int(bool(event["guidance"])), "n_demonstrations": len(event["actions"]),
                     "teaching_error": event["teaching_error"], "rho1": event["rho1"], "rho2": event["rho2"],
                     "theta_hat": json.dumps(event["theta_hat"]),
                     "reproduction_diverged": int(bool(event["reproduction"]["diverged"])),
                     "started_at": event["started_at"], "duration_s": event["duration_s"]})
-    return episodes, demonstrations
+    # Files sort by name; sessions go in the protocol's order (a stable sort keeps each log's).
+    def key(row):
+        return row["participant"], order.get(row["session"], len(order))
+    return sorted(episodes, key=key), sorted(demonstrations, key=key)
 
 
 def _write_csv(path: Path, columns, rows) -> None:

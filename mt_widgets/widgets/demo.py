@@ -90,7 +90,7 @@ class DemoPage(VBox):
         self.episode_slot = Box()
         self.episode: EpisodeWidget | None = None
         self.skill_chooser.observe(lambda _: self.start_episode(), names="value")
-        self.guidance_switch.observe(lambda _: self.start_episode(), names="value")
+        self.guidance_switch.observe(lambda _: self._on_guidance_switched(), names="value")
         self.new_states_button.on_click(lambda _: self.start_episode(new_states=True))
         # The choices on one line, so the episode's canvas starts high on the page; the result and
         # "try again" go beside the canvas (the episode's next_actions), where the visitor is
@@ -98,10 +98,15 @@ class DemoPage(VBox):
         choices = HBox([self.skill_chooser, self.guidance_switch],
                        layout=Layout(flex_flow="row wrap", align_items="center", grid_gap="2px 16px"))
         super().__init__([HTML(WELCOME), choices, self.episode_slot])
+        self.add_class("mt-focus")  # a visible focus on each control (canvas_access.py)
         self.start_episode()
 
-    def start_episode(self, new_states: bool = False) -> EpisodeWidget:
-        """Replace the episode with a fresh one for the chosen skill and guidance setting."""
+    def start_episode(self, new_states: bool = False, keep=None) -> EpisodeWidget:
+        """Replace the episode with a fresh one for the chosen skill and guidance setting.
+
+        ``keep``: (k, R) demonstrations already given on the same states, shown as given (the
+        guidance switched mid-episode keeps the arrows).
+        """
         if as_bool("new_states", new_states):
             self.seed += 1
         if self.episode is not None:
@@ -110,12 +115,29 @@ class DemoPage(VBox):
             self.episode.next_actions.children = []
             retire(self.episode)
         self.episode = EpisodeWidget(self.skills[self.skill_chooser.value], seed=self.seed,
-                                     guidance=self.guidance_switch.value,
+                                     guidance=self.guidance_switch.value, demonstrations=keep,
                                      on_finished=self._on_finished, **self.episode_options)
         self.episode.next_actions.children = [self.result_line, self.new_states_button]
         self.episode_slot.children = [self.episode]
         self.result_line.value = ""
         return self.episode
+
+    def _on_guidance_switched(self) -> None:
+        """Guidance on or off: the same states again, with every arrow confirmed so far (and the one
+        drawn) kept, and a word saying so; after a finished episode, a fresh one."""
+        old = self.episode
+        if old is None or old.phase == "finished" or not old.demonstrations:
+            self.start_episode()
+            return
+        kept = [list(a) for a in old.demonstrations]
+        pending = old.teaching.pending_action
+        episode = self.start_episode(keep=kept)
+        if pending is not None and episode.phase == "teaching":
+            episode.teaching.set_action(pending, method="code")
+        n = len(kept)
+        self.result_line.value = (f"<div style='margin:6px 0;max-width:400px'>Guidance is now "
+                                  f"{'on' if self.guidance_switch.value else 'off'}; your {n} "
+                                  f"arrow{'s' if n != 1 else ''} so far {'are' if n != 1 else 'is'} kept.</div>")
 
     def _on_finished(self, result: EpisodeResult) -> None:
         guided = self.guidance_switch.value

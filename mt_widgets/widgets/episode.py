@@ -30,7 +30,7 @@ from mt_widgets.core.guidance import guidance_parts
 from mt_widgets.core.validation import as_bool, as_count, as_float_array, as_positive
 
 from .callbacks import Callbacks
-from .guidance import GuidancePanel
+from .guidance import GuidancePanel, explain_difference
 from .progress import EffortProgress
 from .reproduction import ReproductionPlayer
 from .teaching import ConfirmedAction, TeachingCanvas
@@ -108,6 +108,9 @@ _ROOM_Y_PX, _SIDE_PX, _MAX_CANVAS_PX = 350, 420, 760
 #: On a narrow page (a tablet upright) the side column is under the canvas, after the replay line
 #: and the reproduction's words: room for those and for the result and the next action.
 _NARROW_EXTRA_Y_PX = 360
+#: Up to this width (CSS px) a page is a phone's: the canvas takes the whole width less the page's
+#: margins, and the person scrolls to what is under it.
+_PHONE_MAX_PX, _PHONE_SLACK_PX = 600, 36
 
 
 def _canvas_class(view) -> str:
@@ -142,6 +145,9 @@ def stage_css(*views) -> str:
         narrow_by_height = f"calc((100vh - {_ROOM_Y_PX + _NARROW_EXTRA_Y_PX}px) * {ratio:.4f})"
         rules.append(f"@media (max-width: 860px) {{.{name} {{width: max(260px, min(calc(100vw - 40px), "
                      f"{narrow_by_height}, {_MAX_CANVAS_PX}px)) !important}}}}")
+        # A phone: the canvas fills the width (a finger needs all of it); what follows is below it.
+        rules.append(f"@media (max-width: {_PHONE_MAX_PX}px) {{.{name} {{width: calc(100vw - {_PHONE_SLACK_PX}px) "
+                     f"!important}}}}")
     return "<style>" + "\n".join(dict.fromkeys(rules)) + "</style>"
 
 
@@ -249,6 +255,8 @@ class EpisodeWidget(VBox):
         description = f"<div style='max-width:760px'>{self.skill.description}</div>" if show_description else ""
         self.header = HTML(f"<h3 style='margin:4px 0'>{heading}</h3>{description}" if heading or description else "")
         self.teaching.on_confirm(self._on_confirm)
+        # Enter on the canvas while guidance is shown: what "Next state" does (keyboard users).
+        self.teaching.on_enter_when_locked(lambda: self.next() if self.phase == "guidance" else None)
         self.teaching.observe(self._sync_traits, names=["state_index", "demonstrations"])
         #: Where a page puts what comes after the episode (the demo: its result and "Try again");
         #: it sits beside the canvas, where the person is looking when the reproduction plays.
@@ -260,10 +268,15 @@ class EpisodeWidget(VBox):
         # Each canvas's legend goes to the side column too, under what to do now: it explains every
         # mark, and under the canvas it would push the reproduction's Replay line off the screen.
         player_legend = self.player.view.legend
-        self.player.children = tuple(child for child in self.player.children if child is not player_legend)
+        # So do the reproduction's words (where the hand ended): under the canvas their second line
+        # fell below the window at 1400 x 1000; beside it they sit with the result.
+        moved = (player_legend, self.player.status)
+        self.player.children = tuple(child for child in self.player.children if child not in moved)
         player_legend.layout.display = "none"
-        self.side = VBox([self.teaching.controls, self.guidance_panel, self.next_button, self.next_actions,
-                          self.teaching.view.legend, player_legend],
+        self._show_status = self.player.status.layout.display != "none"   # hidden for a blinded study
+        self.player.status.layout.display = "none"                        # until the reproduction plays
+        self.side = VBox([self.teaching.controls, self.guidance_panel, self.next_button, self.player.status,
+                          self.next_actions, self.teaching.view.legend, player_legend],
                          layout=Layout(min_width="300px", max_width="400px", flex="1 1 300px"))
         canvases = VBox([self.teaching.view.canvas, self.player], layout=Layout(flex="0 1 auto"))
         self.stage = HBox([canvases, self.side], layout=Layout(flex_flow="row wrap", align_items="flex-start",
@@ -277,6 +290,7 @@ class EpisodeWidget(VBox):
             canvases.add_class(_canvas_class(self.teaching.view))
             children.append(HTML(stage_css(self.teaching.view, self.player.view)))
         super().__init__(children)
+        self.add_class("mt-focus")  # a visible focus on each control (canvas_access.py)
         if demonstrations is not None and len(demonstrations):
             self.restore(demonstrations)
         elif self.episode.demonstrations:  # an episode resumed in core: show what it holds
@@ -337,9 +351,13 @@ class EpisodeWidget(VBox):
     # -- driving it from code ------------------------------------------------------------------------------
     def demonstrate(self, action) -> DemonstrationRecord:
         """Set and confirm ``action`` (R,) at the current state, as if drawn (method "code")."""
+        if self.phase == "guidance":
+            raise RuntimeError("demonstrate: expected phase 'teaching', the episode is in 'guidance'; "
+                               "call next() after guidance")
         if self.phase != "teaching":
-            raise RuntimeError(f"demonstrate: expected phase 'teaching', the episode is in {self.phase!r}; "
-                               f"call next() after guidance")
+            raise RuntimeError(f"demonstrate: expected phase 'teaching', the episode is {self.phase} (all "
+                               f"{len(self.query_states)} demonstrations given); start a new EpisodeWidget to "
+                               f"teach again")
         self.teaching.set_action(action)
         self.teaching.confirm()
         return self.records[-1]
@@ -403,6 +421,8 @@ class EpisodeWidget(VBox):
         self.teaching.controls.layout.display = "none"
         self.teaching.view.legend.layout.display = "none"
         self.player.view.legend.layout.display = None
+        if self._show_status:
+            self.player.status.layout.display = None
         self.guidance_panel.hide()
         self.next_button.layout.display = "none"
         self.player.layout.display = None
@@ -441,6 +461,8 @@ class EpisodeWidget(VBox):
             if self.guidance_words:
                 # The arrows' legend is under the canvas (legend.py), with every other mark.
                 self.guidance_panel.show(confirmed.action, self.optimal[index], exact=self.exact, legend=False)
+                self.teaching.describe_guidance(explain_difference(confirmed.action, self.optimal[index],
+                                                                   self.skill.action_units))
             self.next_button.description = "Finish and watch" if last else "Next state"
             self.next_button.layout.display = None
             self.phase = "guidance"

@@ -60,8 +60,10 @@ class ReproductionPlayer(VBox):
         self.view = ArmView(skill, width=width, height=height, theme=theme, action_length=action_length,
                             css_width=css_width, target_label=target_label)
         self.theme = self.view.theme
+        # Its own width, never shrunk by the line beside it (a long error line cut it to "Rep...").
         self.replay_button = Button(description="Replay", icon="repeat", disabled=True,
-                                    tooltip="Play the reproduction again")
+                                    tooltip="Play the reproduction again",
+                                    layout=Layout(width="auto", min_width="96px", flex="0 0 auto"))
         self.replay_button.on_click(lambda _: self.replay())
         self.status = HTML(value="<i>The robot reproduces what it learnt here after the last demonstration.</i>")
         if not self.show_outcome:
@@ -73,7 +75,8 @@ class ReproductionPlayer(VBox):
         self._frames = None
         self.view.show_state(skill.start, show_velocity=False)
         self.view.legend.remove("velocity")  # frames draw the robot, not its velocity
-        super().__init__([self.view.canvas, self.view.legend, HBox([self.replay_button, self.error_label]),
+        super().__init__([self.view.canvas, self.view.legend, HBox([self.replay_button, self.error_label],
+                                                                 layout=Layout(align_items="center", grid_gap="8px")),
                           self.status],
                          layout=Layout(align_items="flex-start"))
 

@@ -4,18 +4,24 @@ Input, three ways to the same pending action:
 
 - pointer: press on the end-effector (or on the tip of the arrow being drawn) and drag;
   a rubber band follows the pointer and the readout gives the arrow in the action's units;
-- keyboard on the canvas (click it first): arrow keys nudge the arrow (Shift: finer),
-  Enter confirms, Escape or Backspace clears;
+- touch: a finger pressed on the hand (or the tip) and dragged, as with the mouse; a finger
+  landing elsewhere, and two fingers, scroll or zoom the page (``canvas_access.py`` says how);
+- keyboard on the canvas (Tab to it, or click it): arrow keys nudge the arrow (Shift: finer),
+  Enter confirms (and, while guidance is shown, goes on: ``on_enter_when_locked``), Escape or
+  Backspace clears; Tab and Shift+Tab leave it;
 - numbers: components (u1, u2) or angle (degrees, counter-clockwise from +x) and magnitude.
 
 An arrow can be redrawn any number of times; ``Confirm`` records it as the demonstration
 for the current state. Everything observable is a trait: ``state_index``,
-``demonstrations`` (confirmed actions, in order) and ``pending_action``.
+``demonstrations`` (confirmed actions, in order) and ``pending_action``. A screen reader reads
+the canvas as its ``description`` says: the state, the velocity, the arrow and the guidance.
 """
 
 from __future__ import annotations
 
+import html
 import math
+import re
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -29,11 +35,17 @@ from mt_widgets.core.validation import as_bool, as_float_array
 from .arm_view import ArmView
 from .arrows import draw_arrow_pair
 from .callbacks import Callbacks
+from .canvas_access import CanvasDescription
 from .redraw import drawing_batch
 
 #: How often the text readout follows a drag, at most (seconds): the canvas follows every
 #: move, the readout is a second message per update and need not.
 READOUT_INTERVAL_S = 0.08
+#: A finger's grab radius, in grab radii: the kernel accepts a touch this far from the hand (in
+#: canvas pixels); the page's script lets through only touches within the finger's own zone
+#: (canvas_access.FINGER_RADIUS_CSS_PX, at most this), so a canvas shown small still gets a
+#: finger-sized target.
+TOUCH_RADIUS_FACTOR = 2.0
 
 
 @dataclass
@@ -88,7 +100,8 @@ class TeachingCanvas(VBox):
         query_states: (N, state_dim) the states to demonstrate at, shown in order.
         theme: A ``Theme`` or theme name.
         grab_radius: Pixels around the end-effector (and the arrow tip) where a press starts
-            a drag.
+            a drag (a finger gets at least a 48 CSS px target, up to ``TOUCH_RADIUS_FACTOR``
+            times this).
         auto_advance: Move to the next state as soon as an arrow is confirmed (standalone
             use); the episode widget turns this off to show guidance first.
         width, height, css_width, action_length: As for ``ArmView``.
@@ -117,7 +130,10 @@ class TeachingCanvas(VBox):
         self._dragging = False
         self._last_readout = 0.0
         self._guidance = None
+        self._guidance_words = ""
+        self._last_touch = None
         self._timing = InputTiming(time.monotonic())
+        self._enter_when_locked = Callbacks()
 
         units = skill.action_units
         self.readout = HTML(value="")
@@ -145,6 +161,12 @@ class TeachingCanvas(VBox):
         canvas.on_mouse_up(self._on_mouse_up)
         canvas.on_mouse_out(self._on_mouse_up)
         canvas.on_key_down(self._on_key_down)
+        canvas.on_touch_start(self._on_touch_start)
+        canvas.on_touch_move(self._on_touch_move)
+        canvas.on_touch_end(self._on_touch_end)
+        canvas.on_touch_cancel(self._on_touch_end)
+        #: The canvas's text alternative and grab zones (a hidden widget; canvas_access.py).
+        self.description = CanvasDescription(canvas)
 
         self.view.legend.add("user_arrow")
         # The legend beside the canvas under the controls, where the eyes go from a mark to its
@@ -160,11 +182,13 @@ class TeachingCanvas(VBox):
             self.set_button,
             self.hint,
             self.scale_label,
-            HTML("<small>Keyboard: click the canvas, then arrow keys move the arrow tip "
-                 "(Shift: finer), Enter confirms, Escape clears.</small>"),
+            HTML("<small>Keyboard: Tab to the canvas (or click it), then arrow keys move the arrow tip "
+                 "(Shift: finer), Enter confirms, Escape clears, Tab moves on.</small>"),
+            self.description,
         ], layout=Layout(min_width="300px", max_width="380px"))
         super().__init__([HBox([canvas, VBox([controls, self.view.legend], layout=Layout(max_width="400px"))],
                                layout=Layout(flex_flow="row wrap", align_items="flex-start"))])
+        self.add_class("mt-focus")  # a visible focus on each control (canvas_access.py)
         self._show_current_state()
 
     # -- public API ---------------------------------------------------------------------------------
@@ -185,6 +209,17 @@ class TeachingCanvas(VBox):
         to be confirmed again (a demonstration the study log could not write is not counted).
         """
         self._confirm_callbacks.register_callback(callback, remove=remove)
+
+    def on_enter_when_locked(self, callback: Callable[[], None], remove: bool = False) -> None:
+        """Register ``callback()``, called when Enter is pressed on the canvas while input is locked
+        (the episode goes on to the next state with it, as its "Next state" button does)."""
+        self._enter_when_locked.register_callback(callback, remove=remove)
+
+    def describe_guidance(self, words: str) -> None:
+        """The guidance shown in words (HTML allowed), for the canvas's text alternative until the
+        next state."""
+        self._guidance_words = words
+        self._describe()
 
     def set_action(self, action, method: str = "code") -> None:
         """Draw ``action`` (R,) in ``action_units`` as the pending arrow at the current state."""
@@ -250,6 +285,7 @@ class TeachingCanvas(VBox):
         if as_bool("legend", legend):
             self.view.legend.add("optimal_arrow")
         self._draw_arrows()
+        self._describe()
 
     def advance(self) -> None:
         """Move on to the next query state (after a confirmation)."""
@@ -259,6 +295,7 @@ class TeachingCanvas(VBox):
         self.state_index += 1
         self.pending_action = None
         self._guidance = None
+        self._guidance_words = ""
         self._show_current_state()
 
     def restore(self, actions) -> None:
@@ -277,6 +314,7 @@ class TeachingCanvas(VBox):
         self.state_index = len(actions)
         self.pending_action = None
         self._guidance = None
+        self._guidance_words = ""
         self._show_current_state()
 
     # -- drawing --------------------------------------------------------------------------------------
@@ -328,6 +366,44 @@ class TeachingCanvas(VBox):
         can_confirm = self.pending_action is not None and not self.locked and self.current_state is not None
         self.confirm_button.disabled = not can_confirm
         self.clear_button.disabled = not can_confirm
+        if not self._dragging:  # mid-drag the words would change 12 times a second: said on release
+            self._describe()
+
+    def _describe(self) -> None:
+        """The canvas in words (its text alternative) and where a press starts a drag."""
+        units = self.skill.action_units
+        state = self.current_state
+        if state is None:
+            self.description.update(f"Teaching canvas: all {self.n_states} demonstrations given.")
+            return
+        view = self.view
+        position, velocity = view.painter.end_effector(state)
+        length = view.drawing.units
+        words = [f"Teaching canvas, state {self.state_index + 1} of {self.n_states}: the robot's hand is at "
+                 f"({position[0]:.2f}, {position[1]:.2f}) {length}, moving at ({velocity[0]:+.2f}, "
+                 f"{velocity[1]:+.2f}) {length}/s."]
+        if self.pending_action is None:
+            words.append("No arrow yet: arrow keys draw one.")
+        else:
+            words.append(f"Your arrow: {describe_action(self.pending_action, units)}.")
+            if not self.locked:
+                words.append("Enter confirms it.")
+        if self._guidance is not None:
+            words.append(f"The best arrow: {describe_action(self._guidance, units)}.")
+        if self._guidance_words:
+            words.append(re.sub(r"<[^>]+>", " ", self._guidance_words))
+        if self.locked and len(self._enter_when_locked):
+            words.append("Enter goes on.")
+        text = " ".join(" ".join(html.unescape(word).split()) for word in words)
+        zones = ()
+        if self._accepting():
+            origin, _ = view.painter.end_effector(state)
+            touch = TOUCH_RADIUS_FACTOR * self.grab_radius
+            starts = [view.transform.to_pixel(origin)]
+            if self.pending_action is not None:
+                starts.append(view.transform.action_tip(origin, self.pending_action))
+            zones = tuple((float(x), float(y), self.grab_radius, touch) for x, y in starts)
+        self.description.update(text, zones)
 
     def _sync_entries(self) -> None:
         u = self.pending_action
@@ -355,15 +431,19 @@ class TeachingCanvas(VBox):
         return not self.locked and self.current_state is not None
 
     def _on_mouse_down(self, x, y) -> None:
+        self._press(x, y, self.grab_radius)
+
+    def _press(self, x, y, radius: float) -> None:
+        """A mouse button or a finger down at canvas pixel (x, y): start a drag if on a grab zone."""
         if not self._accepting():
             return
         state = self.current_state
         view = self.view
         pointer = np.array([x, y], dtype=float)
         origin, _ = view.painter.end_effector(state)
-        near_origin = np.hypot(*(pointer - view.transform.to_pixel(origin))) <= self.grab_radius
+        near_origin = np.hypot(*(pointer - view.transform.to_pixel(origin))) <= radius
         near_tip = (self.pending_action is not None and np.hypot(
-            *(pointer - view.transform.action_tip(origin, self.pending_action))) <= self.grab_radius)
+            *(pointer - view.transform.action_tip(origin, self.pending_action))) <= radius)
         if not (near_origin or near_tip):
             self.hint.value = (f"<small>Press on the robot's hand ({self.theme.marker_words(self.view.drawing)}) "
                                f"to start an arrow.</small>")
@@ -374,6 +454,31 @@ class TeachingCanvas(VBox):
         if near_tip and not near_origin:
             return  # keep the arrow; the drag moves its tip
         self._drag_to(pointer)
+
+    # ipycanvas reports touches as lists of (x, y), one per finger on the canvas; touch_end and
+    # touch_cancel list the fingers still down, so a drag ends where its finger last moved.
+    def _on_touch_start(self, points) -> None:
+        if len(points) == 1 and not self._dragging:
+            self._last_touch = points[0]
+            self._press(*points[0], TOUCH_RADIUS_FACTOR * self.grab_radius)
+        elif len(points) > 1 and self._dragging:
+            # A second finger (a pinch): the arrow stays where the first finger had drawn it.
+            self._end_touch_drag()
+
+    def _on_touch_move(self, points) -> None:
+        if len(points) == 1 and self._dragging:
+            self._last_touch = points[0]
+            self._on_mouse_move(*points[0])
+
+    def _on_touch_end(self, points) -> None:
+        if not points:
+            self._end_touch_drag()
+
+    def _end_touch_drag(self) -> None:
+        if self._dragging and self._last_touch is not None:
+            self._on_mouse_up(*self._last_touch)
+        self._dragging = False
+        self._last_touch = None
 
     def _on_mouse_move(self, x, y) -> None:
         # Called for every pointer move over the canvas: return at once unless dragging.
@@ -404,6 +509,9 @@ class TeachingCanvas(VBox):
             self._sync_entries()
 
     def _on_key_down(self, key, shift_key, ctrl_key, meta_key) -> None:
+        if key == "Enter" and self.locked and self.current_state is not None:
+            self._enter_when_locked()  # e.g. the episode's "Next state" while guidance is shown
+            return
         if not self._accepting():
             return
         step = self.view.transform.nice_action_step() / (50.0 if shift_key else 10.0)

@@ -119,6 +119,39 @@ def draw_arrow_pair_offset(theme) -> float:
     return side_offset(theme.user_arrow, theme.optimal_arrow)
 
 
+def touch_context(browser, width: int, height: int):
+    """(context, page) of a touch screen (a tablet or a phone) that may only reach 127.0.0.1."""
+    from browser_support import LOCAL_PREFIXES
+    context = browser.new_context(viewport={"width": width, "height": height}, has_touch=True, is_mobile=True)
+    page = context.new_page()
+    page.route("**/*", lambda route: route.continue_() if route.request.url.startswith(LOCAL_PREFIXES)
+               else route.abort())
+    return context, page
+
+
+def touch_drag(page, start, end, steps: int = 6) -> None:
+    """One finger from page point ``start`` to ``end`` (viewport CSS pixels), as a touch screen sends it."""
+    cdp = page.context.new_cdp_session(page)
+    try:
+        cdp.send("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": [{"x": start[0], "y": start[1]}]})
+        for fraction in np.linspace(1.0 / steps, 1.0, steps):
+            point = {"x": start[0] + fraction * (end[0] - start[0]), "y": start[1] + fraction * (end[1] - start[1])}
+            cdp.send("Input.dispatchTouchEvent", {"type": "touchMove", "touchPoints": [point]})
+        cdp.send("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
+    finally:
+        cdp.detach()
+
+
+def ax_names(page) -> list[str]:
+    """Every name in Chromium's accessibility tree (what a screen reader can announce)."""
+    cdp = page.context.new_cdp_session(page)
+    try:
+        nodes = cdp.send("Accessibility.getFullAXTree")["nodes"]
+    finally:
+        cdp.detach()
+    return [node.get("name", {}).get("value", "") for node in nodes if not node.get("ignored")]
+
+
 # -- the visitors' demo (tests/browser/test_impatient_clicks.py, test_payoff_in_view.py) ----------------
 
 def reference(skill="sim-point", guidance=False, seed=0):

@@ -10,18 +10,45 @@ import time
 import numpy as np
 import pytest
 
-from browser_support import button, current_episode, open_and_fill, wait_for_log, wait_for_marker
 from mt_widgets import SKILLS
 from mt_widgets.widgets import ArmView
-from protocols import BROWSER_TEXTS, phase, protocol_toml
+
+from .support import button, current_episode, open_and_fill, wait_for_log, wait_for_marker
 
 pytestmark = pytest.mark.browser
 
-PROTOCOL = protocol_toml(
-    "browser",  # open_and_fill waits for this name
-    [phase("P1", "sim-point", instructions="First part: teach skill 1.", demonstrations=3),
-     phase("P2", "sim-point", instructions="Second part: teach skill 1 again.", demonstrations=3)],
-    seed=7, texts=BROWSER_TEXTS, practice_text="No practice.", top={"reproduction_duration_s": 10.0})
+PROTOCOL = """
+format = 1
+name = "browser"  # open_and_fill waits for this name
+lambda = 0.01
+seed = 7
+reproduction_duration_s = 10.0
+[assignment]
+block_size = 2
+seed = 1
+[texts]
+welcome = "Welcome to the test study."
+consent = "Consent text."
+instructions = "How to teach."
+reproduction = "This is what the robot learnt."
+thank_you = "Thank you, all done."
+[practice]
+skill = "sim-point"
+duration_s = 0
+text = "No practice."
+[[phases]]
+id = "P1"
+skill = "sim-point"
+episodes = 1
+demonstrations = 3
+instructions = "First part: teach skill 1."
+[[phases]]
+id = "P2"
+skill = "sim-point"
+episodes = 1
+demonstrations = 3
+instructions = "Second part: teach skill 1 again."
+"""
 
 DRAWN_WITHIN_MS = 1000
 
@@ -49,13 +76,13 @@ def test_replay_then_continue_then_start_draws_the_next_canvas_within_a_second(p
     button(page, "Start").click()
     page.get_by_text("First part: teach skill 1.").wait_for()
     button(page, "Start").click()
-    wait_for_log(voila_study.logs, participant, lambda events: events[-1]["type"] == "episode_started")
-    episode = current_episode(voila_study.logs, participant)
+    wait_for_log(voila_study, participant, lambda events: events[-1]["type"] == "episode_started")
+    episode = current_episode(voila_study, participant)
     view = ArmView(SKILLS["sim-point"])
     for index in range(3):
         wait_for_marker(page, view.end_effector_pixel(np.asarray(episode["query_states"][index])))
         type_arrow(page, (1.0 - 0.5 * index, 0.5))
-        wait_for_log(voila_study.logs, participant, lambda events, i=index: any(
+        wait_for_log(voila_study, participant, lambda events, i=index: any(
             e["type"] == "demonstration" and e["index"] == i and e["phase"] == "P1" for e in events))
     page.get_by_text("This is what the robot learnt.").wait_for()
     # The participant watches the whole reproduction (Continue waits for it), then replays it
@@ -67,7 +94,7 @@ def test_replay_then_continue_then_start_draws_the_next_canvas_within_a_second(p
     page.get_by_text("Second part: teach skill 1 again.").wait_for()
     button(page, "Start").click()
     page.get_by_text("Part 2 of 2, round 1 of 1").wait_for()
-    events = wait_for_log(voila_study.logs, participant, lambda events: events[-1]["type"] == "episode_started"
+    events = wait_for_log(voila_study, participant, lambda events: events[-1]["type"] == "episode_started"
                           and events[-1]["phase"] == "P2")
     first = view.end_effector_pixel(np.asarray(events[-1]["query_states"][0]))
     settled = time.monotonic()

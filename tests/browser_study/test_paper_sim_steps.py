@@ -11,7 +11,6 @@ dataset the validator accepts, and its status report counts what happened.
 
 from __future__ import annotations
 
-import functools
 import re
 import threading
 import time
@@ -21,31 +20,41 @@ import numpy as np
 import pytest
 from bids_validator import BIDSValidator
 
-from browser_support import (
-    CHROMIUM,
-    CHROMIUM_ARGS,
-    STUDY_PAGE,
-    artifact_path,
-    button,
-    drag_and_confirm,
-    local_page,
-    log_events,
-    wait_for_marker,
-)
-from browser_support import wait_for_log as _wait_for_log
-from mt_widgets.study import StudyFolder, export_bids, load_protocol, read_study
+from browser_support import CHROMIUM, CHROMIUM_ARGS, artifact_path, local_page
+from mt_widgets.study import StudyFolder, export_bids, load_protocol, read_events, read_study
 from mt_widgets.study.practice import PRACTICE_SKILLS
 from mt_widgets.widgets import ArmView
 from mt_widgets.widgets.theme import DEFAULT_THEME
 
+from .support import unlock
+
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
-# A whole study on a loaded machine: up to a minute for each awaited log event.
-wait_for_log = functools.partial(_wait_for_log, timeout=60.0, poll=0.1)
+PAGE = "/voila/render/study_sim.ipynb"
 PROTOCOL = load_protocol("paper-sim")
 # The words of guidance (how the arrow differs from the optimal one); the legend naming the dashed
 # arrow is a label of what is drawn, not guidance in words.
 GUIDANCE_WORDS = re.compile(r"off by|too long|too short|Direction:|Size:|° off", re.IGNORECASE)
+
+
+def button(page, name):
+    return page.get_by_role("button", name=re.compile(rf"^\W*{re.escape(name)}\s*$"))
+
+
+def log_events(logs, participant):
+    path = logs / f"{participant}.jsonl"
+    return read_events(path)[0] if path.exists() else []
+
+
+def wait_for_log(logs, participant, predicate, timeout=60.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        events = log_events(logs, participant)
+        if predicate(events):
+            return events
+        time.sleep(0.1)
+    last = log_events(logs, participant)[-1:]
+    raise AssertionError(f"{participant}: the log never satisfied the condition; last: {last}")
 
 
 def hex_rgb(colour: str) -> list[int]:
@@ -67,6 +76,46 @@ def count_colour(page, rgb, canvas_index=0) -> int:
 
 
 OFFSETS = ((50, -40), (-50, -30), (40, 45), (-45, 40), (55, 10))
+MARKER = [240, 228, 66]  # the end-effector marker (Okabe-Ito yellow)
+
+
+def wait_for_marker(page, pixel, canvases, timeout=30_000):
+    page.wait_for_function("""([x, y, rgb, n]) => {
+        const all = document.querySelectorAll('canvas');
+        if (all.length !== n) return false;
+        const d = all[0].getContext('2d').getImageData(Math.round(x) - 2, Math.round(y) - 2, 5, 5).data;
+        for (let i = 0; i < d.length; i += 4)
+            if (Math.abs(d[i] - rgb[0]) < 40 && Math.abs(d[i + 1] - rgb[1]) < 40 && Math.abs(d[i + 2] - rgb[2]) < 40
+                && d[i + 3] > 200) return true;
+        return false;
+    }""", arg=[float(pixel[0]), float(pixel[1]), MARKER, canvases], timeout=timeout)
+
+
+def drag_and_confirm(page, pixel, offset):
+    element = page.locator("canvas").first
+    box = element.bounding_box()
+    width, height = element.evaluate("c => [c.width, c.height]")
+
+    def to_page(x, y):
+        return box["x"] + x * box["width"] / width, box["y"] + y * box["height"] / height
+
+    confirm = button(page, "Confirm")
+    for _ in range(4):  # the canvas takes the drag once the state is drawn: retry a missed one
+        start = to_page(*pixel)
+        end = to_page(pixel[0] + offset[0], pixel[1] + offset[1])
+        page.mouse.move(*start)
+        page.mouse.down()
+        for fraction in np.linspace(0.25, 1.0, 4):
+            page.mouse.move(start[0] + fraction * (end[0] - start[0]), start[1] + fraction * (end[1] - start[1]))
+        page.mouse.up()
+        try:
+            page.wait_for_function("b => !b.disabled", arg=confirm.element_handle(), timeout=4_000)
+            break
+        except Exception:
+            continue
+    confirm.click()
+
+
 def wait_enabled(page, name, timeout=60_000):
     page.wait_for_function("b => !b.disabled", arg=button(page, name).element_handle(timeout=timeout),
                            timeout=timeout)
@@ -114,7 +163,7 @@ def practice(page, shot):
     skill = PRACTICE_SKILLS["sim-practice"]
     state = skill.query_states(seed=np.random.SeedSequence(12345).spawn(1)[0])[0]
     pixel = ArmView(skill).end_effector_pixel(state)
-    wait_for_marker(page, pixel, canvases=1, timeout=30_000)   # drawing only: no reproduction canvas
+    wait_for_marker(page, pixel, canvases=1)   # drawing only: no reproduction canvas
     drag_and_confirm(page, pixel, (50, -30))
     if shot:
         page.screenshot(path=shot("practice"))
@@ -138,7 +187,7 @@ def phases(page, logs, participant, group, shot, withdraw_in_p1=False):
             guided = group in phase.guidance
             for index in range(phase.demonstrations):
                 pixel = view.end_effector_pixel(np.asarray(started["query_states"][index]))
-                wait_for_marker(page, pixel, canvases=2, timeout=30_000)
+                wait_for_marker(page, pixel, canvases=2)
                 # Arrows long enough to see (and to count on the canvas), in varied directions.
                 drag_and_confirm(page, pixel, OFFSETS[index % len(OFFSETS)])
                 wait_for_log(logs, participant, lambda ev, key=key + (index,): any(
@@ -192,8 +241,7 @@ def take_part(server, participant, group, withdraw=False, replay=False, shot=Non
         context, page = local_page(browser, 1280, 1300)
         page.set_default_timeout(60_000)
         try:
-            page.goto(server.url(STUDY_PAGE), timeout=120_000)
-            page.get_by_text("Experimenter", exact=True).wait_for(timeout=120_000)
+            unlock(page, server)
             page.get_by_placeholder("pseudonymous code, e.g. P07").fill(participant)
             page.get_by_label("Group").select_option(label=group)
             button(page, "Start new participant").click()

@@ -1,8 +1,9 @@
 """A scripted participant takes part in the study page in Voila, in a real Chromium.
 
 Every phase kind (practice, an episode without guidance, an episode with guidance) is done
-with real mouse drags; the page is reloaded in the middle of an episode, the experimenter
-resumes the participant, and the log ends complete: every demonstration once, in order.
+with real mouse drags; the page is reloaded in the middle of an episode and resumes the
+participant by itself (no experimenter panel), and the log ends complete: every demonstration
+once, in order.
 """
 
 import json
@@ -10,49 +11,47 @@ import json
 import numpy as np
 import pytest
 
-from browser_support import (
-    artifact_path,
-    button,
-    current_episode,
-    drag_and_confirm,
-    drag_from,
-    open_and_fill,
-    wait_for_log,
-    wait_for_marker,
-)
 from mt_widgets import SKILLS
 from mt_widgets.study import read_study
 from mt_widgets.widgets import ArmView
-from protocols import BROWSER_TEXTS, phase, protocol_toml
+
+from .support import button, current_episode, demonstrate, drag, open_and_fill, wait_for_log, wait_for_marker
 
 pytestmark = pytest.mark.browser
 
-PROTOCOL = protocol_toml(
-    "browser",
-    [phase("P1", "sim-point", instructions="First part: teach skill 1.", demonstrations=3),
-     phase("P3", "sim-point", instructions="Second part: teach skill 1 again.", demonstrations=3, guidance=["target"])],
-    texts=BROWSER_TEXTS, practice_s=3, practice_text="Practice freely.", top={"reproduction_duration_s": 2.0})
-
-
-def demonstrate(page, server, participant, phase, index, offset):
-    """Draws and confirms the arrow at query state ``index`` of ``phase``; waits until it is on disk."""
-    # The episode's query states are logged when the kernel enters it: wait for that first.
-    wait_for_log(server.logs, participant, lambda events: any(
-        e["type"] == "episode_started" and e["phase"] == phase for e in events))
-    episode = current_episode(server.logs, participant)
-    view = ArmView(SKILLS[episode["skill"]])
-    ee = view.end_effector_pixel(np.asarray(episode["query_states"][index]))
-    try:
-        wait_for_marker(page, ee)
-    except Exception:
-        page.screenshot(path=artifact_path("study-page-no-marker", f"{episode['phase']}-{index}"))
-        raise
-    drag_and_confirm(page, ee, offset, tries=3, wait_ms=3_000)
-    key = (episode["phase"], episode["episode"], index)
-    return wait_for_log(server.logs, participant, lambda events: any(
-        (e["phase"], e["episode"], e["index"]) == key for e in events if e["type"] == "demonstration"))
-
-
+PROTOCOL = """
+format = 1
+name = "browser"
+lambda = 0.01
+seed = 5
+reproduction_duration_s = 2.0
+[assignment]
+block_size = 2
+seed = 1
+[texts]
+welcome = "Welcome to the test study."
+consent = "Consent text."
+instructions = "How to teach."
+reproduction = "This is what the robot learnt."
+thank_you = "Thank you, all done."
+[practice]
+skill = "sim-point"
+duration_s = 10
+text = "Practice freely."
+[[phases]]
+id = "P1"
+skill = "sim-point"
+episodes = 1
+demonstrations = 3
+instructions = "First part: teach skill 1."
+[[phases]]
+id = "P3"
+skill = "sim-point"
+episodes = 1
+demonstrations = 3
+guidance = ["target"]
+instructions = "Second part: teach skill 1 again."
+"""
 def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resumes(page, voila_study, shot,
                                                                                       tmp_path):
     protocol_path = tmp_path / "browser.toml"
@@ -80,7 +79,7 @@ def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resum
     practice_view = ArmView(SKILLS["sim-point"])
     practice_states = SKILLS["sim-point"].query_states(seed=np.random.SeedSequence(12345).spawn(1)[0])
     wait_for_marker(page, practice_view.end_effector_pixel(practice_states[0]))
-    drag_from(page, practice_view.end_effector_pixel(practice_states[0]), (60, -30))
+    drag(page, practice_view.end_effector_pixel(practice_states[0]), (60, -30))
     page.screenshot(path=shot("practice"))
     page.get_by_text("Practice time is over.").wait_for(timeout=10_000)
     button(page, "Continue to the study").click()
@@ -92,7 +91,7 @@ def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resum
     for index in range(3):
         demonstrate(page, voila_study, participant, "P1", index, (50 - 20 * index, -40))
     assert page.get_by_text("optimal action").count() == 0
-    wait_for_log(voila_study.logs, participant, lambda events: events[-1]["type"] == "episode_finished")
+    wait_for_log(voila_study, participant, lambda events: events[-1]["type"] == "episode_finished")
     page.get_by_text("This is what the robot learnt.").wait_for()
     page.screenshot(path=shot("reproduction"))
     button(page, "Continue").click()
@@ -106,17 +105,17 @@ def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resum
     button(page, "Next state").click()
     demonstrate(page, voila_study, participant, "P3", 1, (-40, 30))
 
-    # A reload mid-episode: a new kernel; the experimenter resumes the participant.
-    page.reload()
-    page.get_by_text("Experimenter", exact=True).wait_for(timeout=60_000)
-    open_and_fill(page, voila_study, protocol_path, participant)
-    button(page, "Resume participant").click()
+    # A reload mid-episode (the participant's F5): a new kernel resumes the participant from the
+    # page's address; the experimenter's panel never comes back (issue 18: blinding on reload).
+    page.reload(wait_until="commit")  # a new kernel runs the page's notebook: seconds under load
     try:
-        page.get_by_text("Part 2 of 2, round 1 of 1").wait_for(timeout=15_000)
+        page.get_by_text("Part 2 of 2, round 1 of 1").wait_for(timeout=120_000)
     except Exception:
         page.screenshot(path=shot("resume-failed"))
         raise AssertionError(f"resume failed; the page says: {page.inner_text('body')[:1500]}") from None
-    episode = current_episode(voila_study.logs, participant)
+    assert page.get_by_text("Experimenter", exact=True).count() == 0
+    assert page.get_by_role("button", name="List participants").count() == 0
+    episode = current_episode(voila_study, participant)
     wait_for_marker(page, ArmView(SKILLS["sim-point"]).end_effector_pixel(np.asarray(episode["query_states"][2])))
     page.screenshot(path=shot("resumed"))
     demonstrate(page, voila_study, participant, "P3", 2, (30, 50))
@@ -126,7 +125,7 @@ def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resum
     page.get_by_text("Thank you, all done.").wait_for()
     page.screenshot(path=shot("thank-you"))
 
-    events = wait_for_log(voila_study.logs, participant, lambda events: events[-1]["type"] == "session_finished")
+    events = wait_for_log(voila_study, participant, lambda events: events[-1]["type"] == "session_finished")
     demos = [(e["phase"], e["episode"], e["index"]) for e in events if e["type"] == "demonstration"]
     assert demos == [("P1", 1, 0), ("P1", 1, 1), ("P1", 1, 2), ("P3", 1, 0), ("P3", 1, 1), ("P3", 1, 2)]
     assert [e["guidance_shown"] for e in events if e["type"] == "demonstration"] == [False] * 3 + [True] * 3

@@ -10,6 +10,7 @@ import pytest
 
 from browser_support import REPO, local_page, voila
 from mt_widgets.classroom import ProgressRecorder, create_class_folder, pseudonym
+from mt_widgets.classroom.names import write_names
 
 pytestmark = pytest.mark.browser
 
@@ -37,6 +38,10 @@ def _class_of_twelve(folder):
     return stuck
 
 
+def _salt(server):
+    return json.loads((server.folder / "class.json").read_text())["salt"]
+
+
 @pytest.fixture(scope="module")
 def class_page(tmp_path_factory):
     root = tmp_path_factory.mktemp("class-view")
@@ -44,8 +49,15 @@ def class_page(tmp_path_factory):
     shutil.copy(REPO / "notebooks" / "class_view.ipynb", root / "notebooks" / "class_view.ipynb")
     folder = root / "class"
     stuck = _class_of_twelve(folder)
+    # The instructor's roster names 11 of the 12 (student05 is not on it); the names file lives outside the class.
+    roster = root / "instructor" / "roster.csv"
+    roster.parent.mkdir()
+    roster.write_text("login,name,email,role\n" + "".join(f"student{n:02d},Student Number {n},,student\n"
+                                                           for n in range(12) if n != 5))
+    names = write_names(roster, folder, root / "instructor" / "names.json")
     server = voila(root, env={"MT_WIDGETS_CLASS_FOLDER": str(folder), "MT_WIDGETS_CLASS_REFRESH_S": "1",
-                              "MT_WIDGETS_CLASS_STUCK_MIN": "10", "PYTHONPATH": str(REPO)})
+                              "MT_WIDGETS_CLASS_STUCK_MIN": "10", "PYTHONPATH": str(REPO),
+                              "MT_WIDGETS_CLASS_NAMES": str(names)})
     server.folder, server.stuck = folder, stuck
     yield server
     server.stop()
@@ -62,6 +74,14 @@ def test_the_class_view_shows_every_student_who_is_stuck_and_refreshes_live(brow
         first = rows.nth(0)
         assert first.get_attribute("data-student") == class_page.stuck  # stuck students come first
         assert "stuck" in first.inner_text() and "rho1: expected 3.14, got 0.05" in first.inner_text()
+        # The roster's names beside the pseudonyms; a student not on the roster is said to be so.
+        assert "Student Number 11" in first.inner_text()
+        assert page.locator("td.student-name").count() == 11
+        assert "not on the roster" in page.locator(f"tr[data-student='{pseudonym('student05', _salt(class_page))}']"
+                                                   ).inner_text()
+        # The class folder stays pseudonymous: no name and no login in any of its files.
+        on_disk = "".join(p.read_text() for p in class_page.folder.glob("*.jsonl"))
+        assert "Student Number" not in on_disk and "student05" not in on_disk
         page.wait_for_function("() => [...document.querySelectorAll('img')].filter(i => i.naturalWidth > 300)"
                                ".length >= 2", timeout=30_000)
         page.screenshot(path=artifacts("twelve"), full_page=True)

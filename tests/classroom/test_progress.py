@@ -184,10 +184,12 @@ def test_bad_arguments_are_refused_by_name(tmp_path):
 def test_checks_say_in_words_what_is_wrong_and_are_recorded(tmp_path):
     recorder = ProgressRecorder(tmp_path, "alice")
     checks = ExerciseChecks("a1_ridge_learner", recorder)
-    with pytest.raises(CheckFailed, match=r"theta_hat: expected shape \(2, 5\), got shape \(5, 2\)\. transpose"):
+    with pytest.raises(CheckFailed, match=r"theta_hat: expected shape \(2, 5\), got shape \(5, 2\) "
+                                          r"\(the transpose.s shape: transpose it\)\. transpose"):
         checks.close("fit", "theta_hat", np.zeros((5, 2)), np.zeros((2, 5)), hint="transpose")
-    with pytest.raises(CheckFailed, match=r"E: expected 2\.4 , got 5\.8|E: expected 2\.4, got 5\.8"):
+    with pytest.raises(CheckFailed, match=r"E: not right: it is too large\.$") as failed:
         checks.close("error", "E", 5.8, 2.4)
+    assert "2.4" not in str(failed.value)          # the expected number is never shown
     with pytest.raises(CheckFailed, match="not answered yet"):
         checks.close("error", "E", None, 2.4)
 
@@ -236,3 +238,45 @@ def test_the_summary_follows_each_students_errors_over_episodes(tmp_path):
     summary = summarise(read_class(tmp_path))
     assert sorted(s.errors for s in summary.students) == sorted([[3.0, 2.0, 1.0], [2.0, 1.5, 1.0], [1.0, 1.0, 1.0]])
     assert SKILLS  # the paper's registry is untouched by the recorder
+
+
+def test_a_by_hand_check_refuses_the_package_and_names_the_direction_without_the_number():
+    from mt_widgets import RidgeLearner
+    from mt_widgets.classroom import references
+
+    checks = ExerciseChecks("a1_ridge_learner", ProgressRecorder())
+    rng = np.random.default_rng(0)
+    Phi, U = rng.normal(size=(6, 4)), rng.normal(size=(6, 2))
+
+    def by_numpy(Phi, U, lam):
+        return np.linalg.solve(Phi.T @ Phi + lam * np.eye(Phi.shape[1]), Phi.T @ U).T
+
+    def helper(Phi, U, lam):
+        return RidgeLearner(lam).fit(Phi, U)
+
+    def through_a_helper(Phi, U, lam):      # the package hidden one call away
+        return helper(Phi, U, lam)
+
+    def transposed(Phi, U, lam):
+        return by_numpy(Phi, U, lam).T
+
+    checks.function("fit", by_numpy, [("a 6 x 4 Phi", (Phi, U, 0.3))], references.ridge_fit, by_hand=True)
+    with pytest.raises(CheckFailed, match="uses the package's helper|uses the package's RidgeLearner"):
+        checks.function("fit", through_a_helper, [("a 6 x 4 Phi", (Phi, U, 0.3))], references.ridge_fit, by_hand=True)
+    with pytest.raises(CheckFailed, match=r"expected shape \(2, 4\), got shape \(4, 2\)"):
+        checks.function("fit", transposed, [("x", (Phi, U, 0.3))], references.ridge_fit, by_hand=True)
+    with pytest.raises(CheckFailed, match="times a constant factor") as failed:
+        checks.close("fit", "theta_hat", 2 * by_numpy(Phi, U, 0.3), by_numpy(Phi, U, 0.3))
+    expected = by_numpy(Phi, U, 0.3)
+    assert not any(f"{v:.4g}" in str(failed.value) for v in expected.ravel())
+    # In a notebook's namespace: a substitute stands in for the student's helper during the call only, so a
+    # function is graded on its own; the package's objects there raise while a by-hand answer runs.
+    notebook = {"np": np, "RidgeLearner": RidgeLearner}
+    exec("def helper(Phi, U, lam):\n    return None\n"
+         "def fit(Phi, U, lam):\n    return helper(Phi, U, lam)\n"
+         "def sneaky(Phi, U, lam):\n    return globals()['RidgeLearner'](lam).fit(Phi, U)\n", notebook)
+    checks.function("fit", notebook["fit"], [("x", (Phi, U, 0.3))], references.ridge_fit, by_hand=True,
+                    substitute={"helper": by_numpy})
+    assert notebook["helper"] is not by_numpy and notebook["RidgeLearner"] is RidgeLearner
+    with pytest.raises(CheckFailed, match="uses the package's RidgeLearner"):
+        checks.function("fit", notebook["sneaky"], [("x", (Phi, U, 0.3))], references.ridge_fit, by_hand=True)

@@ -1,15 +1,33 @@
-"""A class on JupyterHub, end to end on loopback: twelve students spawned at once, an episode in
-each student's kernel, two students drawing in Chromium, the instructor's class view with all of
-them, and nbgrader's exchange (release, fetch, submit, collect, autograde, feedback).
+"""A real class on JupyterHub, end to end on loopback, as root, tested as an outsider and as a classmate.
 
-Slow (about 2-4 minutes on two cores): a class is a dozen Jupyter servers.
+One hub for the module, with a roster of an instructor and thirty-odd students, all system users
+``mtt-...`` made by the hub and removed at the end with their cgroups:
+
+- only the roster's people come in, each with their own password; the instructor's cannot be
+  guessed or claimed; repeated wrong passwords lock a login; the instructor's command adds,
+  removes and resets mid-term;
+- a student's kernel is their own system user: it cannot read a classmate's home or progress
+  file, nor the instructor's course folder, nor write into the installation;
+- a runaway allocation in one student's kernel is stopped by their memory limit while
+  classmates' episodes finish;
+- thirty students log in within the same moment, every server and kernel starts and every
+  episode completes, with no retry; two of them draw in Chromium, and the instructor's class
+  view shows them all;
+- nbgrader's exchange works through the hub, and a student cannot list others' submissions.
+
+Slow (a few minutes on two cores): a class is thirty Jupyter servers.
 """
 
 from __future__ import annotations
 
+import grp
+import json
+import os
+import pwd
 import shutil
 import statistics
 import time
+from collections import Counter
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -21,13 +39,30 @@ from mt_widgets.classroom import read_class, summarise
 from tests.browser.helpers import drag, ee_pixel, reference_episode
 
 from .course_support import copy_course, course_env, nbgrader, source_notebook
-from .hub_support import EPISODE_CODE, ClassHub, warm_numba_template
+from .hub_support import (
+    EPISODE_CODE,
+    TEST_INSTRUCTORS,
+    TEST_PREFIX,
+    ClassHub,
+    LoginRefused,
+    warm_numba_template,
+)
 
-pytestmark = [pytest.mark.slow, pytest.mark.browser]
+pytestmark = [pytest.mark.slow, pytest.mark.browser,
+              pytest.mark.skipif(os.geteuid() != 0, reason="the class hub makes system users: run as root")]
 
-STUDENTS = [f"student{number:02d}" for number in range(12)]
+INSTRUCTOR = "mtt-teacher"
+INSTRUCTOR_PASSWORD = "the instructor's own passphrase"
+STUDENTS = [f"mtt-s{number:02d}" for number in range(30)]
+GUESSED, RUNAWAY, LEAVER = "mtt-guessed", "mtt-runaway", "mtt-leaver"
+LATE = "mtt-late"  # added mid-term with the instructor's command
 DRAWERS = STUDENTS[:2]
 ASSIGNMENT = "a1_ridge_learner"
+
+
+def password_of(login: str) -> str:
+    return f"{login}'s first password"
+
 
 DRAW_PAGE = """
 from ipywidgets import Label
@@ -41,79 +76,248 @@ episode.observe(lambda change: setattr(confirmed, "value", f"confirmed {len(chan
 display(confirmed, episode)
 """
 
+#: Run in one student's kernel: what it can reach of others' work and of the installation.
+PROBE_CODE = """
+import json, os, pathlib
+from mt_widgets.classroom import ProgressRecorder, pseudonym, read_class_meta
 
-def _page(folder: Path, name: str, code: str) -> None:
+def attempt(action):
+    try:
+        action()
+        return "allowed"
+    except PermissionError:
+        return "denied"
+
+folder = pathlib.Path(os.environ["MT_WIDGETS_CLASS_FOLDER"])
+salt = read_class_meta(folder)["salt"]
+classmate_progress = folder / (pseudonym({classmate!r}, salt) + ".jsonl")
+ProgressRecorder().record("lesson", lesson="probe")
+own = folder / (pseudonym({me!r}, salt) + ".jsonl")
+installed = pathlib.Path({package!r})
+site = pathlib.Path(json.__file__).parent
+result = {{
+    "uid": os.getuid(), "euid": os.geteuid(), "groups": os.getgroups(),
+    "read_classmate_home": attempt(lambda: os.listdir({classmate_home!r})),
+    "read_classmate_file": attempt(lambda: open({classmate_file!r}).read()),
+    "list_class_folder": attempt(lambda: os.listdir(folder)),
+    "read_classmate_progress": attempt(lambda: open(classmate_progress).read()),
+    "append_classmate_progress": attempt(lambda: open(classmate_progress, "a").write("{{}}\\n")),
+    "take_classmate_lock": attempt(lambda: open(folder / ".locks" / (classmate_progress.stem + ".lock"), "a")),
+    "own_progress_lines": len(own.read_text().splitlines()),
+    "list_course": attempt(lambda: os.listdir({course!r})),
+    "read_course_source": attempt(lambda: open({course_file!r}).read()),
+    "write_package": attempt(lambda: open(installed / "planted.py", "w").write("x = 1")),
+    "write_stdlib": attempt(lambda: open(site / "planted.py", "w").write("x = 1")),
+    "become_root": attempt(lambda: os.setuid(0)),
+}}
+print(json.dumps(result))
+"""
+
+
+def _page(folder: Path, name: str, code: str, owner: str) -> None:
     notebook = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code)])
     notebook.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
-    folder.mkdir(parents=True, exist_ok=True)
     nbformat.write(notebook, folder / name)
+    user = pwd.getpwnam(owner)
+    os.chown(folder / name, user.pw_uid, user.pw_gid)
 
 
 def _files(folder: Path) -> dict[str, float]:
     return {str(p.relative_to(folder)): p.stat().st_mtime for p in folder.rglob("*")}
 
 
+def _test_accounts() -> list[str]:
+    return sorted(user.pw_name for user in pwd.getpwall() if user.pw_name.startswith(TEST_PREFIX))
+
+
 @pytest.fixture(scope="module")
 def hub(tmp_path_factory):
-    root = tmp_path_factory.mktemp("hub")
-    template = warm_numba_template(tmp_path_factory.getbasetemp() / "numba-template")
-    # Where the drawers press (computed here, before the snapshot: this process compiles with
-    # numba's in-tree cache, which is this test's own doing, not a student's).
+    template = tmp_path_factory.getbasetemp() / "numba-template"
+    warm_numba_template(template)
     draw_start = ee_pixel(reference_episode("episode_sim.ipynb"), 0)
     installed_before = _files(REPO / "mt_widgets")
-    class_hub = ClassHub(root, numba_template=template)
+    assert _test_accounts() == [], "test accounts left from an earlier run"
+    class_hub = ClassHub([*STUDENTS, GUESSED, RUNAWAY, LEAVER], [INSTRUCTOR], numba_template=template,
+                         mem_limit="800M")
     class_hub.installed_before, class_hub.draw_start = installed_before, draw_start
-    yield class_hub
-    class_hub.stop()
-    # The hub's log (hub, proxy, every student's server) outlives the temporary folder.
-    shutil.copy(class_hub.log, artifact_path("test_hub", "jupyterhub").replace(".png", ".log"))
+    try:
+        class_hub.set_password(INSTRUCTOR, INSTRUCTOR_PASSWORD)
+        yield class_hub
+    finally:
+        class_hub.stop()
+        # The hub's log (hub, proxy, every student's server) outlives the temporary folder.
+        shutil.copy(class_hub.kept_log, artifact_path("test_hub", "jupyterhub").replace(".png", ".log"))
+        class_hub.kept_log.unlink()
+    # Nothing of the class is left on the machine.
+    assert _test_accounts() == []
+    assert TEST_INSTRUCTORS not in {group.gr_name for group in grp.getgrall()}
+    assert not list(Path("/sys/fs/cgroup/memory").rglob(class_hub.cgroup))
+    assert not class_hub.root.exists()
 
 
-@pytest.mark.timeout(420)
-def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, browser, artifacts):
-    hub.create_users([*STUDENTS, "instructor"])
+@pytest.mark.timeout(300)
+def test_only_the_roster_comes_in_each_with_their_own_password(hub):
+    # The instructor: a made-up password is refused; theirs (set with class_admin.py) is not.
+    with pytest.raises(LoginRefused):
+        hub.login(INSTRUCTOR, "instructor")
+    with pytest.raises(LoginRefused):
+        hub.login(INSTRUCTOR, "a made-up but long password")
+    hub.login(INSTRUCTOR, INSTRUCTOR_PASSWORD)
+    # Not on the roster: refused, whatever the password; system accounts too.
+    for stranger in ("mtt-stranger", "root", "nobody"):
+        with pytest.raises(LoginRefused):
+            hub.login(stranger, "a long enough password")
+    # A student's first login sets their password (a short one is refused); then only that one works.
+    with pytest.raises(LoginRefused):
+        hub.login(GUESSED, "short")
+    hub.login(GUESSED, password_of(GUESSED))
+    with pytest.raises(LoginRefused):
+        hub.login(GUESSED, "someone else's claim")
+    hub.login(GUESSED, password_of(GUESSED))
+    # Five wrong passwords in a row lock the login: then even the right one is refused.
+    for attempt in range(5):
+        with pytest.raises(LoginRefused):
+            hub.login(GUESSED, f"guess number {attempt}")
+    with pytest.raises(LoginRefused):
+        hub.login(GUESSED, password_of(GUESSED))
+    assert "locked" in hub.tail(200_000)
+    passwords = json.loads((hub.root / "state" / "passwords.json").read_text())
+    assert password_of(GUESSED) not in json.dumps(passwords) and passwords[GUESSED].startswith("scrypt$")
+    assert oct((hub.root / "state" / "passwords.json").stat().st_mode & 0o777) == "0o600"
+
+    # Mid-term, with the instructor's command and no restart: a new student comes in, one who left does not.
+    with pytest.raises(LoginRefused):
+        hub.login(LATE, password_of(LATE))
+    added = hub.class_admin("add", LATE, "--name", "Late Comer")
+    assert added.returncode == 0, added.stderr
+    hub.login(LATE, password_of(LATE))
+    assert pwd.getpwnam(LATE).pw_uid != 0
+    hub.students.append(LATE)  # so that stop() removes the account
+    hub.login(LEAVER, password_of(LEAVER))
+    removed = hub.class_admin("remove", LEAVER)
+    assert removed.returncode == 0, removed.stderr
+    with pytest.raises(LoginRefused):
+        hub.login(LEAVER, password_of(LEAVER))
+    # A forgotten password: reset, then the student sets a new one at the next login.
+    reset = hub.class_admin("reset-password", LATE)
+    assert reset.returncode == 0, reset.stderr
+    hub.login(LATE, "a brand new password")
+    with pytest.raises(LoginRefused):
+        hub.login(LATE, password_of(LATE))
+    # An admin's password is never reset to first-login claiming.
+    assert hub.class_admin("reset-password", INSTRUCTOR).returncode == 1
+    # A bad roster is refused with its line and reason, and the roster file stays as it was.
+    before = hub.roster.read_text()
+    bad = hub.class_admin("add", "Bad Login")
+    assert bad.returncode == 1 and "unsafe login 'Bad Login'" in bad.stderr
+    assert hub.roster.read_text() == before
+
+
+@pytest.mark.timeout(300)
+def test_a_students_kernel_is_their_own_user_and_reaches_no_one_elses_work(hub):
+    me, classmate = STUDENTS[2], STUDENTS[3]
+    for name in (me, classmate):
+        hub.ensure_running(name)
+    # The classmate saves a notebook; the instructor's course holds a solution.
+    hub.server_api(classmate, "PUT", "/api/contents/mine.ipynb",
+                   json={"type": "notebook", "content": nbformat.v4.new_notebook()})
+    (hub.course / "source").mkdir(exist_ok=True)
+    (hub.course / "source" / "solution.py").write_text("answer = 42\n")
+    code = PROBE_CODE.format(me=me, classmate=classmate, classmate_home=str(hub.homes / classmate),
+                             classmate_file=str(hub.homes / classmate / "mine.ipynb"),
+                             course=str(hub.course), course_file=str(hub.course / "source" / "solution.py"),
+                             package=str(REPO / "mt_widgets"))
+    run = hub.run_in_kernel(me, code)
+    assert run["error"] is None and not run["died"], run
+    probe = json.loads(run["stdout"].strip().splitlines()[-1])
+    account = pwd.getpwnam(me)
+    assert probe["uid"] == probe["euid"] == account.pw_uid != 0
+    assert grp.getgrnam(TEST_INSTRUCTORS).gr_gid not in probe["groups"]
+    assert probe["own_progress_lines"] >= 1  # the student's own progress is recorded
+    denied = ["read_classmate_home", "read_classmate_file", "list_class_folder", "read_classmate_progress",
+              "append_classmate_progress", "take_classmate_lock", "list_course", "read_course_source",
+              "write_package", "write_stdlib", "become_root"]
+    assert {key: probe[key] for key in denied} == {key: "denied" for key in denied}
+    assert not (REPO / "mt_widgets" / "planted.py").exists()
+    # Every process of the student's runs as the student, in the student's cgroups.
+    processes = hub.processes(me)
+    assert len(processes) >= 2 and all(p.uids().effective == account.pw_uid for p in processes)
+    memory_group = next(line.split(":", 2)[2] for line in Path(f"/proc/{processes[0].pid}/cgroup").read_text()
+                        .splitlines() if ":memory:" in line)
+    assert memory_group.endswith(f"/{hub.cgroup}/{me}")
+    home = hub.homes / me
+    assert oct(home.stat().st_mode & 0o777) == "0o700" and home.stat().st_uid == account.pw_uid
+
+
+@pytest.mark.timeout(300)
+def test_a_runaway_allocation_is_stopped_by_the_memory_limit_while_classmates_finish(hub):
+    classmates = STUDENTS[4:7]
+    for name in (RUNAWAY, *classmates):
+        hub.ensure_running(name)
+    runaway = "chunks = []\nwhile True:\n    chunks.append(b'x' * 2**26)\n"  # 64 MiB a step, forever
+
+    def run(item):
+        number, name = item
+        return hub.run_in_kernel(name, runaway if name == RUNAWAY else EPISODE_CODE.format(number=number))
+
+    with ThreadPoolExecutor(4) as pool:
+        runs = dict(zip((RUNAWAY, *classmates), pool.map(run, enumerate((RUNAWAY, *classmates), start=4))))
+    assert runs[RUNAWAY]["died"], runs[RUNAWAY]
+    for name in classmates:
+        assert runs[name]["error"] is None and not runs[name]["died"], runs[name]
+        assert len(hub.read_json(name, "episode-result.json")["errors"]) == 3
+    assert _oom_kills(hub, RUNAWAY) >= 1  # the kernel's OOM killer, inside the student's group
+    assert all(_oom_kills(hub, name) == 0 for name in classmates)
+    # The runaway's server survived its kernel: the student can go on.
+    after = hub.run_in_kernel(RUNAWAY, "print(6 * 7)")
+    assert after["stdout"].strip() == "42"
+
+
+def _oom_kills(hub, name: str) -> int:
+    pid = hub.processes(name)[0].pid
+    group = next(line.split(":", 2)[2] for line in Path(f"/proc/{pid}/cgroup").read_text().splitlines()
+                 if ":memory:" in line)
+    control = Path("/sys/fs/cgroup/memory", group.lstrip("/"), "memory.oom_control").read_text()
+    return int(dict(line.split() for line in control.splitlines()).get("oom_kill", 0))
+
+
+@pytest.mark.timeout(600)
+def test_a_class_of_thirty_logs_in_at_once_and_every_episode_completes(hub, browser, artifacts):
+    started = time.perf_counter()
+    with ThreadPoolExecutor(len(STUDENTS)) as pool:
+        list(pool.map(lambda name: hub.login(name, password_of(name)), STUDENTS))
+    login_wall = time.perf_counter() - started
     for name in DRAWERS:
-        _page(hub.homes / name, "draw.ipynb", DRAW_PAGE)
-    (hub.homes / "instructor").mkdir(parents=True, exist_ok=True)
-    shutil.copy(REPO / "notebooks" / "class_view.ipynb", hub.homes / "instructor" / "class_view.ipynb")
+        _page(hub.homes / name, "draw.ipynb", DRAW_PAGE, name)
+    shutil.copy(REPO / "notebooks" / "class_view.ipynb", hub.homes / INSTRUCTOR / "class_view.ipynb")
+    os.chown(hub.homes / INSTRUCTOR / "class_view.ipynb", pwd.getpwnam(INSTRUCTOR).pw_uid, -1)
 
     started = time.perf_counter()
-    spawn = hub.spawn_class(STUDENTS)
+    waiting = [name for name in STUDENTS if not (hub.api("GET", f"/users/{name}").get("servers") or {}).get("")]
+    spawn = hub.spawn_class(waiting)
     spawn_wall = time.perf_counter() - started
-    assert sorted(spawn) == STUDENTS
-
-    retried = []
-
-    def teach(item):
-        number, name = item
-        try:
-            return hub.run_in_kernel(name, EPISODE_CODE.format(number=number))
-        except (RuntimeError, TimeoutError) as error:
-            # A kernel lost to the machine's load (its websocket dropped and the kernel is gone)
-            # is not the class's fault: once, in a new kernel, and said so in the output.
-            retried.append(f"{name}: {error}")
-            return hub.run_in_kernel(name, EPISODE_CODE.format(number=number))
 
     with ThreadPoolExecutor(len(STUDENTS)) as pool:
-        runs = dict(zip(STUDENTS, pool.map(teach, enumerate(STUDENTS))))
-    assert len(retried) <= 1, retried
+        runs = dict(zip(STUDENTS, pool.map(lambda item: hub.run_in_kernel(item[1], EPISODE_CODE.format(
+            number=item[0] % 12)), enumerate(STUDENTS))))
     results = {}
     for name, run in runs.items():
-        assert run["error"] is None, f"{name}: {run['error']}\n{run['stdout']}"
+        assert run["error"] is None and not run["died"], f"{name}: {run}"
         results[name] = hub.read_json(name, "episode-result.json")
         # Each student's numba cache is their own, in their home.
         assert results[name]["numba_cache"] == str(hub.homes / name / ".cache" / "numba")
-    assert max(results["student00"]["errors"]) < 1e-10  # no slip: taught exactly
-    assert all(min(results[n]["errors"]) > 1e-3 for n in STUDENTS[1:])
+        assert len(results[name]["errors"]) == 3
+    assert max(results["mtt-s00"]["errors"]) < 1e-10  # no slip: taught exactly
+    assert all(min(results[n]["errors"]) > 1e-3 for n in STUDENTS[1:12])
     memory = {name: hub.memory(name) for name in STUDENTS}
 
-    # Two students draw an arrow in Chromium, logged in through the hub.
+    # Two students draw an arrow in Chromium, logged in through the hub with their own passwords.
     for name in DRAWERS:
         context, page = local_page(browser, 1200, 1000)
         try:
             page.goto(f"{hub.url}/hub/login", timeout=60_000)
             page.fill("input[name=username]", name)
-            page.fill("input[name=password]", hub.password)
+            page.fill("input[name=password]", password_of(name))
             page.click("input[type=submit], button[type=submit]")
             page.wait_for_url("**/user/**", timeout=120_000)
             page.goto(hub.user_url(name, "/voila/render/draw.ipynb"), timeout=120_000)
@@ -127,30 +331,33 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
         finally:
             context.close()
 
-    # The class folder holds every student, with their episode and, for the two, a drawn arrow.
+    # The class folder holds every student the hub or class_admin.py prepared, those not started yet
+    # with no events; the leaver's file stays (recorded work is kept when someone leaves).
+    roster_students = [*STUDENTS, GUESSED, RUNAWAY, LATE, LEAVER]
     progress = summarise(read_class(hub.class_folder))
-    assert len(progress.students) == len(STUDENTS) and progress.problems == []
+    assert len(progress.students) == len(roster_students) and progress.problems == []
     drawn = [e for s in read_class(hub.class_folder).students.values() for e in s.events
              if e["kind"] == "demonstration" and e.get("method") == "pointer"]
     assert len(drawn) == 2 and {e["lesson"] for e in drawn} == {"hub-draw"}
-    recorded = [error for errors in sorted(s.errors for s in progress.students) for error in errors]
-    returned = [error for errors in sorted(r["errors"] for r in results.values()) for error in errors]
-    assert recorded == pytest.approx(returned, rel=1e-12)
-    assert progress.exercise_shares("a1_ridge_learner") and len(progress.exercise_shares("a1_ridge_learner")) == 12
+    recorded = sorted(e["error"] for s in read_class(hub.class_folder).students.values() for e in s.events
+                      if e["kind"] == "episode" and e["lesson"] == "hub-episode")
+    returned = sorted(error for r in results.values() for error in r["errors"])
+    # Every episode of the thirty is recorded (earlier tests' episodes are recorded too).
+    assert Counter(returned) <= Counter(recorded) and len(returned) == 3 * len(STUDENTS)
 
     # The instructor opens the class view on the hub: every student is there.
-    hub.spawn("instructor")
+    hub.ensure_running(INSTRUCTOR)
     context, page = local_page(browser, 1400, 1300)
     try:
         page.goto(f"{hub.url}/hub/login", timeout=60_000)
-        page.fill("input[name=username]", "instructor")
-        page.fill("input[name=password]", hub.password)
+        page.fill("input[name=username]", INSTRUCTOR)
+        page.fill("input[name=password]", INSTRUCTOR_PASSWORD)
         page.click("input[type=submit], button[type=submit]")
         page.wait_for_url("**/user/**", timeout=120_000)
-        page.goto(hub.user_url("instructor", "/voila/render/class_view.ipynb"), timeout=120_000)
+        page.goto(hub.user_url(INSTRUCTOR, "/voila/render/class_view.ipynb"), timeout=120_000)
         page.wait_for_function("() => (document.querySelector('.class-status') || {}).textContent"
-                               "?.includes('12 students')", timeout=120_000)
-        assert page.locator("tr.student-row").count() == 12
+                               f"?.includes('{len(roster_students)} students')", timeout=120_000)
+        assert page.locator("tr.student-row").count() == len(roster_students)
         page.screenshot(path=artifacts("class-view"), full_page=True)
     finally:
         context.close()
@@ -160,21 +367,22 @@ def test_a_class_of_twelve_spawns_teaches_and_shows_up_in_the_class_view(hub, br
 
     spawn_times = sorted(spawn.values())
     latencies = sorted(latency for r in results.values() for latency in r["latencies_s"])
-    print(f"\nclass of {len(STUDENTS)}: spawned in {spawn_wall:.1f} s; "
-          f"spawn p50 {statistics.median(spawn_times):.1f} s, "
-          f"max {spawn_times[-1]:.1f} s; feedback latency p50 {statistics.median(latencies) * 1000:.0f} ms, "
-          f"max {latencies[-1] * 1000:.0f} ms; memory per student {statistics.median(memory.values()) / 2**20:.0f} MiB"
-          + (f"; retried once: {retried}" if retried else ""))
+    print(f"\nclass of {len(STUDENTS)}: logged in at once in {login_wall:.1f} s; {len(waiting)} spawned in "
+          f"{spawn_wall:.1f} s (p50 {statistics.median(spawn_times):.1f} s, max {spawn_times[-1]:.1f} s); "
+          f"feedback latency all at once p50 {statistics.median(latencies) * 1000:.0f} ms, "
+          f"max {latencies[-1] * 1000:.0f} ms; "
+          f"memory per student {statistics.median(memory.values()) / 2**20:.0f} MiB; "
+          f"load average {os.getloadavg()[0]:.1f}")
 
 
-@pytest.mark.timeout(300)
-def test_the_nbgrader_exchange_works_on_the_hub(hub, tmp_path):
-    course = copy_course(tmp_path / "course")
+@pytest.mark.timeout(600)
+def test_the_nbgrader_exchange_works_on_the_hub_and_keeps_submissions_apart(hub):
+    course = copy_course(hub.course / "mt-widgets")
     env = course_env(MT_WIDGETS_EXCHANGE=str(hub.exchange))
     for step in (("generate_assignment", ASSIGNMENT, "--force"), ("release_assignment", ASSIGNMENT, "--force")):
         result = nbgrader(course, *step, env=env)
         assert result.returncode == 0, result.stdout + result.stderr
-    submitters = {"student02": "solution", "student03": "untouched"}
+    submitters = {STUDENTS[8]: "solution", STUDENTS[9]: "untouched"}
     for name in submitters:
         hub.ensure_running(name)
     ids = {"course_id": "mt-widgets", "assignment_id": ASSIGNMENT}
@@ -192,6 +400,12 @@ def test_the_nbgrader_exchange_works_on_the_hub(hub, tmp_path):
         submitted = hub.server_api(name, "POST", "/assignments/submit", data=ids)
         assert submitted["success"], submitted
         assert any(a["status"] == "submitted" for a in submitted["value"]), submitted
+    # A student cannot see what classmates submitted (nbgrader's inbound: write, no listing).
+    inbound = hub.exchange / "mt-widgets" / "inbound"
+    peek = hub.run_in_kernel(STUDENTS[9], f"import os\ntry:\n    print(os.listdir({str(inbound)!r}))\n"
+                                          "except PermissionError:\n    print('denied')\n")
+    assert peek["stdout"].strip() == "denied", peek
+    assert {p.stat().st_uid for p in inbound.iterdir()} == {pwd.getpwnam(n).pw_uid for n in submitters}
     for step in (("collect", ASSIGNMENT), ("autograde", ASSIGNMENT, "--create"), ("generate_feedback", ASSIGNMENT),
                  ("release_feedback", ASSIGNMENT)):
         result = nbgrader(course, *step, env=env)

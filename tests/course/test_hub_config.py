@@ -1,55 +1,232 @@
-"""deploy/jupyterhub/jupyterhub_config.py, loaded without starting a hub: what every class gets."""
+"""deploy/jupyterhub/jupyterhub_config.py loaded without starting a hub, and its Zero to JupyterHub twin.
+
+Loading the config prepares the roster's accounts (system users ``mtt-cfg-...``), so these tests
+run as root, like the hub, and remove what they made.
+"""
 
 from __future__ import annotations
 
+import grp
 import os
+import pwd
+import secrets
+import shutil
+import stat
+import subprocess
+import sys
 from pathlib import Path
 from types import SimpleNamespace
 
+import pytest
+import yaml
+from jupyterhub.spawner import LocalProcessSpawner
 from traitlets.config.loader import PyFileConfigLoader
 
 from .course_support import REPO
+from .hub_support import STUDENT_PYTHON
 
-CONFIG = REPO / "deploy" / "jupyterhub" / "jupyterhub_config.py"
+HUB = REPO / "deploy" / "jupyterhub"
+CONFIG = HUB / "jupyterhub_config.py"
+sys.path.insert(0, str(HUB))
+import class_hub  # noqa: E402
+from roster_authenticator import RosterAuthenticator  # noqa: E402
+
+pytestmark = pytest.mark.skipif(os.geteuid() != 0, reason="the class hub's config makes system users: run as root")
+
+TEACHER, ANN = "mtt-cfg-teacher", "mtt-cfg-ann"
+GROUP = "mtt-cfg-instructors"
 
 
-def _load(tmp_path, monkeypatch, **env):
-    for name, value in {"MT_HUB_STATE": str(tmp_path / "state"), **env}.items():
-        monkeypatch.setenv(name, value)
-    return PyFileConfigLoader(CONFIG.name, path=str(CONFIG.parent)).load_config()
+def _remove_accounts():
+    for user in pwd.getpwall():
+        if user.pw_name.startswith("mtt-cfg-"):
+            subprocess.run(["userdel", user.pw_name], capture_output=True, timeout=60)
+    subprocess.run(["groupdel", GROUP], capture_output=True, timeout=60)
 
 
-def test_the_hub_listens_on_loopback_only_with_the_dummy_authenticator(tmp_path, monkeypatch):
-    config = _load(tmp_path, monkeypatch, MT_HUB_PORT="8123")
+@pytest.fixture
+def setting(tmp_path, monkeypatch):
+    """Loads the config with a two-person roster; returns a function (more env -> config)."""
+    cgroup = f"mtt-cfg-{secrets.token_hex(3)}"
+    runtime = Path("/tmp", cgroup)
+    roster = tmp_path / "roster.csv"
+    roster.write_text(f"login,role\n{TEACHER},instructor\n{ANN},\n")
+    python = STUDENT_PYTHON if STUDENT_PYTHON.exists() else Path(sys.executable)
+    base = {"MT_HUB_ROSTER": str(roster), "MT_HUB_STATE": str(tmp_path / "state"),
+            "MT_HUB_HOMES": str(tmp_path / "homes"), "MT_HUB_RUNTIME": str(runtime),
+            "MT_HUB_INSTRUCTORS_GROUP": GROUP, "MT_HUB_CGROUP": cgroup, "MT_HUB_STUDENT_PYTHON": str(python),
+            "MT_WIDGETS_CLASS_FOLDER": str(tmp_path / "class"), "MT_WIDGETS_EXCHANGE": "/srv/exchange"}
+
+    def load(**env):
+        for name, value in {**base, **env}.items():
+            monkeypatch.setenv(name, value)
+        return PyFileConfigLoader(CONFIG.name, path=str(CONFIG.parent)).load_config()
+
+    load.roster, load.tmp, load.cgroup = roster, tmp_path, cgroup
+    yield load
+    _remove_accounts()
+    shutil.rmtree(runtime, ignore_errors=True)
+    for controller in ("memory", "cpu"):
+        for group in sorted(Path("/sys/fs/cgroup", controller).rglob(cgroup), reverse=True):
+            for child in group.iterdir():
+                if child.is_dir():
+                    child.rmdir()
+            group.rmdir()
+
+
+def _spawner(config, name, tmp_path, admin=False):
+    return SimpleNamespace(user=SimpleNamespace(name=name, admin=admin), port=0, log=SimpleNamespace(
+        warning=lambda *a: None), home_dir=str(tmp_path / "homes" / name))
+
+
+def test_the_hub_listens_on_loopback_with_the_roster_authenticator_and_each_students_own_user(setting):
+    config = setting(MT_HUB_PORT="8123")
     assert config.JupyterHub.ip == config.JupyterHub.hub_ip == "127.0.0.1"
     assert config.ConfigurableHTTPProxy.api_url.startswith("http://127.0.0.1:")
     assert config.JupyterHub.port == 8123
-    assert config.JupyterHub.authenticator_class == "dummy"
-    assert config.JupyterHub.spawner_class == "simple"
-    assert ("--allow-root" in config.Spawner.args) == (os.geteuid() == 0)
+    assert config.JupyterHub.authenticator_class is RosterAuthenticator or \
+        config.JupyterHub.authenticator_class.__name__ == "RosterAuthenticator"
+    assert "allow_all" not in config.Authenticator
+    assert config.Authenticator.admin_users == {TEACHER}
+    assert issubclass(config.JupyterHub.spawner_class, LocalProcessSpawner)
+    assert "--allow-root" not in config.Spawner.get("args", [])
+    assert config.Spawner.cmd[1:] == ["-m", "jupyterhub.singleuser"]
+    culler = next(s for s in config.JupyterHub.services if s["name"] == "idle-culler")
+    assert f"--timeout={class_hub.DEFAULT_CULL_IDLE_S}" in culler["command"]
 
 
-def test_each_student_gets_their_own_numba_cache_and_nothing_writes_into_the_install(tmp_path, monkeypatch):
-    config = _load(tmp_path, monkeypatch, MT_WIDGETS_CLASS_FOLDER="/srv/class", MT_WIDGETS_EXCHANGE="/srv/exchange")
-    environment = config.Spawner.environment
-    spawner = SimpleNamespace(home_dir=str(tmp_path / "homes" / "ada"), user=SimpleNamespace(name="ada"), port=0)
-    assert environment["NUMBA_CACHE_DIR"](spawner) == str(tmp_path / "homes" / "ada" / ".cache" / "numba")
-    assert environment["PYTHONDONTWRITEBYTECODE"] == "1"
-    assert environment["MT_WIDGETS_CLASS_FOLDER"] == "/srv/class"
-    assert environment["MT_WIDGETS_EXCHANGE"] == "/srv/exchange"
-    assert Path(environment["JUPYTER_CONFIG_PATH"], "nbgrader_config.py").is_file()
+def test_loading_the_config_makes_each_roster_login_a_private_system_user(setting):
+    setting()
+    for login, admin in ((TEACHER, True), (ANN, False)):
+        user = pwd.getpwnam(login)
+        assert user.pw_uid != 0 and user.pw_gecos == class_hub.MARKER
+        home = Path(user.pw_dir)
+        assert home == setting.tmp / "homes" / login
+        assert stat.S_IMODE(home.stat().st_mode) == 0o700 and home.stat().st_uid == user.pw_uid
+        assert (login in grp.getgrnam(GROUP).gr_mem) == admin
+    # The class folder: only instructors list it; each student's file is theirs, made before they start.
+    folder = setting.tmp / "class"
+    assert stat.S_IMODE(folder.stat().st_mode) == class_hub.CLASS_FOLDER_MODE
+    assert folder.stat().st_gid == grp.getgrnam(GROUP).gr_gid
+    files = [p for p in folder.glob("*.jsonl")]
+    assert len(files) == 1 and files[0].stat().st_uid == pwd.getpwnam(ANN).pw_uid
+    assert stat.S_IMODE(files[0].stat().st_mode) == 0o640
 
 
-def test_the_spawn_hook_copies_a_warm_cache_once_and_picks_a_port_below_the_ephemeral_range(tmp_path, monkeypatch):
-    template = tmp_path / "template"
+def test_a_roster_login_that_is_someone_elses_system_user_is_refused(setting):
+    subprocess.run(["useradd", "--no-create-home", "mtt-cfg-other"], check=True, timeout=60)
+    setting.roster.write_text("login\nmtt-cfg-other\n")
+    with pytest.raises(class_hub.ClassHubError, match="was not made by the class hub"):
+        setting()
+
+
+def test_a_bad_roster_stops_the_hub_naming_the_line(setting):
+    setting.roster.write_text("login,role\nann,student\nann,student\nroot,\n")
+    with pytest.raises(ValueError, match=r"line 3: duplicate login 'ann'.*\n.*line 4: login 'root' is reserved"):
+        setting()
+    assert "mtt-cfg" not in " ".join(u.pw_name for u in pwd.getpwall())
+
+
+def test_the_spawn_hook_gives_a_warm_cache_a_runtime_folder_cgroups_and_a_port_outside_the_ephemeral_range(setting):
+    template = setting.tmp / "template"
     (template / "core_x").mkdir(parents=True)
     (template / "core_x" / "f.nbi").write_text("index")
-    config = _load(tmp_path, monkeypatch, MT_HUB_NUMBA_TEMPLATE=str(template))
-    spawner = SimpleNamespace(home_dir=str(tmp_path / "homes" / "ada"), user=SimpleNamespace(name="ada"), port=0)
+    config = setting(MT_HUB_NUMBA_TEMPLATE=str(template), MT_HUB_MEM_LIMIT="700M", MT_HUB_CPU_LIMIT="0.5")
+    spawner = _spawner(config, ANN, setting.tmp)
     config.Spawner.pre_spawn_hook(spawner)
-    cached = tmp_path / "homes" / "ada" / ".cache" / "numba" / "core_x" / "f.nbi"
-    assert cached.read_text() == "index"
+    ann = pwd.getpwnam(ANN)
+    cached = setting.tmp / "homes" / ANN / ".cache" / "numba" / "core_x" / "f.nbi"
+    assert cached.read_text() == "index" and cached.stat().st_uid == ann.pw_uid
     assert 20000 <= spawner.port < 32768
+    runtime = Path("/tmp", setting.cgroup, ANN)
+    assert runtime.stat().st_uid == ann.pw_uid and stat.S_IMODE(runtime.stat().st_mode) == 0o700
+    memory = next(Path("/sys/fs/cgroup/memory").rglob(f"{setting.cgroup}/{ANN}"))
+    cpu = next(Path("/sys/fs/cgroup/cpu").rglob(f"{setting.cgroup}/{ANN}"))
+    assert int((memory / "memory.limit_in_bytes").read_text()) == 700 * 2**20
+    assert int((cpu / "cpu.cfs_quota_us").read_text()) == int((cpu / "cpu.cfs_period_us").read_text()) // 2
     cached.write_text("the student's own")
     config.Spawner.pre_spawn_hook(spawner)  # a restart keeps the student's cache
     assert cached.read_text() == "the student's own"
+    config.Spawner.post_stop_hook(spawner)
+    assert not memory.exists() and not cpu.exists()
+    # Someone taken off the roster does not start again.
+    setting.roster.write_text(f"login,role\n{TEACHER},instructor\n")
+    with pytest.raises(class_hub.ClassHubError, match="no longer on the roster"):
+        config.Spawner.pre_spawn_hook(spawner)
+
+
+def test_each_students_caches_and_runtime_are_their_own_and_nothing_writes_into_the_install(setting):
+    config = setting()
+    environment = config.Spawner.environment
+    spawner = _spawner(config, ANN, setting.tmp)
+    assert environment["NUMBA_CACHE_DIR"](spawner) == str(setting.tmp / "homes" / ANN / ".cache" / "numba")
+    assert environment["JUPYTER_RUNTIME_DIR"](spawner) == str(Path("/tmp", setting.cgroup, ANN))
+    assert environment["PYTHONDONTWRITEBYTECODE"] == "1"
+    assert environment["PYTHONPATH"].split(os.pathsep)[0] == str(HUB / "student-site")
+    assert "node" not in os.listdir(environment["PATH"](spawner))  # JupyterLab would run yarn at every start
+    assert environment["MT_WIDGETS_CLASS_FOLDER"] == str(setting.tmp / "class")
+    assert environment["MT_WIDGETS_EXCHANGE"] == "/srv/exchange"
+    assert environment["MT_HUB_ROLE"](spawner) == "student"
+    assert environment["MT_HUB_ROLE"](_spawner(config, TEACHER, setting.tmp, admin=True)) == "instructor"
+    for name in ("nbgrader_config.py", "jupyter_server_config.py"):
+        assert Path(environment["JUPYTER_CONFIG_PATH"], name).is_file()
+
+
+def _server_config(role: str):
+    os.environ["MT_HUB_ROLE"] = role
+    try:
+        return PyFileConfigLoader("jupyter_server_config.py", path=str(HUB / "student-config")).load_config()
+    finally:
+        os.environ.pop("MT_HUB_ROLE")
+
+
+def test_students_servers_use_ipc_kernels_and_leave_out_what_lessons_do_not_use():
+    student = _server_config("student")
+    assert student.KernelManager.transport == "ipc"
+    assert student.ServerApp.terminals_enabled is False
+    off = {name for name, enabled in student.ServerApp.jpserver_extensions.items() if not enabled}
+    assert off == {"jupyter_lsp", "jupyter_server_terminals", "nbgrader.server_extensions.formgrader"}
+    instructor = _server_config("instructor")
+    assert instructor.KernelManager.transport == "ipc"
+    assert "jpserver_extensions" not in instructor.ServerApp
+
+
+def test_the_installation_check_names_the_folder_students_cannot_enter(tmp_path):
+    locked = tmp_path / "locked"
+    (locked / "inner").mkdir(parents=True)
+    (locked / "inner" / "python").write_text("")
+    os.chmod(locked / "inner" / "python", 0o755)
+    os.chmod(locked, 0o700)
+    problems = class_hub.installation_problems([locked / "inner" / "python"])
+    assert f"students cannot enter {locked} (needed for {locked / 'inner' / 'python'}): chmod o+x {locked}" in problems
+    os.chmod(locked, 0o755)
+    assert not any(p.endswith(f"chmod o+x {locked}") for p in class_hub.installation_problems([locked / "inner"]))
+
+
+def test_the_zero_to_jupyterhub_values_carry_the_same_authenticator_roster_isolation_and_limits():
+    values = yaml.safe_load((HUB / "z2jh" / "values.yaml").read_text())
+    hub = values["hub"]["config"]
+    assert hub["JupyterHub"]["authenticator_class"] == "roster_authenticator.RosterAuthenticator"
+    for trait in ("min_password_length", "max_failures", "lockout_seconds", "failure_delay_seconds"):
+        assert hub["RosterAuthenticator"][trait] == getattr(RosterAuthenticator, trait).default_value, trait
+    assert hub["RosterAuthenticator"]["roster_path"] == values["hub"]["extraEnv"]["MT_HUB_ROSTER"]
+    assert "c.KubeSpawner.uid = _uid" in values["hub"]["extraConfig"]["mt-class"]  # a uid per login
+    single = values["singleuser"]
+    assert class_hub.parse_bytes(single["memory"]["limit"]) == class_hub.parse_bytes(class_hub.DEFAULT_MEM_LIMIT)
+    assert float(single["cpu"]["limit"]) == class_hub.DEFAULT_CPU_LIMIT
+    assert single["extraPodConfig"]["securityContext"]["runAsNonRoot"] is True
+    assert single["extraEnv"]["PYTHONDONTWRITEBYTECODE"] == "1"
+    assert values["cull"]["enabled"] is True and values["cull"]["timeout"] == class_hub.DEFAULT_CULL_IDLE_S
+    dockerfile = (HUB / "z2jh" / "Dockerfile").read_text()
+    assert f"COPY deploy/jupyterhub/student-config {single['extraEnv']['JUPYTER_CONFIG_PATH']}" in dockerfile
+    assert "roster_authenticator.py" in dockerfile and "AS hub" in dockerfile and "AS singleuser" in dockerfile
+
+
+def test_students_servers_leave_out_the_package_that_costs_seconds_at_every_start():
+    code = ("import sys, jsonschema, jupyter_events\n"
+            "jsonschema.validate({'a': 1}, {'type': 'object', 'properties': {'a': {'type': 'integer'}}})\n"
+            "print('rfc3987_syntax' in sys.modules)")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(HUB / "student-site"), str(REPO)]))
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "False"

@@ -373,7 +373,7 @@ def test_a_stop_while_the_arm_checks_reachability_means_the_move_is_never_sent()
         with pytest.raises(SwiftProStopped, match="not sent"):
             arm.move_to(250.0, 20.0)
         lines = sent_lines(arm)
-        last_stop = max(i for i, line in enumerate(lines) if line.split()[1:2] in (["S1100"], ["S1000"], ["G2203"]))
+        last_stop = max(i for i, line in enumerate(lines) if line.split()[1:2] in (["S1100"], ["S1000"], ["M2000"]))
         assert not any(line.split()[1] in ("G0", "G1") for line in lines[last_stop:])
         assert not any(line.split()[1] in ("G0", "G1") for line in lines if "X250" in line.replace(" ", ""))
         arm.is_reachable = ask_arm

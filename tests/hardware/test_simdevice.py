@@ -55,7 +55,7 @@ def test_4x_move_replies_when_done_and_position_query_overtakes_it():
 def test_3x_answers_a_move_when_queued_and_reports_moving_with_m2200():
     dev, t = booted(3)
     dev.write(b"#1 G0 X250 Y0 Z100 F3000\n", t)  # F in mm/min: 50 mm/s
-    assert lines(dev, t) == ["$1 ok"]
+    assert lines(dev, t) == ["$1 ok "]  # Marlin prints "ok ", then the (empty) reply buffer
     dev.write(b"#2 M2200\n", t + 0.5)
     assert lines(dev, t + 0.5) == ["$2 ok V1"]
     dev.write(b"#3 M2200\n", t + 1.1)
@@ -75,19 +75,33 @@ def test_move_with_motors_detached_gives_e27_on_4x():
     assert lines(dev, t) == ["$1 ok", "$2 E27"]
 
 
-@pytest.mark.parametrize("line", [b"#3 G0 X1e-05 Y0 Z100 F100\n", b"#3 M2222 X200 Y0 Z100\n", b"#3 G0 X2.0.1\n"])
-def test_malformed_numbers_or_missing_fields_give_e21(line):
+@pytest.mark.parametrize("line, answer", [
+    (b"#3 G0 X1e-05 Y0 Z100 F100\n", "$3 E20"),    # grbl reads X1, then E-05 is an unsupported word
+    (b"#3 M2222 X200 Y0 Z100\n", "$3 E21"),         # the fixed pattern wants P too
+    (b"#3 M2222 X2e2 Y0 Z100 P0\n", "$3 E21"),      # %[0-9-+.] stops at the E
+    (b"#3 G0 X2.0.1\n", "$3"),                      # grbl: expected a letter, reported with nothing
+    (b"#3 G1 X210 Y0 Z100\n", "$3"),                # G1 with no feed rate ever: likewise
+])
+def test_4x_number_grammar_and_missing_fields(line, answer):
     dev, t = booted()
     dev.write(line, t)
-    assert lines(dev, t) == ["$3 E21"]
+    assert lines(dev, t) == [answer]
+
+
+def test_3x_number_grammar_is_marlins_strtod():
+    dev, t = booted(3)
+    dev.write(b"#3 G0 X200 Y1e-05 Z100 F6000\n", t)  # strtod takes the exponent
+    assert lines(dev, t) == ["$3 ok "]
+    dev.write(b"#4 M2222 X2e2 Y0 Z100\n#5 M2222 X200 Y0\n", t)
+    assert lines(dev, t) == ["$4 ok V1", "$5 E21 "]
 
 
 def test_unknown_command_gives_e20_on_4x_and_an_echo_without_reply_on_3x():
     dev4, t = booted(4)
-    dev4.write(b"#9 G28\n", t)
+    dev4.write(b"#9 M2999\n", t)
     assert lines(dev4, t) == ["$9 E20"]
     dev3, t = booted(3)
-    dev3.write(b"#9 G28\n", t)
+    dev3.write(b"#9 M2999\n", t)
     out = lines(dev3, t)
     assert len(out) == 1 and out[0].startswith("echo:Unknown command") and "$9" not in out[0]
 

@@ -85,10 +85,7 @@ def demonstrations(events) -> list[tuple]:
             for e in events if e["type"] == "demonstration"]
 
 
-__all__ = ["SHORT_PROTOCOL", "demonstrations", "load_protocol", "run", "scripted_action", "short_protocol"]
-
-
-# -- a protocol with the steps around the task (tests/study/test_steps.py, test_bids.py) --------------
+# -- a protocol with every kind of step around the task (tests/study/test_steps.py, test_bids.py) ----
 
 VIDEO = PROTOCOL_FOLDER / "media" / "instructions.webm"
 
@@ -151,7 +148,7 @@ required = false
 """
 
 
-def with_steps(extra: str = STEPS, base: str = SHORT_PROTOCOL) -> str:
+def _with_steps(extra: str = STEPS, base: str = SHORT_PROTOCOL) -> str:
     # Top-level keys go before the first table; the step tables at the end; practice draws only.
     base = base.replace('text = "Practice."', 'text = "Practice."\nreproduction = false')
     head, tables = extra.split("[[before]]", 1) if "[[before]]" in extra else (extra, "")
@@ -160,7 +157,7 @@ def with_steps(extra: str = STEPS, base: str = SHORT_PROTOCOL) -> str:
 
 
 def steps_protocol(extra: str = STEPS):
-    return parse_protocol(with_steps(extra), "steps.toml")
+    return parse_protocol(_with_steps(extra), "steps.toml")
 
 
 def run_to_end(session, answers=None):
@@ -187,6 +184,67 @@ def run_to_end_one(session, answers=None, plays: int = 1):
         session.finish_episode()
     else:
         session.advance()
+
+
+__all__ = ["FOLLOWUP_SESSION", "SHORT_PROTOCOL", "STEPS", "VIDEO", "_with_steps", "act", "click_primary",
+           "demonstrations", "followup_protocol", "load_protocol", "run", "run_all", "run_to_end", "run_to_end_one",
+           "scripted_action", "short_protocol", "steps_protocol"]
+
+
+#: A follow-up session a week (to two weeks) after SHORT_PROTOCOL's main session: retention of
+#: skill A and transfer to skill B, with its own questionnaire.
+FOLLOWUP_SESSION = """
+[[sessions]]
+id = "followup-1w"
+welcome = "Welcome back."
+instructions = "As last time."
+thank_you = "Thank you, that was the last session."
+
+[sessions.window]
+earliest = "7d"
+latest = "14d"
+too_early = "refuse"
+too_late = "{late}"
+too_early_text = "Too early: come back on {{opens}}."
+
+[[sessions.phases]]
+id = "F1"
+skill = "uarm-point"
+episodes = 1
+instructions = "Retention."
+
+[[sessions.phases]]
+id = "F2"
+skill = "uarm-line"
+episodes = 1
+instructions = "Transfer."
+
+[[sessions.after]]
+id = "followup_tlx"
+kind = "questionnaire"
+
+[[sessions.after.items]]
+id = "effort"
+kind = "likert"
+prompt = "How hard did you work?"
+levels = ["1", "2", "3", "4", "5"]
+"""
+
+
+def followup_protocol(late: str = "refuse"):
+    """SHORT_PROTOCOL with FOLLOWUP_SESSION (too late: ``late``, "refuse" or "flag")."""
+    return parse_protocol(SHORT_PROTOCOL + FOLLOWUP_SESSION.replace("{late}", late).replace("{{", "{")
+                          .replace("}}", "}"), "short-followup.toml")
+
+
+def run_all(session) -> None:
+    """Drives ``session`` to its end, answering every question with its first option."""
+    while not session.finished:
+        step = session.current_step()
+        if step.kind in ("questionnaire", "demographics", "eligibility"):
+            session.submit_answers({item.id: item.choices[0] for item in step.study_step.items})
+        else:
+            run(session, stop_after=1)
 
 
 # -- a participant through the study app's widgets (tests/study/test_app.py, test_rolled_out_once.py) ---

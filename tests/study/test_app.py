@@ -1,17 +1,22 @@
 """The participant app: the experimenter panel stays apart, blinding holds, bad input is refused
 before the participant starts, and a new kernel resumes where the last one stopped."""
 
+import datetime
 import re
+import time
+import types
 
 import numpy as np
 import pytest
 from ipywidgets import Button
 
+from blinding_support import participant_texts
 from mt_widgets import SKILLS
-from mt_widgets.apps import StudyApp, participant_texts
+from mt_widgets.apps import StudyApp
 from mt_widgets.study import LogError, SessionStateError, read_events
+from mt_widgets.study.protocol import PROTOCOL_FOLDER
 
-from .scripted import SHORT_PROTOCOL, act
+from .scripted import SHORT_PROTOCOL, act, click_primary
 
 
 @pytest.fixture
@@ -148,3 +153,189 @@ def test_the_group_dropdown_shows_randomised_and_the_panel_says_what_the_start_d
     # Switching the protocol keeps the choice visible.
     panel.protocol.value = str(protocol_file)
     assert panel.group.label == "randomised (block randomisation)"
+
+
+# -- issue 18: buttons act once, plain words, the video, the practice clock, the arrow named ------------------
+
+VIDEO = PROTOCOL_FOLDER / "media" / "instructions.webm"
+AROUND = """
+guidance_modality = "arrows"
+"""
+AROUND_STEPS = f"""
+[[before]]
+id = "video"
+kind = "video"
+file = "{VIDEO}"
+require_watched = true
+
+[[before]]
+id = "consent"
+kind = "consent"
+text = "Do you agree?"
+
+[[before]]
+id = "about"
+kind = "demographics"
+"""
+
+
+def steps_protocol_file(tmp_path) -> str:
+    base = SHORT_PROTOCOL.replace('text = "Practice."', 'text = "Practice."\nreproduction = false')
+    first = base.index("[assignment]")
+    path = tmp_path / "around.toml"
+    path.write_text(base[:first] + AROUND + base[first:] + AROUND_STEPS)
+    return str(path)
+
+
+def buttons_in(widget):
+    found, pending = [], [widget]
+    while pending:
+        node = pending.pop(0)
+        if isinstance(node, Button) and node.layout.display != "none":
+            found.append(node)
+        pending += list(getattr(node, "children", ()))
+    return found
+
+
+def double_press(button):
+    """A double click: both clicks reach the kernel before the page has changed."""
+    button.click()
+    button.click()
+
+
+def test_every_button_of_the_study_path_pressed_twice_acts_once(tmp_path):
+    app = StudyApp(protocol=steps_protocol_file(tmp_path), log_folder=tmp_path / "logs")
+    app.start_participant("P01", group="target")
+    pressed = set()
+    while not app.session.finished:
+        step = app.session.current_step()
+        before = len(app.session.events)
+        if step.kind == "video":
+            app.video.ended_button.click()
+            double_press(app.video.continue_button)
+        elif step.kind == "demographics":
+            app.form.fields["age"].value = "30"
+            app.form.fields["sex"].value = "female"
+            double_press(app.form.continue_button)
+        elif step.kind == "practice":
+            app._practice_done.disabled = False
+            double_press(app._practice_done)
+        elif step.kind in ("demonstration", "episode_end"):
+            if app.episode.phase == "guidance":
+                double_press(app.episode.next_button)
+            else:
+                app.episode.demonstrate(SKILLS[step.skill].target_actions(step.state[None])[0] + 0.3)
+                continue
+        elif step.kind == "reproduction":
+            double_press(app._continue)
+        else:
+            primary = [b for b in buttons_in(app.body) if b.button_style == "primary"]
+            double_press(primary[0])
+        pressed.add(step.kind)
+        assert app.stopped_by is None, app.stopped_by
+        if step.kind not in ("demonstration", "episode_end"):
+            # One step's event (and the next step's own, e.g. an episode's start), never two steps.
+            done = [e["type"] for e in app.session.events[before:]]
+            assert done[0] != "session_finished" or step.kind == "questionnaire"
+            assert sum(t in ("screen_done", "step_done", "consent_given", "practice_finished") for t in done) <= 1
+    assert pressed >= {"welcome", "video", "consent", "demographics", "instructions", "practice", "phase_intro",
+                       "demonstration", "reproduction"}
+    assert app.session.completed
+
+
+def test_a_double_yes_withdraw_ends_on_the_withdrawal_screen_with_nothing_left_to_press(tmp_path, protocol_file):
+    app = StudyApp(protocol=protocol_file, log_folder=tmp_path / "logs")
+    app.start_participant("P04")
+    double_press(app.withdraw_button)
+    yes = [b for b in buttons_in(app.withdraw_box) if b.description == "Yes, withdraw"][0]
+    double_press(yes)
+    assert app.stopped_by is None and app.session.ended == "withdrawn"
+    text = " ".join(participant_texts(app.participant_view))
+    assert "resume participant" not in text.lower() and "Please call the experimenter" not in text
+    assert app.withdraw_box.layout.display == "none"
+    app.withdraw()  # code calling it again: nothing happens
+    assert [e["type"] for e in read_events(tmp_path / "logs" / "P04.jsonl")[0]].count("withdrawn") == 1
+
+
+def test_a_stopped_page_offers_no_withdraw_button(tmp_path, protocol_file):
+    app = StudyApp(protocol=protocol_file, log_folder=tmp_path / "logs")
+    app.start_participant("P01")
+    app.stop_for_experimenter(LogError("the disk is full"))
+    assert app.withdraw_box.layout.display == "none"
+    assert not [b for b in buttons_in(app.participant_view) if not b.disabled and b.layout.display != "none"]
+
+
+def test_form_problems_are_said_in_plain_words_and_nothing_is_logged(tmp_path):
+    app = StudyApp(protocol=steps_protocol_file(tmp_path), log_folder=tmp_path / "logs")
+    app.start_participant("P01")
+    while app.session.current_step().kind != "demographics":
+        step = app.session.current_step()
+        if step.kind == "video":
+            app.video.ended_button.click()
+            app.video.continue_button.click()
+        else:
+            [b for b in buttons_in(app.body) if b.button_style == "primary"][0].click()
+    logged = len(app.session.events)
+    for age, words in (("-5", "from 18 to 120"), ("twelve", "in digits"), ("30.5", "whole number"),
+                       ("", "Please answer")):
+        app.form.fields["age"].value = age
+        app.form.fields["sex"].value = "female"
+        app.form.continue_button.click()
+        message = app.form.message.value
+        assert words in message and "Your age" in message, message
+        assert "answers[" not in message and "expected" not in message
+        assert not app.form.continue_button.disabled  # offered again
+    assert len(app.session.events) == logged and app.stopped_by is None
+    app.form.fields["age"].value = "30"
+    app.form.continue_button.click()
+    assert app.session.current_step().kind == "instructions"
+
+
+def test_a_video_scrubbed_to_its_end_does_not_count_as_watched(tmp_path):
+    app = StudyApp(protocol=steps_protocol_file(tmp_path), log_folder=tmp_path / "logs")
+    app.start_participant("P01")
+    click_primary(app)  # welcome
+    video = app.video
+    video.played_button.click()
+    video.skipped_button.click()  # the player reached its end by seeking
+    assert video.continue_button.disabled and not video.watched_to_end
+    assert "skipped ahead" in video.note.value
+    video.ended_button.click()  # played through
+    assert not video.continue_button.disabled
+    video.continue_button.click()
+    done = [e for e in app.session.events if e["type"] == "step_done"][-1]
+    assert done["watched_to_end"] is True and done["plays"] == 1
+
+
+def test_the_practice_clock_continues_after_a_reload(tmp_path, protocol_file, monkeypatch):
+    from mt_widgets.apps.study import practice
+    first = StudyApp(protocol=protocol_file, log_folder=tmp_path / "logs")
+    first.start_participant("P01")
+    while first.session.current_step().kind != "practice":
+        act(first)
+    first.session.close()
+    started = [e for e in first.session.events if e["type"] == "practice_started"][0]
+    # The reload comes 3.5 s after the practice began (of its 5 s).
+    began = datetime.datetime.fromisoformat(started["time"].replace("Z", "+00:00")).timestamp()
+    monkeypatch.setattr(practice, "time", types.SimpleNamespace(time=lambda: began + 3.5, monotonic=time.monotonic))
+    second = StudyApp(protocol=protocol_file, log_folder=tmp_path / "logs")
+    second.resume_participant("P01")
+    view = second.participant_view.practice
+    assert 3.4 < view.elapsed_s < 4.0
+    assert "0:02" in view.left.value  # not 0:05 again
+    assert view.done_button.disabled
+
+
+def test_the_guidance_arrow_is_named_for_the_guided_group_only_while_it_is_shown(tmp_path, protocol_file):
+    for group in ("target", "control"):
+        app = StudyApp(protocol=protocol_file, log_folder=tmp_path / f"logs-{group}")
+        app.start_participant("P01", group=group)
+        named = 0
+        while not app.session.finished:
+            text = " ".join(participant_texts(app.participant_view))
+            if "arrow shows the optimal action" in text:
+                assert group == "target" and app.episode.phase == "guidance"
+                assert "dashed orange arrow" in text
+                named += 1
+            act(app)
+        assert (named > 0) == (group == "target")

@@ -5,7 +5,8 @@ import re
 import numpy as np
 import pytest
 
-from mt_widgets.apps import StudyApp, participant_texts
+from blinding_support import participant_texts
+from mt_widgets.apps import StudyApp
 from mt_widgets.core import SKILLS
 from mt_widgets.study import (
     LogError,
@@ -18,11 +19,17 @@ from mt_widgets.study import (
     read_events,
     read_study,
 )
-from mt_widgets.study.log import OUTCOME_FILE
 from mt_widgets.study.session import timeline
+from mt_widgets.study.study_folder import OUTCOME_FILE
 
-from .scripted import STEPS, VIDEO, run_to_end, run_to_end_one, steps_protocol
-from .scripted import with_steps as _with_steps
+from .scripted import (
+    STEPS,
+    VIDEO,
+    _with_steps,
+    run_to_end,
+    run_to_end_one,
+    steps_protocol,
+)
 
 # -- protocol input ----------------------------------------------------------------------------------
 
@@ -162,8 +169,6 @@ def test_a_withdrawn_participant_is_kept_out_logged_and_cannot_be_resumed(tmp_pa
     with pytest.raises(LogError, match="withdrew from the study.*cannot be resumed"):
         Session.resume(study, "P03")
     assert [r["state"] for r in study.status()] == ["completed", "completed", "withdrawn"]
-
-
 
 
 def test_a_protocol_that_says_delete_deletes_the_log_and_records_the_withdrawal(tmp_path):

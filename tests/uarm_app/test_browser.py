@@ -65,3 +65,116 @@ def test_the_uarm_view_draws_takes_a_real_drag_and_moves_the_simulated_arm(uarm_
     assert np.hypot(x - final_mm[0], y - final_mm[1]) < 0.6  # min_move_mm: tiny last steps are not sent
     assert np.hypot(x - states[-1][0] * 10, y - states[-1][1] * 10) > 5.0  # it did move
     page.screenshot(path=artifacts("reproduced"))
+
+
+def _hand_canvas_point(page, px: float, py: float) -> tuple[float, float]:
+    """A pixel of the simulated hand's canvas -> page coordinates (through its CSS box)."""
+    box = page.evaluate("""() => {
+        const host = document.querySelector('.mt-simulated-hand');
+        const c = host.tagName === 'CANVAS' ? host : host.querySelector('canvas');
+        const r = c.getBoundingClientRect();
+        return [r.x, r.y, r.width, r.height, c.width, c.height];
+    }""")
+    x, y, w, h, cw, ch = box
+    return x + px * w / cw, y + py * h / ch
+
+
+def _drag_tip(page, state_cm, step_cm, fractions=(0.25, 0.5, 0.75, 1.0), release: bool = True) -> None:
+    from mt_widgets.apps.uarm_hand import arm_to_view
+    start = np.array(arm_to_view(state_cm[0] * 10, state_cm[1] * 10))
+    end = np.array(arm_to_view((state_cm[0] + step_cm[0]) * 10, (state_cm[1] + step_cm[1]) * 10))
+    page.mouse.move(*_hand_canvas_point(page, *start))
+    page.mouse.down()
+    for f in fractions:
+        page.mouse.move(*_hand_canvas_point(page, *(start + f * (end - start))))
+    if release:
+        page.mouse.up()
+
+
+@pytest.mark.browser
+def test_teaching_by_hand_in_the_browser_with_a_pulled_cable_mid_move(uarm_voila, tall_page, artifacts):
+    page = tall_page
+    states = SKILLS["uarm-point"].query_states(seed=0)
+    page.goto(uarm_voila.url("/voila/render/uarm_hand.ipynb"), timeout=60_000)
+    wait_for_color(page, ROBOT, *pixel(states[0]), OKABE["black"], timeout=150_000)
+    hand_button = page.get_by_role("button", name="Teach by hand (H)")
+    steps = [(2.0, 0.0), (0.0, -1.5)]
+    for index, step in enumerate(steps):
+        wait_for_color(page, ROBOT, *pixel(states[index]), OKABE["black"])
+        wait_for_status(page, "!s.hand_busy", timeout=30_000)
+        if index == 0:
+            hand_button.dblclick()  # an impatient double click starts one hand move
+        else:
+            page.locator("canvas").first.click(position={"x": 5, "y": 5})
+            page.keyboard.press("h")  # the key, on the canvas
+        wait_for_status(page, "s.released", timeout=30_000)
+        if index == 0:
+            page.screenshot(path=artifacts("hand-released"))
+        _drag_tip(page, states[index], step)
+        # A hand is not a ruler: the tip lands within a few mm of where the pointer went (0.5 px per mm).
+        s = wait_for_status(page, f"s.pending !== null && Math.abs(s.pending[0] - {step[0]}) < 0.3 "
+                                  f"&& Math.abs(s.pending[1] - {step[1]}) < 0.3", timeout=30_000)
+        measured = (np.array(s["tip_mm"][:2]) - states[index] * 10) / 10
+        assert s["pending"] == pytest.approx(measured, abs=0.02)  # the arrow is the measured displacement
+        if index == 0:
+            page.screenshot(path=artifacts("hand-arrow"))
+        page.get_by_role("button", name="Confirm").click()
+        wait_for_status(page, f"s.demonstrations.length === {index + 1} && !s.released", timeout=30_000)
+    s = status(page)
+    assert s["methods"] == ["hand", "hand"]
+    # The third state: the cable is pulled in the middle of the hand move.
+    wait_for_color(page, ROBOT, *pixel(states[2]), OKABE["black"])
+    wait_for_status(page, "!s.hand_busy", timeout=30_000)
+    hand_button.click()
+    wait_for_status(page, "s.released", timeout=30_000)
+    _drag_tip(page, states[2], (1.0, 1.0), fractions=(0.25, 0.5), release=False)
+    page.mouse.up()
+    page.get_by_role("button", name="Pull the USB cable").click()
+    s = wait_for_status(page, "s.message.includes('safe')", timeout=30_000)
+    assert "released" in s["message"] and "nothing is lost" in s["message"]
+    assert s["released"] and len(s["demonstrations"]) == 2 and s["phase"] == "teaching"
+    assert page.get_by_text("Cable pulled").count() >= 1
+    page.screenshot(path=artifacts("cable-pulled"))
+
+
+@pytest.mark.browser
+def test_the_uarm_study_app_taught_by_hand_logs_the_modality_and_survives_a_pulled_cable(uarm_voila, tall_page,
+                                                                                         artifacts):
+    page = tall_page
+    page.goto(uarm_voila.url("/voila/render/uarm_study_hand.ipynb"), timeout=60_000)
+    for label in ("Continue", "I agree", "Start", "Start"):
+        button = page.get_by_role("button", name=label, exact=True)
+        button.first.wait_for(timeout=150_000)
+        button.first.click()
+    s = wait_for_status(page, "s.in_episode && s.hand_shown && !s.hand_busy", timeout=60_000)
+    hand_button = page.get_by_role("button", name="Teach by hand (H)")
+    for index, step in enumerate([(1.5, 0.0), (0.0, 1.0)]):
+        s = wait_for_status(page, f"s.index === {index} && !s.hand_busy && !s.released", timeout=30_000)
+        hand_button.click()
+        s = wait_for_status(page, "s.released", timeout=30_000)
+        state_cm = np.array(s["state_mm"][:2]) / 10
+        _drag_tip(page, state_cm, step)
+        s = wait_for_status(page, f"s.pending !== null && Math.abs(s.pending[0] - {step[0]}) < 0.3 "
+                                  f"&& Math.abs(s.pending[1] - {step[1]}) < 0.3", timeout=30_000)
+        if index == 0:
+            page.screenshot(path=artifacts("study-hand-arrow"))
+        page.get_by_role("button", name="Confirm").click()
+        wait_for_status(page, f"s.logged.length === {index + 1}", timeout=30_000)
+    s = wait_for_status(page, "s.index === 2 && !s.hand_busy && !s.released", timeout=30_000)
+    assert s["logged"] == [["hand", "hand"], ["hand", "hand"]]
+    hand_button.click()
+    s = wait_for_status(page, "s.released", timeout=30_000)
+    _drag_tip(page, np.array(s["state_mm"][:2]) / 10, (1.0, 0.0), fractions=(0.3, 0.6), release=False)
+    page.mouse.up()
+    page.get_by_role("button", name="Pull the USB cable").click()
+    s = wait_for_status(page, "s.message.includes('safe')", timeout=30_000)
+    assert s["released"] and len(s["logged"]) == 2 and len(s["demonstrations"]) == 2
+    page.screenshot(path=artifacts("study-cable-pulled"))
+    # The participant can still finish by drawing: the confirmed arrow is logged as drawn.
+    page.get_by_role("button", name="Clear").click()
+    page.locator(".widget-inline-hbox:has-text('u1 (cm)') input").first.fill("1")
+    page.locator(".widget-inline-hbox:has-text('u2 (cm)') input").first.fill("0.5")
+    page.get_by_role("button", name="Set arrow").click()
+    page.get_by_role("button", name="Confirm").click()
+    s = wait_for_status(page, "s.logged.length === 3", timeout=30_000)
+    assert s["logged"][2] == ["drawn", "numeric"]

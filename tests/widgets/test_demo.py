@@ -55,3 +55,26 @@ def test_the_teaching_error_is_shown_after_the_episode_and_compared_with_earlier
     finish(page.episode)
     assert f"{page.episode.result.error:.3f}" in page.result_line.value
     assert f"best before on this skill (with guidance): {first:.3f}" in page.result_line.value
+
+
+def test_switching_guidance_mid_episode_keeps_the_arrows_and_says_so(recorder):
+    page = DemoPage(duration=1.0)
+    page.episode.demonstrate([1.0, 0.5])
+    page.episode.next()
+    page.episode.demonstrate([-0.5, 0.25])
+    page.episode.next()
+    page.episode.teaching.set_action([0.3, 0.3])                 # drawn, not confirmed
+    states = page.episode.query_states
+    page.guidance_switch.value = False
+    episode = page.episode
+    assert episode.guidance is False and np.array_equal(episode.query_states, states)
+    assert episode.demonstrations == [[1.0, 0.5], [-0.5, 0.25]] and episode.state_index == 2
+    assert episode.progress.demonstrations_done == 2
+    assert episode.teaching.pending_action == [0.3, 0.3]
+    assert "Guidance is now off; your 2 arrows so far are kept" in page.result_line.value
+    page.guidance_switch.value = True                           # and back: still kept
+    assert page.episode.guidance is True and page.episode.demonstrations == [[1.0, 0.5], [-0.5, 0.25]]
+    finish(page.episode)
+    assert page.episode.phase == "finished" and len(page.episode.result.demonstrations) == 5
+    page.guidance_switch.value = False                          # after the end: a fresh episode
+    assert page.episode.demonstrations == [] and page.result_line.value == ""

@@ -5,8 +5,9 @@ import re
 import numpy as np
 import pytest
 
+from blinding_support import participant_texts
 from mt_widgets import SKILLS
-from mt_widgets.apps import StudyApp, participant_texts
+from mt_widgets.apps import StudyApp
 from mt_widgets.widgets import THEMES, ArmView, EpisodeWidget, ReproductionPlayer, Theme
 from mt_widgets.widgets.guidance import explain_difference
 from mt_widgets.widgets.theme import fill_words

@@ -1,0 +1,29 @@
+"""Each class member's Jupyter server on the hub (found through JUPYTER_CONFIG_PATH, set by the spawner).
+
+- Kernels talk to the server over IPC sockets in the member's own runtime folder
+  (``~/.local/share/jupyter/runtime``, private to them), not TCP ports: jupyter_client picks a
+  kernel's five ports by binding port 0 and closing it again, and with thirty servers starting
+  kernels at once another kernel binds the same port in between (``ZMQError: Address already in
+  use``, then a lost kernel). Files cannot collide: each kernel's names come from its own id.
+- umask 027: nothing a member writes is readable by classmates.
+- Students get what a lesson uses: JupyterLab, Voila's pages, nbgrader's assignment list and
+  validation; not the language server, terminals (their shell is nologin anyway) or
+  nbgrader's formgrader, which only instructors (``MT_HUB_ROLE=instructor``) load. Each
+  extension left out is start-up time and memory a student does not pay.
+"""
+
+import os
+
+c = get_config()  # noqa: F821 - provided by Jupyter's config loader
+
+c.KernelManager.transport = "ipc"
+# Files a member's server and kernels create are readable by their own group at most (on the
+# class folder, that group is the instructors'): deploy/jupyterhub/class_hub.py.
+os.umask(0o027)
+if os.environ.get("MT_HUB_ROLE") != "instructor":
+    c.ServerApp.terminals_enabled = False
+    c.ServerApp.jpserver_extensions = {
+        "jupyter_lsp": False,
+        "jupyter_server_terminals": False,
+        "nbgrader.server_extensions.formgrader": False,
+    }

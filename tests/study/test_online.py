@@ -1,0 +1,127 @@
+"""The [online] table: completion URLs and codes per outcome, the URL parameters that identify a
+participant, and IDs from a URL refused (with nothing written) when they are not usable."""
+
+import pytest
+
+from mt_widgets.study import ParticipantIdError, ProtocolError, Session, StudyFolder, parse_protocol
+from mt_widgets.study.online import OUTCOMES, outcome_of
+from mt_widgets.study.participants import validate_url_participant_id
+
+from .scripted import SHORT_PROTOCOL, run
+
+PROLIFIC = "https://app.prolific.com/submissions/complete?cc={code}"
+ONLINE = f"""
+[online]
+identify = "prolific"
+[online.completion.completed]
+url = "{PROLIFIC}"
+code = "C1MPL3T3"
+[online.completion.screened_out]
+url = "{PROLIFIC}"
+code = "SCR33N"
+[online.completion.declined]
+url = "{PROLIFIC}"
+code = "D3CL1N3D"
+[online.completion.withdrawn]
+url = "https://example.org/left?code={{code}}&x=1"
+code = "W1THDR4WN"
+"""
+
+
+def online_protocol(text=ONLINE):
+    return parse_protocol(SHORT_PROTOCOL + text, "online.toml")
+
+
+def test_each_outcome_has_its_completion_url_and_code():
+    online = online_protocol().online
+    assert online.completion_url("completed") == "https://app.prolific.com/submissions/complete?cc=C1MPL3T3"
+    assert online.completion_url("screened_out").endswith("cc=SCR33N")
+    assert online.completion_url("ineligible") == online.completion_url("screened_out")  # the session's word
+    assert online.completion_url("declined").endswith("cc=D3CL1N3D")
+    assert online.completion_url("withdrawn") == "https://example.org/left?code=W1THDR4WN&x=1"
+    assert len({online.completion(o).code for o in OUTCOMES}) == 4
+    assert online.id_parameter == "PROLIFIC_PID" and online.recorded_parameters == ("STUDY_ID", "SESSION_ID")
+    with pytest.raises(ValueError, match="outcome: expected one of"):
+        online.completion_url("finished")
+    assert parse_protocol(SHORT_PROTOCOL).online is None
+
+
+def test_the_url_names_the_participant_and_what_is_recorded_with_them(tmp_path):
+    protocol = online_protocol()
+    arrival = protocol.online.participant_from_url({"PROLIFIC_PID": ["5f3a9c2e8b1d4a0012345678"],
+                                                    "STUDY_ID": ["abc"], "SESSION_ID": ["s1"], "other": ["x"]})
+    assert arrival.participant_id == "5f3a9c2e8b1d4a0012345678"
+    assert arrival.parameters == {"STUDY_ID": "abc", "SESSION_ID": "s1"}
+    study = StudyFolder.create(tmp_path / "study", protocol)
+    with Session.arrive(study, arrival.participant_id, parameters=arrival.parameters) as session:
+        run(session)
+        assert outcome_of(session) == "completed"
+    assert study.enrolment(arrival.participant_id)["url_parameters"] == {"STUDY_ID": "abc", "SESSION_ID": "s1"}
+    generic = online_protocol(ONLINE.replace('"prolific"', '"participant"')).online
+    assert generic.participant_from_url({"participant": "P07"}).participant_id == "P07"
+
+
+def test_a_withdrawn_session_ends_on_the_withdrawal_url(tmp_path):
+    protocol = online_protocol()
+    study = StudyFolder.create(tmp_path / "study", protocol)
+    with Session.arrive(study, "P01") as session:
+        session.withdraw()
+        assert protocol.online.completion_url(outcome_of(session)).endswith("W1THDR4WN&x=1")
+    with Session.arrive(study, "P02") as running, pytest.raises(ValueError, match="still running"):
+        outcome_of(running)
+
+
+@pytest.mark.parametrize("value, message", [
+    (None, "does not say who you are"),
+    ("", "empty"),
+    ("   ", "empty"),
+    ("x" * 65, "65 characters long"),
+    ("../../etc/passwd", "file path"),
+    ("a/b", "file path"),
+    ("C:evil", "file path"),
+    (".hidden", "file path"),
+    ("~root", "file path"),
+    ("P07\n", "control characters"),
+    ("P\x0007", "control characters"),
+    ("P07\x7f", "control characters"),
+    ("P 07", "not a usable ID"),
+    ("Pé07", "not a usable ID"),
+    ("con", "not a usable ID"),
+])
+def test_ids_from_a_url_are_refused_with_a_message_and_nothing_is_written(tmp_path, value, message):
+    study = StudyFolder.create(tmp_path / "study", online_protocol())
+    before = sorted(p.name for p in study.folder.iterdir())
+    with pytest.raises(ParticipantIdError, match=message) as refused:
+        study.protocol.online.participant_from_url({"PROLIFIC_PID": value, "STUDY_ID": "s"})
+    assert "Nothing was recorded" in str(refused.value)
+    assert "\n" not in str(refused.value) and "\x00" not in str(refused.value)
+    with pytest.raises(ParticipantIdError):
+        validate_url_participant_id(value)
+    assert sorted(p.name for p in study.folder.iterdir()) == before
+
+
+def test_recorded_parameters_and_repeated_ids_are_checked_too():
+    online = online_protocol().online
+    with pytest.raises(ParticipantIdError, match="2 times"):
+        online.participant_from_url({"PROLIFIC_PID": ["a1", "b2"]})
+    with pytest.raises(ParticipantIdError, match="SESSION_ID.*control characters"):
+        online.participant_from_url({"PROLIFIC_PID": "a1", "SESSION_ID": "s\n1"})
+    with pytest.raises(TypeError, match="query"):
+        online.participant_from_url("PROLIFIC_PID=a1")
+
+
+@pytest.mark.parametrize("change, message", [
+    (('identify = "prolific"', 'identify = "mturk"'), "online.identify: expected one of"),
+    (('url = "https://example.org/left', 'url = "ftp://example.org/left'), "expected an https:// URL"),
+    (('code = "SCR33N"', 'code = "has space"'), "expected a code of letters"),
+    (("[online.completion.declined]", "[online.completion.declinedx]"), "unknown field"),
+])
+def test_a_bad_online_table_is_refused_naming_the_field(change, message):
+    with pytest.raises(ProtocolError, match=message):
+        online_protocol(ONLINE.replace(*change))
+
+
+def test_every_outcome_needs_its_url():
+    text = ONLINE.split("[online.completion.withdrawn]")[0]
+    with pytest.raises(ProtocolError, match="online.completion.withdrawn: missing required table"):
+        online_protocol(text)
