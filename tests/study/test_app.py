@@ -16,7 +16,7 @@ from mt_widgets.apps import StudyApp
 from mt_widgets.study import LogError, SessionStateError, read_events
 from mt_widgets.study.protocol import PROTOCOL_FOLDER
 
-from .scripted import SHORT_PROTOCOL
+from .scripted import SHORT_PROTOCOL, act, click_primary
 
 
 @pytest.fixture
@@ -24,37 +24,6 @@ def protocol_file(tmp_path):
     path = tmp_path / "short.toml"
     path.write_text(SHORT_PROTOCOL)
     return str(path)
-
-
-def click_primary(app):
-    """Clicks the page's one primary button (a consent page also offers "I do not agree")."""
-    found, pending = [], list(app.body.children)
-    while pending:
-        widget = pending.pop()
-        if isinstance(widget, Button) and widget.button_style == "primary":
-            found.append(widget)
-        pending += list(getattr(widget, "children", ()))
-    assert len(found) == 1, found
-    found[0].click()
-
-
-def act(app):
-    """One participant action through the widgets, as the buttons and the canvas would do it."""
-    step = app.session.current_step()
-    if step.kind in ("welcome", "consent", "instructions", "phase_intro"):
-        click_primary(app)
-    elif step.kind == "practice":
-        # The practice cannot be skipped before its time (a cold first run may have used it up).
-        assert app._practice_done.disabled or time.monotonic() - app._practice_started >= step.duration_s
-        app._practice_done.disabled = False
-        app._practice_done.click()
-    elif step.kind in ("demonstration", "episode_end"):
-        if app.episode.phase == "guidance":
-            app.episode.next()
-        else:
-            app.episode.demonstrate(SKILLS[step.skill].target_actions(step.state[None])[0] + 0.3)
-    elif step.kind == "reproduction":
-        app._continue.click()
 
 
 WORDS = re.compile(r"\b(target|control|group|groups|condition)\b", re.IGNORECASE)
