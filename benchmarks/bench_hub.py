@@ -1,4 +1,5 @@
-"""A class on one machine: how long students wait, for their server, their first episode and feedback, and what each costs.
+"""A class on one machine: how long students wait, for their server, their first episode and feedback,
+and what each costs.
 
 Starts deploy/jupyterhub/jupyterhub_config.py as root on loopback with a roster of N students
 (system users ``mtt-bench-...``, removed at the end, as tests/course/test_hub.py does), and:
@@ -64,7 +65,7 @@ def percentile(values, q: float) -> float:
 
 def paced(code: str, number: int) -> str:
     """EPISODE_CODE with a human's pause of 3 to 8 s (random, per student) before each arrow."""
-    return ("import random as _random, time as _time\n_pause = _random.Random(%d)\n" % number
+    return (f"import random as _random, time as _time\n_pause = _random.Random({number})\n"
             + code.replace("        episode.demonstrate(", "        _time.sleep(_pause.uniform(3, 8))\n"
                                                            "        episode.demonstrate("))
 

@@ -73,7 +73,7 @@ def run(browser, n: int, think_s: float) -> dict:
     for name in ("study_online.ipynb", "study_online_pilot.toml"):
         shutil.copy(ROOT / "notebooks" / name, root / "notebooks" / name)
     server = voila(root, f"--Voila.config_file_paths={ROOT / 'deploy' / 'voila'}",
-                   env={"MT_WIDGETS_FAST": "0", "MT_WIDGETS_STUDY_LOGS": str(root / "logs")})
+                   env={"MT_WIDGETS_STUDY_LOGS": str(root / "logs")})
     pages, arrivals, responses = [], [], []
     try:
         time.sleep(5.0)  # the preheated spare runs the notebook up to its wait for a request
@@ -122,22 +122,20 @@ def main() -> None:
         parser.error(f"--participants: expected whole numbers separated by commas, got {args.participants!r}")
     if any(n < 1 for n in sizes):
         parser.error(f"--participants: expected sizes >= 1, got {sizes}")
-    results = {}
+    print(f"{'participants':>12} {'arrival p50/p95/max':>22} {'response p50/p95/max':>24} {'memory':>9} "
+          f"{'kernels':>8} {'per kernel':>11}  target p95 <= 1 s", flush=True)
     with sync_playwright() as playwright:
         browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        for n in sizes:
-            results[n] = run(browser, n, args.think)
+        for n in sizes:  # each row as soon as it is measured: a larger group may not fit
+            r = run(browser, n, args.think)
+            a, s = r["arrivals"], r["responses"]
+            total = r["server_mb"] + r["kernels_mb"]
+            per = r["kernels_mb"] / max(r["kernels"], 1)
+            print(f"{n:>12} {statistics.median(a):>7.1f} /{percentile(a, 0.95):>5.1f} /{max(a):>5.1f} s "
+                  f"{statistics.median(s):>8.2f} /{percentile(s, 0.95):>5.2f} /{max(s):>5.2f} s {total:>6.0f} MB "
+                  f"{r['kernels']:>8d} {per:>8.0f} MB  {percentile(s, 0.95):.2f}x", flush=True)
         browser.close()
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores at the end (browser on the same cores)")
-    print(f"{'participants':>12} {'arrival p50/p95/max':>22} {'response p50/p95/max':>24} {'memory':>9} "
-          f"{'kernels':>8} {'per kernel':>11}  target p95 <= 1 s")
-    for n, r in results.items():
-        a, s = r["arrivals"], r["responses"]
-        total = r["server_mb"] + r["kernels_mb"]
-        per = r["kernels_mb"] / max(r["kernels"], 1)
-        print(f"{n:>12} {statistics.median(a):>7.1f} /{percentile(a, 0.95):>5.1f} /{max(a):>5.1f} s "
-              f"{statistics.median(s):>8.2f} /{percentile(s, 0.95):>5.2f} /{max(s):>5.2f} s {total:>6.0f} MB "
-              f"{r['kernels']:>8d} {per:>8.0f} MB  {percentile(s, 0.95):.2f}x")
 
 
 if __name__ == "__main__":

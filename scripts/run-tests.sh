@@ -43,8 +43,10 @@ while IFS= read -r line; do tiers+=("$line"); done < <("$VENV/bin/python" tests/
 summary=()
 started_all=$SECONDS
 for line in "${tiers[@]}"; do
-    tier="${line%%$'\t'*}"
-    expression="${line#*$'\t'}"
+    IFS=$'\t' read -r -a fields <<< "$line"   # name, marker expression, the files it is in (if given)
+    tier="${fields[0]}"
+    expression="${fields[1]}"
+    paths=("${fields[@]:2}")
     if [ "$tier" != lint ] && [ "$tier" != fast ] && [ -z "${prepared:-}" ]; then
         prepare_browser_and_hub
         prepared=1
@@ -52,7 +54,7 @@ for line in "${tiers[@]}"; do
     echo "== tier $tier: -m \"$expression\""
     started=$SECONDS
     status=0
-    "${pytest[@]}" -m "$expression" </dev/null || status=$?
+    "${pytest[@]}" -m "$expression" ${paths[@]+"${paths[@]}"} </dev/null || status=$?
     elapsed=$((SECONDS - started))
     summary+=("$(printf '%-9s %4d s  %s' "$tier" "$elapsed" "$([ "$status" = 0 ] && echo passed || echo "FAILED ($status)")")")
     echo "== tier $tier: ${elapsed} s"

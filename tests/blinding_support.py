@@ -1,5 +1,12 @@
 """What a participant's page could show: every text a widget tree holds (a test helper for blinding)."""
 
+import re
+
+# A page script's code is never shown (the canvas's touch and keyboard script, widgets/canvas_access.py,
+# rides in an ``onerror`` attribute and reads the DOM's ``event.target``); every text it shows is
+# markup of the page. Blinding checks read the words, not the code: ``without_scripts``.
+_SCRIPT = re.compile(r"<script\b.*?</script>|\son[a-z]+=\"[^\"]*\"", re.IGNORECASE | re.DOTALL)
+
 
 def participant_texts(widget) -> list[str]:
     """Every piece of text a widget tree can show (values, descriptions, labels, options, tooltips).
@@ -26,3 +33,8 @@ def participant_texts(widget) -> list[str]:
 
     walk(widget)
     return texts
+
+
+def without_scripts(text: str) -> str:
+    """``text`` without the code of its page scripts (``<script>`` elements and ``on...=`` attributes)."""
+    return _SCRIPT.sub(" ", text)

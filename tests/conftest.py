@@ -6,6 +6,8 @@ root conftest.py's (tests/notebook_parameters.py)."""
 collect_ignore_glob = ["*/pages/*.ipynb", "*/pages/**/*.ipynb"]
 
 
+import sys  # noqa: E402
+
 import pytest  # noqa: E402
 
 from browser_support import CHROMIUM, CHROMIUM_ARGS, artifact_path  # noqa: E402
@@ -57,3 +59,14 @@ def pytest_collection_modifyitems(config, items):
 def artifacts(request):
     """Where to keep screenshots: ``artifacts(step)`` -> test-artifacts/<test name>-<step>.png."""
     return lambda step: artifact_path(request.node.name, step)
+
+
+@pytest.fixture(autouse=True)
+def fresh_animation_queue(monkeypatch):
+    """Every test starts as a fresh page: the widgets' estimate of when the browser's canvas queue
+    is free (``mt_widgets.widgets.animation._Queue.free_at``, process-global) starts empty, not
+    behind what earlier tests' animations sent (a whole study app's pushes it minutes ahead).
+    Only once the widgets are imported: a core test does not import them for this."""
+    animation = sys.modules.get("mt_widgets.widgets.animation")
+    if animation is not None:
+        monkeypatch.setattr(animation._Queue, "free_at", 0.0)

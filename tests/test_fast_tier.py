@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from _pytest.mark.expression import Expression
 
-from tiers import HUB_TESTS, LINT_TESTS, MARKS, TIERS, tier_expression
+from tiers import HUB_TESTS, LINT_TESTS, MARKS, TIERS, tier_expression, tier_paths
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -57,5 +57,7 @@ def test_the_lint_mark_lands_on_the_lint_tests_only():
 def test_the_script_lists_the_tiers_for_run_tests():
     listed = subprocess.run([sys.executable, str(ROOT / "tests" / "tiers.py")], capture_output=True, text=True,
                             check=True, timeout=60).stdout
-    assert [tuple(line.split("\t")) for line in listed.splitlines()] == list(TIERS)
+    assert [tuple(line.split("\t")) for line in listed.splitlines()] == [
+        (name, expression, *tier_paths(name)) for name, expression in TIERS]
+    assert tier_paths("lint") == LINT_TESTS and tier_paths("hub") == HUB_TESTS and tier_paths("fast") == ()
     assert "tests/tiers.py" in (ROOT / "scripts" / "run-tests.sh").read_text()

@@ -65,6 +65,6 @@ def test_a_boolean_option_refuses_anything_but_a_bool_and_names_itself(option):
         _accepts(call, value, name)
     for value in NOT_BOOLEANS + ([] if option in OPTIONAL else [None]):
         wanted = "True, False or None" if option in OPTIONAL else "True or False"
-        with pytest.raises(ValueError, match=rf"^{name}: expected {wanted}, got "):
+        with pytest.raises(TypeError, match=rf"^{name}: expected {wanted}, got "):
             call(value)
 

@@ -13,7 +13,7 @@ Every test belongs to exactly one tier (tests/test_fast_tier.py checks it over e
 of marks). The cheap tiers come first, so a lint error or a broken core stops the run in a minute
 or two instead of after every browser test.
 
-``python tests/tiers.py`` prints the tiers, one ``name<TAB>expression`` a line, for
+``python tests/tiers.py`` prints the tiers, one ``name<TAB>expression[<TAB>path...]`` a line, for
 scripts/run-tests.sh; ``python tests/tiers.py fast`` one tier's expression, for scripts/test-fast.sh.
 This module imports nothing from pytest: the scripts read it before any test runs.
 """
@@ -47,6 +47,13 @@ def tier_expression(name: str) -> str:
     raise ValueError(f"name: expected one of {[tier for tier, _ in TIERS]}, got {name!r}")
 
 
+def tier_paths(name: str) -> tuple[str, ...]:
+    """Where the tier ``name``'s tests are, when its mark is given by files (``lint``, ``hub``): the
+    run collects only those (seconds instead of the whole suite's minute); () for the whole suite."""
+    tier_expression(name)
+    return {"lint": LINT_TESTS, "hub": HUB_TESTS}.get(name, ())
+
+
 if __name__ == "__main__":
     import sys
 
@@ -54,4 +61,4 @@ if __name__ == "__main__":
         print(tier_expression(sys.argv[1]))
     else:
         for tier, expression in TIERS:
-            print(f"{tier}\t{expression}")
+            print("\t".join([tier, expression, *tier_paths(tier)]))

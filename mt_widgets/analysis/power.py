@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from mt_widgets.core.validation import as_bool, as_fraction
+from mt_widgets.core.validation import as_bool, as_count, as_fraction
 from mt_widgets.in_silico.engine import run_many_studies
 from mt_widgets.in_silico.plan import resolve_protocol
 
@@ -40,8 +40,7 @@ def analytic_power(n_per_group: int, effect_size: float, alpha: float = 0.05,
     Returns:
         The probability that the test rejects, from the noncentral t distribution.
     """
-    if isinstance(n_per_group, bool) or not isinstance(n_per_group, (int, np.integer)) or n_per_group < 2:
-        raise ValueError(f"n_per_group: expected a whole number >= 2, got {n_per_group!r}")
+    n_per_group = as_count("n_per_group", n_per_group, minimum=2)
     alpha = as_fraction("alpha", alpha)
     alternative = check_alternative(alternative)
     df = 2 * n_per_group - 2

@@ -532,8 +532,7 @@ def analyse_changes(episodes, changes=PAPER_CHANGES, alternative: str = "less", 
     check_alternative(alternative)
     if test not in TESTS:
         raise ValueError(f"test: expected one of {list(TESTS)}, got {test!r}")
-    if not 0 < alpha < 1:
-        raise ValueError(f"alpha: expected a level strictly between 0 and 1, got {alpha!r}")
+    alpha = as_fraction("alpha", alpha)
     frame = episodes_frame(episodes, groups)
     groups = _pair(frame, groups)
     changes = tuple(changes)

@@ -3,7 +3,10 @@
 ``ProgressRecorder`` writes one student's progress to the class folder the instructor sets
 (``MT_WIDGETS_CLASS_FOLDER``), and nothing at all without one; ``read_class`` and
 ``summarise`` give the instructor's view (``mt_widgets.apps.class_view``) its data; the
-``checks`` module gives exercises their visible checks, which explain in words what is wrong.
+``checks`` module gives exercises their checks, which explain in words what is wrong without the
+expected number, against the answers of ``references``; ``roster`` reads the class list,
+``names`` joins it to the pseudonyms for the instructor only, and ``baseline`` keeps a student's
+novice baseline from tutorial 00.
 """
 
 from .checks import CheckFailed, ExerciseChecks

@@ -102,7 +102,7 @@ class TeachingEpisode:
     Args:
         skill: the ``Skill`` taught.
         query_states: (N, state_dim) the states to demonstrate at; default
-            ``skill.query_states(seed=seed)`` (N = S, the teaching dimension).
+            ``skill.query_states(seed=seed)`` (N = S, the rank condition's minimum).
         seed: seed of the default query states (int, ``SeedSequence``, ``Generator`` or None);
             only when ``query_states`` is not given.
         lam: the learner's ridge parameter (>= 0), also used for the optimal actions.
@@ -112,7 +112,7 @@ class TeachingEpisode:
         features: (N, S) Phi.
         optimal_actions: (N, R) U_bar, the demonstration that teaches the skill (exactly when
             ``exact``).
-        exact: True when Phi has rank S (the query states reach the teaching dimension); when
+        exact: True when Phi has rank S (the query states meet the rank condition); when
             False no demonstration teaches Theta exactly (``optimal_actions`` of
             ``mt_widgets.core`` then warns with ``UnderdeterminedTeachingWarning``) and U_bar is
             the least-error one.
@@ -265,7 +265,7 @@ class TeachingEpisode:
 
     @property
     def bound(self) -> float:
-        """rho1 * rho2 (+ the residual norm below the teaching dimension), an upper bound on E."""
+        """rho1 * rho2 (+ the residual norm when the rank condition fails), an upper bound on E."""
         self._require_complete("bound")
         return self.rho1 * self.rho2 + self.residual_norm
 

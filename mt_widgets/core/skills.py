@@ -144,7 +144,7 @@ class Skill:
         return self.features(states) @ self.theta.T
 
     def query_states(self, seed=None, n: int | None = None) -> np.ndarray:
-        """n (default S, the teaching dimension) well-conditioned query states, seeded."""
+        """n (default S, the fewest given states that meet the rank condition) well-conditioned query states, seeded."""
         n = self.n_features if n is None else as_count("n", n)
         return sample_query_states(self.plant, self.feature_map, n, seed=seed, max_condition=self.max_condition)
 

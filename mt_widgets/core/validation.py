@@ -1,7 +1,10 @@
-"""Input checks shared by every public function of the science layer.
+"""The input checks of the whole package: one place, one convention.
 
-Each check raises ``ValueError`` naming the argument, what was expected and what came, so a
-mistake in a notebook cell points at its cause instead of surfacing as a NaN three calls later.
+Each check names the argument, what was expected and what came, so a mistake in a notebook cell
+points at its cause instead of surfacing as a NaN three calls later. The convention, everywhere:
+``TypeError`` for a value of the wrong type (a string where a number goes, ``1`` where a boolean
+option goes, a float where a count goes), ``ValueError`` for a value of the right type that is
+wrong (a negative count, an alpha of 1.5, an array of the wrong shape, NaN).
 """
 
 from __future__ import annotations
@@ -44,10 +47,17 @@ def as_float_array(name: str, value, *, ndim=None, shape=None, finite: bool = Tr
     Returns:
         The checked float64 array (a view when ``value`` already was one).
     """
+    if value is None:   # np.asarray would make it a NaN
+        raise TypeError(f"{name}: expected an array of numbers, got None")
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as error:
-        raise ValueError(f"{name}: expected an array of numbers, got {_describe(value)}") from error
+        try:
+            kind = np.asarray(value).dtype.kind
+        except (TypeError, ValueError):   # ragged nesting: numbers, but no array shape
+            kind = "f"
+        wrong = ValueError if kind in "biufc" else TypeError   # text or objects: a wrong type
+        raise wrong(f"{name}: expected an array of numbers, got {_describe(value)}") from error
     if ndim is not None:
         allowed = (ndim,) if isinstance(ndim, int) else tuple(ndim)
         if array.ndim not in allowed:
@@ -68,7 +78,7 @@ def as_float_array(name: str, value, *, ndim=None, shape=None, finite: bool = Tr
 def as_finite(name: str, value) -> float:
     """Checks a finite real scalar (not a bool, NaN or infinity)."""
     if not is_real(value):
-        raise ValueError(f"{name}: expected a real number, got {_describe(value)}")
+        raise TypeError(f"{name}: expected a real number, got {_describe(value)}")
     number = float(value)
     if not np.isfinite(number):
         raise ValueError(f"{name}: expected a finite number, got {number!r}")
@@ -77,7 +87,9 @@ def as_finite(name: str, value) -> float:
 
 def as_fraction(name: str, value) -> float:
     """Checks a number strictly between 0 and 1 (a significance level, a power, a confidence)."""
-    if not is_real(value) or not 0 < float(value) < 1:
+    if not is_real(value):
+        raise TypeError(f"{name}: expected a number strictly between 0 and 1, got {_describe(value)}")
+    if not 0 < float(value) < 1:
         raise ValueError(f"{name}: expected a number strictly between 0 and 1, got {_describe(value)}")
     return float(value)
 
@@ -85,7 +97,7 @@ def as_fraction(name: str, value) -> float:
 def as_positive(name: str, value, *, allow_zero: bool = False) -> float:
     """Checks a real scalar that must be positive (or non-negative with ``allow_zero``)."""
     if not is_real(value):
-        raise ValueError(f"{name}: expected a real number, got {_describe(value)}")
+        raise TypeError(f"{name}: expected a real number, got {_describe(value)}")
     number = float(value)
     if not np.isfinite(number) or number < 0 or (number == 0 and not allow_zero):
         wanted = "a non-negative" if allow_zero else "a positive"
@@ -96,7 +108,7 @@ def as_positive(name: str, value, *, allow_zero: bool = False) -> float:
 def as_count(name: str, value, *, minimum: int = 1) -> int:
     """Checks an integer count of at least ``minimum``."""
     if isinstance(value, bool) or not isinstance(value, (numbers.Integral, np.integer)):
-        raise ValueError(f"{name}: expected a whole number, got {_describe(value)}")
+        raise TypeError(f"{name}: expected a whole number, got {_describe(value)}")
     if value < minimum:
         raise ValueError(f"{name}: expected a whole number >= {minimum}, got {value}")
     return int(value)
@@ -114,5 +126,5 @@ def as_bool(name: str, value, *, allow_none: bool = False) -> bool | None:
         return None
     if not isinstance(value, bool):
         wanted = "True, False or None" if allow_none is True else "True or False"
-        raise ValueError(f"{name}: expected {wanted}, got {_describe(value)}")
+        raise TypeError(f"{name}: expected {wanted}, got {_describe(value)}")
     return value

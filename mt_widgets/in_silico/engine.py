@@ -25,7 +25,7 @@ import numpy as np
 import pandas as pd
 
 from mt_widgets.core.episode_batch import EpisodeBatch
-from mt_widgets.core.validation import as_bool
+from mt_widgets.core.validation import as_bool, as_count
 from mt_widgets.study.participants import block_assignment
 
 from .plan import (
@@ -173,8 +173,7 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
     reproduce = as_bool("reproduce", reproduce)
     progress = as_bool("progress", progress, allow_none=True)
     protocol = resolve_protocol(protocol)
-    if isinstance(n_participants, bool) or not isinstance(n_participants, (int, np.integer)) or n_participants < 1:
-        raise ValueError(f"n_participants: expected a whole number >= 1, got {n_participants!r}")
+    n_participants = as_count("n_participants", n_participants)
     parameters = default_parameters(protocol) if parameters is None else parameters
     if groups is None:
         groups = [block_assignment(p, protocol.groups, protocol.block_size, protocol.assignment_seed)
@@ -280,9 +279,7 @@ def run_many_studies(n_studies: int, n_per_group: int, seed: int = 0, parameters
     progress = as_bool("progress", progress, allow_none=True)
     protocol = resolve_protocol(protocol)
     parameters = default_parameters(protocol) if parameters is None else parameters
-    for name, value in (("n_studies", n_studies), ("n_per_group", n_per_group)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-            raise ValueError(f"{name}: expected a whole number >= 1, got {value!r}")
+    n_studies, n_per_group = as_count("n_studies", n_studies), as_count("n_per_group", n_per_group)
     plan = episode_plan(protocol)
     show = progress if progress is not None else n_studies > 50
     bar = Progress(n_studies + len(plan), "studies", show)

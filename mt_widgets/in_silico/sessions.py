@@ -11,7 +11,7 @@ import datetime as _dt
 
 import numpy as np
 
-from mt_widgets.core.validation import as_bool
+from mt_widgets.core.validation import as_bool, as_count
 from mt_widgets.study.session import Session
 from mt_widgets.study.study_folder import StudyFolder
 
@@ -150,8 +150,7 @@ def run_through_sessions(folder, n_participants: int = 8, protocol=None, paramet
     """
     progress = as_bool("progress", progress, allow_none=True)
     protocol = resolve_protocol(protocol)
-    if isinstance(n_participants, bool) or not isinstance(n_participants, (int, np.integer)) or n_participants < 1:
-        raise ValueError(f"n_participants: expected a whole number >= 1, got {n_participants!r}")
+    n_participants = as_count("n_participants", n_participants)
     if groups is not None and len(list(groups)) != n_participants:
         raise ValueError(f"groups: expected {n_participants} group names, got {len(list(groups))}")
     study = StudyFolder.create(folder, protocol)

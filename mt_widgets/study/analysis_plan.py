@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from mt_widgets.core.validation import as_fraction
+
 
 @dataclass(frozen=True)
 class Change:
@@ -82,9 +84,7 @@ class AnalysisPlan:
         if self.alternative not in ALTERNATIVES:
             raise ValueError(f"alternative: expected one of {list(ALTERNATIVES)}, got {self.alternative!r}")
         for name in ("alpha", "power"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 1:
-                raise ValueError(f"{name}: expected a number strictly between 0 and 1, got {value!r}")
+            as_fraction(name, getattr(self, name))
         if isinstance(self.effect_size, bool) or not isinstance(self.effect_size, (int, float)) \
                 or self.effect_size == 0:
             raise ValueError(f"effect_size: expected a non-zero number (Cohen's d), got {self.effect_size!r}")

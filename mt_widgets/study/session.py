@@ -76,7 +76,7 @@ import numpy as np
 
 import mt_widgets
 from mt_widgets.core import TeachingEpisode
-from mt_widgets.core.validation import as_bool, as_positive
+from mt_widgets.core.validation import as_bool, as_count, as_positive
 
 from .log import LogError, MemoryLog, ParticipantLog, read_events, to_jsonable
 from .protocol import Phase, Protocol
@@ -543,8 +543,7 @@ class Session:
         step = self.plan.steps[slot.index]
         if not isinstance(watched_to_end, bool):
             raise TypeError(f"watched_to_end: expected a bool, got {type(watched_to_end).__name__}")
-        if isinstance(plays, bool) or not isinstance(plays, (int, np.integer)) or plays < 0:
-            raise ValueError(f"plays: expected a whole number >= 0, got {plays!r}")
+        plays = as_count("plays", plays, minimum=0)
         if step.require_watched and not watched_to_end:
             raise SessionStateError(f"finish_video: step {step.id!r} requires the video to be watched to the end")
         self.log.append("step_done", step=step.id, kind=step.kind, watched_to_end=watched_to_end, plays=int(plays))

@@ -10,7 +10,7 @@ def test_overwrite_no_keeps_the_existing_folder(tmp_path, value):
     folder = tmp_path / "study"
     folder.mkdir()
     (folder / "keep.txt").write_text("a participant's data")
-    with pytest.raises(ValueError, match=r"^overwrite: expected True or False, got "):
+    with pytest.raises(TypeError, match=r"^overwrite: expected True or False, got "):
         write_example_study(folder, overwrite=value)
     assert (folder / "keep.txt").read_text() == "a participant's data"
 

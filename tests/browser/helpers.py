@@ -150,3 +150,35 @@ def ax_names(page) -> list[str]:
     finally:
         cdp.detach()
     return [node.get("name", {}).get("value", "") for node in nodes if not node.get("ignored")]
+
+
+# -- the visitors' demo (tests/browser/test_impatient_clicks.py, test_payoff_in_view.py) ----------------
+
+def reference(skill="sim-point", guidance=False, seed=0):
+    """The demo's episode for these settings, built without a kernel (same defaults as the page)."""
+    from mt_widgets.widgets import DemoPage
+    page = DemoPage(skill=skill, guidance=True, seed=seed)
+    if not guidance:
+        page.guidance_switch.value = False
+    return page.episode
+
+
+def teach_by_numbers(page, episode, guidance: bool) -> None:
+    """Types each optimal arrow, sets and confirms it (and moves on after guidance)."""
+    n = len(episode.query_states)
+    for index, action in enumerate(episode.optimal):
+        page.get_by_text(f"State {index + 1} of {n}").first.wait_for(timeout=10_000)
+        fields = page.locator(".widget-text input[type=number]")
+        fields.nth(0).fill(f"{action[0]:.6f}")
+        fields.nth(1).fill(f"{action[1]:.6f}")
+        fields.nth(1).press("Tab")  # the last value reaches the kernel before the click
+        page.get_by_role("button", name="Set arrow").click()
+        try:
+            page.get_by_text(f"State {index + 1} of {n}: your arrow").first.wait_for(timeout=10_000)
+        except Exception:
+            page.screenshot(path="test-artifacts/impatient-debug.png")
+            raise
+        page.get_by_role("button", name="Confirm").click()
+        if guidance:
+            page.get_by_role("button", name="Finish and watch" if index == n - 1 else "Next state").click()
+    page.get_by_text("Your teaching error").wait_for(timeout=20_000)

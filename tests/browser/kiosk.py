@@ -102,11 +102,23 @@ def wait_until_quiet(server: Server, window: float = 0.6, timeout: float = 60.0)
     raise AssertionError(f"the server did not settle within {timeout} s")
 
 
-def kiosk_context(browser, width: int = 1280, height: int = 1100):
-    """The kiosk's one browser context (its HTTP cache is shared by every visit); 127.0.0.1 only."""
+#: Chromium arguments that keep every host but 127.0.0.1 unresolvable: pages reach nothing else
+#: without Playwright's request interception, which turns the HTTP cache off (a kiosk's browser
+#: keeps its cache between visitors; a benchmark must too).
+LOCAL_ONLY_ARGS = ["--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1"]
+
+
+def kiosk_context(browser, width: int = 1280, height: int = 1100, cache: bool = False):
+    """The kiosk's one browser context (its HTTP cache is shared by every visit); 127.0.0.1 only.
+
+    ``cache``: keep the HTTP cache on, as a kiosk's browser has it; the browser must then have been
+    launched with ``LOCAL_ONLY_ARGS`` (nothing is intercepted). Without it every request goes
+    through Playwright's router, which aborts the non-local ones and disables the cache.
+    """
     context = browser.new_context(viewport={"width": width, "height": height})
-    context.route("**/*", lambda route: route.continue_() if route.request.url.startswith(LOCAL_PREFIXES)
-                  else route.abort())
+    if not cache:
+        context.route("**/*", lambda route: route.continue_() if route.request.url.startswith(LOCAL_PREFIXES)
+                      else route.abort())
     return context
 
 
@@ -115,6 +127,10 @@ class Visit:
     kernel_id: str
     drawn_ms: float          # navigation -> the arm drawn on the teaching canvas
     answered_ms: float       # navigation -> a skill button's click answered by the new skill's canvas
+    #: Where the time went, each from navigation (ms): the page's HTML received, DOMContentLoaded
+    #: done, the load event done (every script and style loaded), the first canvas element on the
+    #: page (the widgets rendered); and what was fetched: requests, MB over the wire, MB of bodies.
+    phases: dict | None = None
 
 
 @functools.lru_cache(maxsize=1)
@@ -137,15 +153,22 @@ def visit(context, server: Server, *, unload: bool = True, keep_open: bool = Fal
     page = context.new_page()
     page.goto(server.url(DEMO_URL_PATH), wait_until="commit", timeout=60_000)
     page.wait_for_selector("canvas", timeout=60_000)
+    canvas_ms = page.evaluate("performance.now()")
     wait_for_color(page, 0, *ee_pixel(first), OKABE["yellow"], timeout=60_000)
     drawn = page.evaluate("performance.now()")
+    phases = page.evaluate("""() => { const n = performance.getEntriesByType('navigation')[0];
+        const r = performance.getEntriesByType('resource');
+        return {html_ms: n.responseEnd, dom_ms: n.domContentLoadedEventEnd, load_ms: n.loadEventEnd,
+                requests: r.length + 1, transfer_mb: (n.transferSize + r.reduce((a, e) => a + e.transferSize, 0)) / 1e6,
+                body_mb: (n.encodedBodySize + r.reduce((a, e) => a + e.encodedBodySize, 0)) / 1e6}; }""")
+    phases["canvas_ms"] = canvas_ms
     page.get_by_role("button", name=ANSWER_BUTTON, exact=True).click()
     wait_for_color(page, 0, *ee_pixel(answer), OKABE["black"], tolerance=20, timeout=60_000)
     answered = page.evaluate("performance.now()")
     if screenshot:
         page.screenshot(path=screenshot)
     kernel_id = page.evaluate("() => JSON.parse(document.getElementById('jupyter-config-data').textContent).kernelId")
-    result = Visit(kernel_id, drawn, answered)
+    result = Visit(kernel_id, drawn, answered, phases)
     if keep_open:
         return result, page
     page.close(run_before_unload=unload)

@@ -9,21 +9,12 @@ import time
 
 import pytest
 
-from .helpers import OKABE, ee_pixel, wait_for_color
+from .helpers import OKABE, ee_pixel, reference, teach_by_numbers, wait_for_color
 
 pytestmark = pytest.mark.browser
 
 #: How long after the page settles every canvas must show its drawing.
 DRAWN_WITHIN_MS = 1000
-
-
-def reference(skill="sim-point", guidance=False, seed=0):
-    """The demo's episode for these settings, built without a kernel (same defaults as the page)."""
-    from mt_widgets.widgets import DemoPage
-    page = DemoPage(skill=skill, guidance=True, seed=seed)
-    if not guidance:
-        page.guidance_switch.value = False
-    return page.episode
 
 
 def open_demo(page, voila_server, console):
@@ -38,27 +29,6 @@ def set_guidance(page, on: bool) -> None:
     box = page.get_by_role("checkbox")
     if box.is_checked() != on:
         box.click()
-
-
-def teach_by_numbers(page, episode, guidance: bool) -> None:
-    """Types each optimal arrow, sets and confirms it (and moves on after guidance)."""
-    n = len(episode.query_states)
-    for index, action in enumerate(episode.optimal):
-        page.get_by_text(f"State {index + 1} of {n}").first.wait_for(timeout=10_000)
-        fields = page.locator(".widget-text input[type=number]")
-        fields.nth(0).fill(f"{action[0]:.6f}")
-        fields.nth(1).fill(f"{action[1]:.6f}")
-        fields.nth(1).press("Tab")  # the last value reaches the kernel before the click
-        page.get_by_role("button", name="Set arrow").click()
-        try:
-            page.get_by_text(f"State {index + 1} of {n}: your arrow").first.wait_for(timeout=10_000)
-        except Exception:
-            page.screenshot(path="test-artifacts/impatient-debug.png")
-            raise
-        page.get_by_role("button", name="Confirm").click()
-        if guidance:
-            page.get_by_role("button", name="Finish and watch" if index == n - 1 else "Next state").click()
-    page.get_by_text("Your teaching error").wait_for(timeout=20_000)
 
 
 def mark_canvases(page) -> None:

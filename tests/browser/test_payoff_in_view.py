@@ -5,8 +5,7 @@ import pytest
 
 from browser_support import local_page
 
-from .helpers import OKABE, ee_pixel, wait_for_color
-from .test_impatient_clicks import reference, teach_by_numbers
+from .helpers import OKABE, ee_pixel, reference, teach_by_numbers, wait_for_color
 
 pytestmark = pytest.mark.browser
 

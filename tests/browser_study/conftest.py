@@ -27,7 +27,7 @@ def _serve(root, *options):
         shutil.copy(REPO / "notebooks" / name, root / "notebooks" / name)
     logs = root / "logs"
     # The pages as participants get them: the real log folder, not the notebooks' test folders.
-    server = voila(root, *options, env={"MT_WIDGETS_FAST": "0", "MT_WIDGETS_STUDY_LOGS": str(logs),
+    server = voila(root, *options, env={"MT_WIDGETS_STUDY_LOGS": str(logs),
                                         "MT_WIDGETS_EXPERIMENTER_CODE": EXPERIMENTER_CODE})
     server.logs = logs
     return server

@@ -129,5 +129,5 @@ def test_skills_live_in_registries_their_users_own():
     assert "sim-stiff" not in registry
     with pytest.raises(TypeError, match="skill: expected a Skill"):
         registry.add("sim-point")
-    with pytest.raises(ValueError, match="read_only: expected True or False"):
+    with pytest.raises(TypeError, match="read_only: expected True or False"):
         SkillRegistry(read_only="yes")

@@ -174,7 +174,7 @@ def test_bad_arguments_name_themselves():
         TeachingEpisode("sim-point")
     with pytest.raises(ValueError, match="lam: expected a non-negative"):
         TeachingEpisode(skill, lam=-1)
-    with pytest.raises(ValueError, match="lam: expected a real number"):
+    with pytest.raises(TypeError, match="lam: expected a real number"):
         TeachingEpisode(skill, lam="0.1")
     with pytest.raises(ValueError, match="duration: expected a positive"):
         TeachingEpisode(skill, duration=0)

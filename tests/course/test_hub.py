@@ -281,7 +281,7 @@ def _oom_kills(hub, name: str) -> int:
     return int(dict(line.split() for line in control.splitlines()).get("oom_kill", 0))
 
 
-@pytest.mark.timeout(600)
+@pytest.mark.timeout(1200)
 def test_a_class_of_thirty_logs_in_at_once_and_every_episode_completes(hub, browser, artifacts):
     started = time.perf_counter()
     with ThreadPoolExecutor(len(STUDENTS)) as pool:
@@ -298,8 +298,10 @@ def test_a_class_of_thirty_logs_in_at_once_and_every_episode_completes(hub, brow
     spawn_wall = time.perf_counter() - started
 
     with ThreadPoolExecutor(len(STUDENTS)) as pool:
+        # Thirty kernels importing and teaching at once on two cores: minutes on a loaded machine
+        # (CPU, not a lost kernel: a kernel that dies or errs fails the test at once).
         runs = dict(zip(STUDENTS, pool.map(lambda item: hub.run_in_kernel(item[1], EPISODE_CODE.format(
-            number=item[0] % 12)), enumerate(STUDENTS))))
+            number=item[0] % 12), timeout=900), enumerate(STUDENTS))))
     results = {}
     for name, run in runs.items():
         assert run["error"] is None and not run["died"], f"{name}: {run}"
@@ -417,5 +419,6 @@ def test_the_nbgrader_exchange_works_on_the_hub_and_keeps_submissions_apart(hub)
         feedback = list((hub.homes / name / ASSIGNMENT / "feedback").rglob(f"{ASSIGNMENT}.html"))
         assert len(feedback) == 1, f"{name} got no feedback"
         html = feedback[0].read_text()
-        score = "10.0 / 10.0" if kind == "solution" else "0.0 / 10.0"
+        # a1: 10 autograded points and a written answer (2) the instructor grades by hand later.
+        score = "10.0 / 12.0" if kind == "solution" else "0.0 / 12.0"
         assert f"Score: {score}" in html.replace("&nbsp;", " ") or score in html, html[:2000]

@@ -40,6 +40,32 @@ def wait_until(condition, timeout: float = 10.0, what: str = "the condition") ->
         time.sleep(0.002)
 
 
+class InThread:
+    """``call(*args)`` run in a thread of its own; ``raised()`` joins it and returns what it raised.
+
+    ``pytest.raises`` inside a thread cannot fail a test (a DID NOT RAISE there is only a thread's
+    warning), so the test asserts on ``raised()`` in its own thread instead.
+    """
+
+    def __init__(self, call, *args):
+        self._error: BaseException | None = None
+        self._thread = threading.Thread(target=self._run, args=(call, args), daemon=True)
+        self._thread.start()
+
+    def _run(self, call, args) -> None:
+        try:
+            call(*args)
+        except BaseException as error:   # handed to the test's thread
+            self._error = error
+
+    def raised(self, timeout: float = 10.0) -> BaseException | None:
+        """What the call raised (None when it returned); fails when it is still running after ``timeout``."""
+        self._thread.join(timeout)
+        if self._thread.is_alive():
+            raise AssertionError(f"the call in a thread did not end within {timeout} s")
+        return self._error
+
+
 def arm_is_moving(arm: SwiftPro) -> bool:
     """Whether the simulated arm behind ``arm`` has a move under way now."""
     return device_of(arm).moving_at(time.monotonic())

@@ -13,41 +13,13 @@ from mt_widgets.in_silico.engine import run_in_silico
 from mt_widgets.in_silico.plan import imagined_line_target
 from mt_widgets.in_silico.teachers import along_line_offsets, naive_offsets
 from mt_widgets.study import load_protocol
+from protocols import phase, protocol_toml
 
 SKILLS_FILE = Path(__file__).resolve().parent / "circle_skills.py"
 
-PROTOCOL = """
-format = 1
-name = "ring-lab"
-lambda = 0.01
-seed = 5
-[skills]
-module = "circle_skills.py"
-[assignment]
-block_size = 2
-seed = 1
-[texts]
-welcome = "Welcome."
-consent = "Consent."
-instructions = "Instructions."
-reproduction = "Reproduction."
-thank_you = "Thank you."
-[practice]
-skill = "sim-point"
-duration_s = 0
-text = "Practice."
-[[phases]]
-id = "P1"
-skill = "sim-point"
-episodes = 1
-instructions = "Reach the point."
-[[phases]]
-id = "P2"
-skill = "sim-ring"
-episodes = 2
-guidance = ["target"]
-instructions = "Reach the ring."
-"""
+PROTOCOL = protocol_toml("ring-lab", [phase("P1", "sim-point", instructions="Reach the point."),
+                                     phase("P2", "sim-ring", 2, "Reach the ring.", guidance=["target"])],
+                         skills_module="circle_skills.py")
 
 
 @pytest.fixture

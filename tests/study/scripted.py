@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from mt_widgets import SKILLS
@@ -159,32 +161,21 @@ def steps_protocol(extra: str = STEPS):
 
 
 def run_to_end(session, answers=None):
+    """Drives ``session`` to its end: every video watched (twice), the forms answered with ``answers``."""
     answers = answers or {"screen": {"background": "no"}, "about": {"age": 30, "sex": "female"},
                           "tlx": {"effort": "5", "hours": 7}}
     while not session.finished:
-        step = session.current_step()
-        if step.kind == "video":
-            session.finish_video(True, 2)
-        elif step.kind in ("eligibility", "demographics", "questionnaire"):
-            session.submit_answers(answers[step.study_step.id])
-        elif step.kind == "practice":
-            session.finish_practice(1.0)
-        elif step.kind == "demonstration":
-            session.submit_demonstration(scripted_action(step))
-        elif step.kind == "episode_end":
-            session.finish_episode()
-        else:
-            session.advance()
+        run_to_end_one(session, answers, plays=2)
 
 
-def run_to_end_one(session):
-    """One step of ``run_to_end``."""
+def run_to_end_one(session, answers=None, plays: int = 1):
+    """One step of ``run_to_end`` (by default: the video played once, the forms before the task answered)."""
+    answers = answers or {"screen": {"background": "no"}, "about": {"age": 30, "sex": "male"}}
     step = session.current_step()
     if step.kind == "video":
-        session.finish_video(True, 1)
+        session.finish_video(True, plays)
     elif step.kind in ("eligibility", "demographics", "questionnaire"):
-        session.submit_answers({"screen": {"background": "no"}, "about": {"age": 30, "sex": "male"}}[
-            step.study_step.id])
+        session.submit_answers(answers[step.study_step.id])
     elif step.kind == "practice":
         session.finish_practice(1.0)
     elif step.kind == "demonstration":
@@ -195,9 +186,9 @@ def run_to_end_one(session):
         session.advance()
 
 
-__all__ = ["FOLLOWUP_SESSION", "SHORT_PROTOCOL", "STEPS", "VIDEO", "_with_steps", "demonstrations",
-           "followup_protocol", "load_protocol", "run", "run_all", "run_to_end", "run_to_end_one", "scripted_action",
-           "short_protocol", "steps_protocol"]
+__all__ = ["FOLLOWUP_SESSION", "SHORT_PROTOCOL", "STEPS", "VIDEO", "_with_steps", "act", "click_primary",
+           "demonstrations", "followup_protocol", "load_protocol", "run", "run_all", "run_to_end", "run_to_end_one",
+           "scripted_action", "short_protocol", "steps_protocol"]
 
 
 #: A follow-up session a week (to two weeks) after SHORT_PROTOCOL's main session: retention of
@@ -254,3 +245,38 @@ def run_all(session) -> None:
             session.submit_answers({item.id: item.choices[0] for item in step.study_step.items})
         else:
             run(session, stop_after=1)
+
+
+# -- a participant through the study app's widgets (tests/study/test_app.py, test_rolled_out_once.py) ---
+
+def click_primary(app):
+    """Clicks the page's one primary button (a consent page also offers "I do not agree")."""
+    from ipywidgets import Button
+
+    found, pending = [], list(app.body.children)
+    while pending:
+        widget = pending.pop()
+        if isinstance(widget, Button) and widget.button_style == "primary":
+            found.append(widget)
+        pending += list(getattr(widget, "children", ()))
+    assert len(found) == 1, found
+    found[0].click()
+
+
+def act(app):
+    """One participant action through the widgets, as the buttons and the canvas would do it."""
+    step = app.session.current_step()
+    if step.kind in ("welcome", "consent", "instructions", "phase_intro"):
+        click_primary(app)
+    elif step.kind == "practice":
+        # The practice cannot be skipped before its time (a cold first run may have used it up).
+        assert app._practice_done.disabled or time.monotonic() - app._practice_started >= step.duration_s
+        app._practice_done.disabled = False
+        app._practice_done.click()
+    elif step.kind in ("demonstration", "episode_end"):
+        if app.episode.phase == "guidance":
+            app.episode.next()
+        else:
+            app.episode.demonstrate(SKILLS[step.skill].target_actions(step.state[None])[0] + 0.3)
+    elif step.kind == "reproduction":
+        app._continue.click()

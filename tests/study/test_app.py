@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 from ipywidgets import Button
 
-from blinding_support import participant_texts
+from blinding_support import participant_texts, without_scripts
 from mt_widgets import SKILLS
 from mt_widgets.apps import StudyApp
 from mt_widgets.study import LogError, SessionStateError, read_events
 from mt_widgets.study.protocol import PROTOCOL_FOLDER
 
-from .scripted import SHORT_PROTOCOL
+from .scripted import SHORT_PROTOCOL, act, click_primary
 
 
 @pytest.fixture
@@ -24,37 +24,6 @@ def protocol_file(tmp_path):
     path = tmp_path / "short.toml"
     path.write_text(SHORT_PROTOCOL)
     return str(path)
-
-
-def click_primary(app):
-    """Clicks the page's one primary button (a consent page also offers "I do not agree")."""
-    found, pending = [], list(app.body.children)
-    while pending:
-        widget = pending.pop()
-        if isinstance(widget, Button) and widget.button_style == "primary":
-            found.append(widget)
-        pending += list(getattr(widget, "children", ()))
-    assert len(found) == 1, found
-    found[0].click()
-
-
-def act(app):
-    """One participant action through the widgets, as the buttons and the canvas would do it."""
-    step = app.session.current_step()
-    if step.kind in ("welcome", "consent", "instructions", "phase_intro"):
-        click_primary(app)
-    elif step.kind == "practice":
-        # The practice cannot be skipped before its time (a cold first run may have used it up).
-        assert app._practice_done.disabled or time.monotonic() - app._practice_started >= step.duration_s
-        app._practice_done.disabled = False
-        app._practice_done.click()
-    elif step.kind in ("demonstration", "episode_end"):
-        if app.episode.phase == "guidance":
-            app.episode.next()
-        else:
-            app.episode.demonstrate(SKILLS[step.skill].target_actions(step.state[None])[0] + 0.3)
-    elif step.kind == "reproduction":
-        app._continue.click()
 
 
 WORDS = re.compile(r"\b(target|control|group|groups|condition)\b", re.IGNORECASE)
@@ -68,7 +37,7 @@ def test_nothing_the_participant_view_holds_names_a_group(tmp_path, protocol_fil
     assert app.children == (app.participant_view,)  # the experimenter panel has left the page
     guidance_seen = False
     while not app.session.finished:
-        texts = " ".join(participant_texts(app))
+        texts = without_scripts(" ".join(participant_texts(app)))
         assert not WORDS.search(texts), WORDS.search(texts).group(0)
         step = app.session.current_step()
         if GUIDANCE_WORDS.search(texts):
@@ -77,7 +46,7 @@ def test_nothing_the_participant_view_holds_names_a_group(tmp_path, protocol_fil
             guidance_seen = True
         act(app)
     assert guidance_seen == (group == "target")
-    assert not WORDS.search(" ".join(participant_texts(app)))
+    assert not WORDS.search(without_scripts(" ".join(participant_texts(app))))
     events, _ = read_events(tmp_path / "logs" / "P01.jsonl")
     assert events[-1]["type"] == "session_finished"
 

@@ -13,8 +13,7 @@ from mt_widgets.core import Plant, Skill, TeachingEpisode, machine_teaching
 from mt_widgets.study import Session, read_events
 from mt_widgets.widgets import EpisodeWidget
 
-from .scripted import SHORT_PROTOCOL, short_protocol
-from .test_app import act
+from .scripted import SHORT_PROTOCOL, act, short_protocol
 
 
 @pytest.fixture

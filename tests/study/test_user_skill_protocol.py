@@ -14,44 +14,16 @@ import pytest
 from mt_widgets import SKILLS
 from mt_widgets.study import ProtocolError, Session, StudyFolder, export_study, load_protocol, parse_protocol
 from mt_widgets.widgets import EpisodeWidget
+from protocols import phase, protocol_toml
 
 # Each test loads a user's skill module and runs a session with it: seconds each.
 pytestmark = pytest.mark.slow
 
 USER_PLANT = Path(__file__).resolve().parents[1] / "user_plant.py"
 
-PROTOCOL = """
-format = 1
-name = "puck-lab"
-lambda = 0.01
-seed = 5
-[skills]
-module = "skills/puck.py"
-[assignment]
-block_size = 2
-seed = 1
-[texts]
-welcome = "Welcome."
-consent = "Consent."
-instructions = "Instructions."
-reproduction = "Reproduction."
-thank_you = "Thank you."
-[practice]
-skill = "puck-park"
-duration_s = 0
-text = "Practice."
-[[phases]]
-id = "A"
-skill = "puck-park"
-episodes = 2
-guidance = ["target"]
-instructions = "Park the puck."
-[[phases]]
-id = "B"
-skill = "sim-point"
-episodes = 1
-instructions = "Now the arm."
-"""
+PROTOCOL = protocol_toml("puck-lab", [phase("A", "puck-park", 2, "Park the puck.", guidance=["target"]),
+                                     phase("B", "sim-point", instructions="Now the arm.")],
+                         skills_module="skills/puck.py")
 
 
 @pytest.fixture

@@ -7,7 +7,6 @@ import time
 
 import numpy as np
 import pytest
-from ipywidgets import Button
 
 from blinding_support import participant_texts
 from mt_widgets.apps.uarm_study import UArmEpisodePage, UArmStudyApp, UArmTeaching
@@ -15,32 +14,7 @@ from mt_widgets.core import Trajectory
 from mt_widgets.hardware import SwiftPro
 from mt_widgets.hardware.bridge import arm_to_plant_cm
 
-from .helpers import arm_is_moving, device_of, is_move, moves, received, sim_url, wait_until
-
-ONE_EPISODE = """
-format = 1
-name = "one-uarm-episode"
-lambda = 0.01
-seed = 5
-[assignment]
-block_size = 2
-seed = 3
-[texts]
-welcome = "Welcome."
-consent = "Consent."
-instructions = "Instructions."
-reproduction = "Reproduction."
-thank_you = "Thank you."
-[practice]
-skill = "uarm-point"
-duration_s = 0
-text = "Practice."
-[[phases]]
-id = "P1"
-skill = "uarm-point"
-episodes = 1
-instructions = "Skill 1."
-"""
+from .helpers import ONE_EPISODE, _click, arm_is_moving, device_of, is_move, moves, received, sim_url, wait_until
 
 
 @pytest.fixture
@@ -87,12 +61,6 @@ def test_the_stop_button_halts_the_arm_until_resume(teaching):
     teaching.panel.resume_button.click()
     teaching.wait(5)
     np.testing.assert_allclose(arm_to_plant_cm(teaching.bridge.position_mm()), episode.query_states[1], atol=1e-3)
-
-
-def _click(app, description):
-    buttons = [w for w in app.body.children if isinstance(w, Button) and w.description == description]
-    assert buttons, f"no {description!r} button among {[type(w).__name__ for w in app.body.children]}"
-    buttons[0].click()
 
 
 def test_in_the_study_a_lost_arm_gives_a_message_and_the_demonstrations_are_logged(tmp_path):

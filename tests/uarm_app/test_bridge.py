@@ -22,7 +22,7 @@ from mt_widgets.hardware.bridge import (
     polar_waypoints,
 )
 
-from .helpers import arm_is_moving, device_of, is_move, is_stop, moves, received, sim_url, wait_until
+from .helpers import InThread, arm_is_moving, device_of, is_move, is_stop, moves, received, sim_url, wait_until
 
 
 # ----------------------------------------------------------------------------- mapping
@@ -171,9 +171,9 @@ def test_stop_halts_the_reproduction_and_no_move_is_sent_after_it():
         lines = received(arm)
         last_stop = max(i for i, line in enumerate(lines) if is_stop(line))
         assert not any(is_move(line) for line in lines[last_stop + 1:])
-        held = device_of(arm).position_at(time.monotonic())
-        time.sleep(0.6)
-        assert device_of(arm).position_at(time.monotonic()) == pytest.approx(held)
+        now = time.monotonic()   # the simulated arm's clock, asked ahead instead of waited for
+        held = device_of(arm).position_at(now)
+        assert device_of(arm).position_at(now + 0.6) == pytest.approx(held)
         # Stopped means stopped: the arm is short of where the skill would have taken it.
         assert np.linalg.norm(np.array(held[:2]) - plant_to_arm_mm(trajectory.final_position)) > 20.0
         # Stop is sticky: nothing moves until someone resumes.
@@ -287,16 +287,15 @@ def test_resume_on_firmware_4_2_moves_the_arm_again_and_the_cut_move_never_comes
     # Before 4.5 stop pauses (S1000 V0); resume must un-pause and finish the cut move first.
     with SwiftPro(sim_url(version="4.2", motion_scale=1), timeout=1.0) as arm:
         bridge = UArmBridge(arm)
-        worker = threading.Thread(target=lambda: pytest.raises(SwiftProStopped, bridge.show_state, [29.0, 0.0]))
-        worker.start()  # 90 mm at 60 mm/s
+        worker = InThread(bridge.show_state, [29.0, 0.0])  # 90 mm at 60 mm/s
         wait_until(lambda: arm_is_moving(arm), what="the move to start")
         assert bridge.stop() is None
-        worker.join(timeout=5.0)
+        assert isinstance(worker.raised(timeout=5.0), SwiftProStopped)
         assert bridge.stop_requested
         bridge.resume()
         assert not bridge.stop_requested
         bridge.show_state([21.0, 2.0])  # the arm answers: not left paused
-        time.sleep(0.3)
+        wait_until(lambda: not arm_is_moving(arm), what="the move to end")
         assert arm.position() == pytest.approx((210.0, 20.0, TEACHING_HEIGHT_MM), abs=0.01)
         assert not arm_is_moving(arm) and not arm.paused
 
@@ -304,11 +303,10 @@ def test_resume_on_firmware_4_2_moves_the_arm_again_and_the_cut_move_never_comes
 def test_a_stop_while_resuming_wins():
     with SwiftPro(sim_url(version="4.2", motion_scale=1), timeout=1.0) as arm:
         bridge = UArmBridge(arm)
-        worker = threading.Thread(target=lambda: pytest.raises(SwiftProStopped, bridge.show_state, [29.0, 0.0]))
-        worker.start()
+        worker = InThread(bridge.show_state, [29.0, 0.0])
         wait_until(lambda: arm_is_moving(arm), what="the move to start")
         bridge.stop()
-        worker.join(timeout=5.0)
+        assert isinstance(worker.raised(timeout=5.0), SwiftProStopped)
         errors = []
 
         def resume():
@@ -324,8 +322,7 @@ def test_a_stop_while_resuming_wins():
         resumer.join(timeout=5.0)
         assert errors and bridge.stop_requested and arm.paused
         held = arm.position()
-        time.sleep(0.3)
-        assert arm.position() == pytest.approx(held)
+        assert device_of(arm).position_at(time.monotonic() + 0.3) == pytest.approx(held)   # and 0.3 s later
         with pytest.raises(SwiftProStopped):
             bridge.show_state([21.0, 0.0])
 

@@ -16,8 +16,7 @@ from mt_widgets.apps.uarm_study import UArmEpisodePage, UArmStudyApp, UArmTeachi
 from mt_widgets.hardware import SwiftPro
 from mt_widgets.hardware.bridge import arm_to_plant_cm
 
-from .helpers import device_of, sim_url, wait_until
-from .test_app import ONE_EPISODE, _click
+from .helpers import ONE_EPISODE, _click, device_of, sim_url, wait_until
 
 
 @pytest.fixture(params=[4, 3], ids=["4.x", "3.x"])

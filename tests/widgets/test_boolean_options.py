@@ -56,12 +56,12 @@ def test_a_boolean_option_refuses_anything_but_a_bool_and_names_itself(option):
     for value in (True, False):
         call(value)
     for value in NOT_BOOLEANS:
-        with pytest.raises(ValueError, match=rf"^{option.strip()}: expected True or False, got "):
+        with pytest.raises(TypeError, match=rf"^{option.strip()}: expected True or False, got "):
             call(value)
 
 
 def test_guidance_no_does_not_show_guidance():
-    with pytest.raises(ValueError, match="guidance: expected True or False, got str 'no'"):
+    with pytest.raises(TypeError, match="guidance: expected True or False, got str 'no'"):
         EpisodeWidget("sim-point", guidance="no")
     episode = EpisodeWidget("sim-point", guidance=False)
     episode.demonstrate([0.1, 0.2])

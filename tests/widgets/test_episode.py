@@ -107,7 +107,7 @@ def test_bad_arguments_name_themselves():
         EpisodeWidget("sim-point", lam=-1)
     # (None is the default: DEFAULT_LAMBDA, or a shown TeachingEpisode's own; tests/widgets/test_episode_options.py.)
     for bad in ("0.1", [0.1], True):
-        with pytest.raises(ValueError, match="lam: expected a real number"):
+        with pytest.raises(TypeError, match="lam: expected a real number"):
             EpisodeWidget("sim-point", lam=bad)
     with pytest.raises(ValueError, match="query_states"):
         EpisodeWidget("sim-point", query_states=np.zeros((5, 2)))

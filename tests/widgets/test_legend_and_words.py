@@ -11,6 +11,8 @@ from mt_widgets.apps import StudyApp
 from mt_widgets.widgets import THEMES, ArmView, EpisodeWidget, ReproductionPlayer, Theme
 from mt_widgets.widgets.guidance import explain_difference
 from mt_widgets.widgets.theme import fill_words
+from protocols import phase as phase_table
+from protocols import protocol_toml
 
 
 def lab(hex_color: str) -> np.ndarray:
@@ -69,35 +71,11 @@ def test_guidance_never_says_within_0_degrees():
         assert "within" not in text and "Direction: good" in text
 
 
-WORDS_PROTOCOL = """
-format = 1
-name = "words"
-lambda = 0.01
-seed = 3
-[assignment]
-block_size = 2
-seed = 1
-[texts]
-welcome = "Welcome."
-consent = "Consent."
-instructions = "The goal of the robot is {goal}."
-reproduction = "Reproduction."
-thank_you = "Thank you."
-[practice]
-skill = "sim-point"
-duration_s = 0
-text = "Practice."
-[[phases]]
-id = "P1"
-skill = "sim-point"
-episodes = 1
-instructions = "Skill 1: bring the tip of the arm to {goal} and stop there."
-[[phases]]
-id = "P2"
-skill = "sim-line"
-episodes = 1
-instructions = "Skill 2: bring the tip of the arm onto {goal} and stop there."
-"""
+WORDS_PROTOCOL = protocol_toml(
+    "words",
+    [phase_table("P1", "sim-point", instructions="Skill 1: bring the tip of the arm to {goal} and stop there."),
+     phase_table("P2", "sim-line", instructions="Skill 2: bring the tip of the arm onto {goal} and stop there.")],
+    seed=3, texts={"instructions": "The goal of the robot is {goal}."})
 
 
 def test_the_paper_protocols_name_the_goal_through_the_theme_not_a_colour():
