@@ -89,10 +89,9 @@ def test_the_dependencies_are_what_the_core_imports_and_the_extras_cover_the_res
         "pyproject.toml's dependencies must be exactly what mt_widgets/core imports; the rest go in extras")
     everything = _third_party_imports(REPO / "mt_widgets")
     installed = _distributions(project["dependencies"] + _extra(project, "lab"))
-    # IPython and traitlets come with ipywidgets (the widgets extra), which requires both; tomli is
-    # Python 3.10's optional TOML reader (mt_widgets/study/protocol.py says why it is no dependency).
+    # IPython and traitlets come with ipywidgets (the widgets extra), which requires both.
     missing = everything - installed
-    assert missing <= {"ipython", "traitlets", "tomli"}, f"imported but in no extra of lab: {missing}"
+    assert missing <= {"ipython", "traitlets"}, f"imported but in no extra of lab: {missing}"
 
 
 def test_ci_runs_the_readme_test_command():

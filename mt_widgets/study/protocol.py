@@ -71,7 +71,7 @@ none, so fields are located by scanning the text table by table); JSON files get
 of the field's first occurrence inside its phase.
 
 TOML needs ``tomllib`` (Python >= 3.11); on Python 3.10 the same parser comes as the ``tomli``
-package, a dependency there (``tomli; python_version < '3.11'`` in pyproject.toml), so the
+package, in the ``analysis`` extra there (``tomli; python_version < '3.11'`` in pyproject.toml), so the
 shipped TOML protocols load on every Python the package claims. JSON works everywhere.
 
 The module tree of a protocol: ``protocol_model`` (the frozen model), ``protocol_schema``

@@ -6,7 +6,7 @@ The format is documented in ``mt_widgets.study.protocol``; the sessions' tables 
 steps around the task in ``mt_widgets.study.steps``.
 
 TOML needs ``tomllib`` (Python >= 3.11); on Python 3.10 the ``tomli`` package (the same parser,
-declared as a dependency there) is used.
+in pyproject.toml's ``analysis`` extra there) is used.
 """
 
 from __future__ import annotations
