@@ -24,8 +24,9 @@ def button(page, name):
 
 def unlock(page, server):
     """Opens the lab page and the experimenter panel with the experimenter's code."""
-    page.goto(server.url(PAGE), timeout=60_000)
-    page.get_by_placeholder("the experimenter's code").fill(EXPERIMENTER_CODE, timeout=60_000)
+    # The kernel runs the page's notebook while the page loads: wait for the field, not for "load".
+    page.goto(server.url(PAGE), wait_until="commit", timeout=120_000)
+    page.get_by_placeholder("the experimenter's code").fill(EXPERIMENTER_CODE, timeout=120_000)
     button(page, "Open the experimenter panel").click()
     page.get_by_text("Experimenter", exact=True).wait_for(timeout=60_000)
 
