@@ -11,6 +11,7 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 
 EXPECTED = {
+    "bench_online.py": ["participants", "arrival p50/p95/max", "response p50/p95/max", "load average"],
     "bench_kiosk.py": ["demo page (notebooks/demo.ipynb)", "stock Voila", "shipped config", "memory after"],
     "bench_core.py": ["agreement with MuJoCo", "(a) one 10 s rollout", "(b) 1000 rollouts", "fit + optimal_actions"],
     "bench_study.py": ["in-silico study, 32 participants", "power by simulation"],
@@ -18,7 +19,7 @@ EXPECTED = {
     "bench_widgets.py": ["feedback latency", "animation message", "Chromium playback", "pointer-to-arrow latency"],
 }
 # Shorter runs where a full one takes minutes (the figures are reported, never asserted).
-ARGS = {"bench_kiosk.py": ["--loads", "2", "--no-study"]}
+ARGS = {"bench_kiosk.py": ["--loads", "2", "--no-study"], "bench_online.py": ["--participants", "2", "--think", "1"]}
 
 
 @pytest.mark.slow
