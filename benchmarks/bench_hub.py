@@ -1,5 +1,4 @@
-"""A class on one machine: how long students wait, for their server, their first episode and feedback,
-and what each costs.
+"""A class on one machine: how long students wait (server, first episode, feedback) and what each costs.
 
 Starts deploy/jupyterhub/jupyterhub_config.py as root on loopback with a roster of N students
 (system users ``mtt-bench-...``, removed at the end, as tests/course/test_hub.py does), and:
@@ -100,11 +99,13 @@ def main() -> None:
             load_spawn = os.getloadavg()
             print(f"{len(students)} logged in at once in {login_wall:.1f} s; spawned at once in {spawn_wall:.1f} s")
 
-            def run(item, code):
+            def run(item, code, keep=False):
                 number, name = item
-                result = hub.run_in_kernel(name, code.format(number=number % 12), timeout=600)
+                result = hub.run_in_kernel(name, code.format(number=number % 12), timeout=900)
                 if result["error"] or result["died"]:
                     raise SystemExit(f"{name}: {result}")
+                if not keep:  # one kernel per student at a time, as the memory figure means
+                    hub.server_api(name, "DELETE", f"/api/kernels/{result['kernel_id']}")
                 return result
 
             with ThreadPoolExecutor(len(students)) as pool:
@@ -121,7 +122,7 @@ def main() -> None:
                          for latency in hub.read_json(name, "episode-result.json")["latencies_s"]]
                 load_human = os.getloadavg()
             with ThreadPoolExecutor(len(students)) as pool:
-                list(pool.map(lambda item: run(item, EPISODE_CODE), enumerate(students)))
+                list(pool.map(lambda item: run(item, EPISODE_CODE, keep=True), enumerate(students)))
             at_once = [latency * 1000 for name in students
                        for latency in hub.read_json(name, "episode-result.json")["latencies_s"]]
             load_at_once = os.getloadavg()
