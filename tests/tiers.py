@@ -6,7 +6,7 @@ A tier is a pytest marker expression over five marks, set by tests/conftest.py (
 - ``browser``: a test that drives Chromium (it takes the ``browser`` fixture, lives in a folder named
   ``browser*``, or carries ``@pytest.mark.browser``);
 - ``notebook``: a notebook cell run by nbval;
-- ``hub``: a test that starts a JupyterHub (tests/course/test_hub.py);
+- ``hub``: a test that starts a JupyterHub or loads its config as root (tests/course/test_hub.py, test_hub_config.py);
 - ``slow``: a test that takes seconds, marked ``@pytest.mark.slow`` where it is written.
 
 Every test belongs to exactly one tier (tests/test_fast_tier.py checks it over every combination
@@ -25,7 +25,9 @@ MARKS = ("lint", "browser", "notebook", "hub", "slow")
 
 #: The files whose tests are ``lint``, and ``hub``, as paths from the repository's root.
 LINT_TESTS = ("tests/test_lint.py",)
-HUB_TESTS = ("tests/course/test_hub.py",)
+# test_hub_config.py makes system users and needs the students' Python of scripts/install-hub.sh,
+# which run-tests.sh prepares only after the cheap tiers.
+HUB_TESTS = ("tests/course/test_hub.py", "tests/course/test_hub_config.py")
 
 #: (name, marker expression), in the order they run. ``fast`` is what scripts/test-fast.sh runs
 #: after ``lint``: the edit loop's tiers.
