@@ -16,6 +16,41 @@ EXPERIMENTER_CODE = "lab-code-4711"
 
 PAGE = "/voila/render/study_sim.ipynb"
 
+#: The short study the study-page tests take part in (test_study_page.py, test_touch_drawing.py).
+PROTOCOL = """
+format = 1
+name = "browser"
+lambda = 0.01
+seed = 5
+reproduction_duration_s = 2.0
+[assignment]
+block_size = 2
+seed = 1
+[texts]
+welcome = "Welcome to the test study."
+consent = "Consent text."
+instructions = "How to teach."
+reproduction = "This is what the robot learnt."
+thank_you = "Thank you, all done."
+[practice]
+skill = "sim-point"
+duration_s = 10
+text = "Practice freely."
+[[phases]]
+id = "P1"
+skill = "sim-point"
+episodes = 1
+demonstrations = 3
+instructions = "First part: teach skill 1."
+[[phases]]
+id = "P3"
+skill = "sim-point"
+episodes = 1
+demonstrations = 3
+guidance = ["target"]
+instructions = "Second part: teach skill 1 again."
+"""
+
 
 def button(page, name):
     # Icons add to a button's accessible name: match the words, nothing else.

@@ -15,43 +15,11 @@ from mt_widgets import SKILLS
 from mt_widgets.study import read_study
 from mt_widgets.widgets import ArmView
 
-from .support import button, current_episode, demonstrate, drag, open_and_fill, wait_for_log, wait_for_marker
+from .support import PROTOCOL, button, current_episode, demonstrate, drag, open_and_fill, wait_for_log, wait_for_marker
 
 pytestmark = pytest.mark.browser
 
-PROTOCOL = """
-format = 1
-name = "browser"
-lambda = 0.01
-seed = 5
-reproduction_duration_s = 2.0
-[assignment]
-block_size = 2
-seed = 1
-[texts]
-welcome = "Welcome to the test study."
-consent = "Consent text."
-instructions = "How to teach."
-reproduction = "This is what the robot learnt."
-thank_you = "Thank you, all done."
-[practice]
-skill = "sim-point"
-duration_s = 10
-text = "Practice freely."
-[[phases]]
-id = "P1"
-skill = "sim-point"
-episodes = 1
-demonstrations = 3
-instructions = "First part: teach skill 1."
-[[phases]]
-id = "P3"
-skill = "sim-point"
-episodes = 1
-demonstrations = 3
-guidance = ["target"]
-instructions = "Second part: teach skill 1 again."
-"""
+
 def test_a_participant_goes_through_the_study_page_reloads_mid_episode_and_resumes(page, voila_study, shot,
                                                                                       tmp_path):
     protocol_path = tmp_path / "browser.toml"

@@ -12,7 +12,7 @@ from mt_widgets import SKILLS
 from mt_widgets.widgets import ArmView
 from tests.browser.helpers import touch_context, touch_drag
 
-from .test_study_page import PROTOCOL, button, current_episode, open_and_fill, wait_for_log, wait_for_marker
+from .support import PROTOCOL, button, current_episode, open_and_fill, wait_for_log, wait_for_marker
 
 pytestmark = pytest.mark.browser
 
