@@ -108,8 +108,10 @@ def test_hidden_tests_hold_at_least_half_of_the_points_in_cells_of_their_own(ass
     assert hidden_points(assignment) >= max_points(assignment) / 2
     for cell in _cells(assignment):
         if "BEGIN HIDDEN TESTS" in cell.source:
-            lines = cell.source.strip().splitlines()
-            assert lines[0] == "### BEGIN HIDDEN TESTS" and lines[-1] == "### END HIDDEN TESTS", grade_id(cell)
+            # Nothing but a comment outside the hidden block: the cell's points are the hidden tests'.
+            outside = re.sub(r"### BEGIN HIDDEN TESTS.*?### END HIDDEN TESTS", "", cell.source, flags=re.S)
+            assert all(line.startswith("#") for line in outside.strip().splitlines()), grade_id(cell)
+            assert cell.source.rstrip().endswith("### END HIDDEN TESTS"), grade_id(cell)
 
 
 def test_the_written_answers_are_graded_by_hand():
