@@ -1,5 +1,8 @@
 """The teaching canvas for fingers, the keyboard and screen readers: what the browser must do.
 
+(The script names no study word such as "target": a blinded participant's page is checked for
+them, tests/study/test_app.py.)
+
 ipycanvas' front end (0.14, ``src/widget.ts``) makes its canvas element focusable and then, on
 that element:
 
@@ -54,8 +57,9 @@ _SCRIPT = r"""
     }
     return null;
   }
-  function ours(target) {
-    var canvas = target && target.closest ? target.closest('canvas') : null;
+  function ours(e) {
+    var node = e.composedPath()[0];
+    var canvas = node && node.closest ? node.closest('canvas') : null;
     return canvas && tokenOf(canvas) ? canvas : null;
   }
   function describer(token) { return document.querySelector('[data-mt-describes="' + token + '"]'); }
@@ -73,21 +77,21 @@ _SCRIPT = r"""
     });
   }
   document.addEventListener('touchstart', function (e) {
-    var canvas = ours(e.target);
+    var canvas = ours(e);
     if (!canvas) { return; }
     if (e.touches.length === 1) { state.passing = onGrabZone(canvas, e.touches[0]); }
     if (!state.passing) { e.stopImmediatePropagation(); }
   }, {capture: true, passive: true});
   ['touchmove', 'touchend', 'touchcancel'].forEach(function (type) {
     document.addEventListener(type, function (e) {
-      if (!ours(e.target)) { return; }
+      if (!ours(e)) { return; }
       var passing = state.passing;
       if (e.touches.length === 0) { state.passing = false; }
       if (!passing) { e.stopImmediatePropagation(); }
     }, {capture: true, passive: true});
   });
   document.addEventListener('keydown', function (e) {
-    if (e.key === 'Tab' && ours(e.target)) { e.stopImmediatePropagation(); }
+    if (e.key === 'Tab' && ours(e)) { e.stopImmediatePropagation(); }
   }, true);
   state.sync = function () {
     document.querySelectorAll('[data-mt-describes]').forEach(function (d) {

@@ -92,6 +92,18 @@ def describe_action(action, units: str) -> str:
             f"direction {angle:+.0f}&deg;")
 
 
+def arrow_in_words(action, units: str) -> str:
+    """The arrow for a screen reader: "1.82 N left and 1.52 N up, size 2.37 N at 140 degrees".
+
+    Worded unlike the readout's "(-1.82, +1.52) N", so a search of the page for the readout
+    finds the readout alone.
+    """
+    u = np.asarray(action, dtype=float)
+    angle = math.degrees(math.atan2(u[1], u[0]))
+    return (f"{abs(u[0]):.2f} {units} {'right' if u[0] >= 0 else 'left'} and {abs(u[1]):.2f} {units} "
+            f"{'up' if u[1] >= 0 else 'down'}, size {np.hypot(*u):.2f} {units} at {angle:.0f} degrees")
+
+
 class TeachingCanvas(VBox):
     """Draw one action arrow at each query state.
 
@@ -385,11 +397,11 @@ class TeachingCanvas(VBox):
         if self.pending_action is None:
             words.append("No arrow yet: arrow keys draw one.")
         else:
-            words.append(f"Your arrow: {describe_action(self.pending_action, units)}.")
+            words.append(f"Your arrow: {arrow_in_words(self.pending_action, units)}.")
             if not self.locked:
                 words.append("Enter confirms it.")
         if self._guidance is not None:
-            words.append(f"The best arrow: {describe_action(self._guidance, units)}.")
+            words.append(f"The best arrow: {arrow_in_words(self._guidance, units)}.")
         if self._guidance_words:
             words.append(re.sub(r"<[^>]+>", " ", self._guidance_words))
         if self.locked and len(self._enter_when_locked):

@@ -11,7 +11,7 @@ import pytest
 
 from mt_widgets.widgets import EpisodeWidget
 from mt_widgets.widgets.canvas_access import CANVAS_CLASS_PREFIX
-from mt_widgets.widgets.teaching import TOUCH_RADIUS_FACTOR
+from mt_widgets.widgets.teaching import TOUCH_RADIUS_FACTOR, arrow_in_words
 
 
 def touch(canvas, event, points):
@@ -103,9 +103,9 @@ def test_the_description_says_the_state_velocity_arrow_and_guidance(episode, rec
     assert f"({velocity[0]:+.2f}, {velocity[1]:+.2f}) m/s" in text
     episode.demonstrate([1.0, -0.5])
     text = teaching.description.text
-    assert "Your arrow: (+1.00, -0.50) N" in text
+    assert "Your arrow: 1.00 N right and 0.50 N down" in text
     best = episode.optimal[0]
-    assert f"The best arrow: ({best[0]:+.2f}, {best[1]:+.2f}) N" in text
+    assert f"The best arrow: {arrow_in_words(best, 'N')}" in text and f"{abs(best[0]):.2f} N" in text
     assert "Direction" in text and "Enter goes on" in text
     assert not re.search(r"&\w+;|<", text)                      # words, not markup
     episode.next()
