@@ -87,8 +87,11 @@ class SessionTeacher:
             elif item.kind in ("likert", "choice"):
                 answers[item.id] = item.choices[int(self._answers_rng.integers(len(item.choices)))]
             elif item.kind == "number":
-                low = 18 if item.minimum is None else item.minimum
-                high = max(low, 40 if item.maximum is None else min(item.maximum, low + 22))
+                # Inside the eligible band when the item has one (a synthetic teacher is an adult).
+                floor = item.minimum if item.eligible_minimum is None else item.eligible_minimum
+                ceiling = item.maximum if item.eligible_maximum is None else item.eligible_maximum
+                low = 18 if floor is None else floor
+                high = max(low, 40 if ceiling is None else min(ceiling, low + 22))
                 value = self._answers_rng.uniform(low, high)
                 answers[item.id] = int(round(value)) if item.integer else float(value)
             elif item.required:

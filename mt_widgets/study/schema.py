@@ -39,9 +39,9 @@ Participant log events (one JSON object a line; ``mt_widgets.study.log`` writes 
   phase, episode (where they apply).
 - ``consent_given``: step (the consent step's id, absent for the default consent);
   ``consent_declined``: step.
-- ``step_done``: step (id), kind, and by kind: answers {item: value} (eligibility adds
-  eligible (bool)); watched_to_end (bool) and plays (int) for a video.
-- ``screened_out``: step, answers (the eligibility answers that ended the session).
+- ``step_done``: step (id), kind, and by kind: answers {item: value} (eligibility, and a
+  step with an item that screens, add eligible (bool)); watched_to_end (bool) and plays (int) for a video.
+- ``screened_out``: step, answers (the step's answers, one of them not eligible).
 - ``withdrawn``: reason, data ("exclude" or "delete", the protocol's policy), at (the step).
 - ``practice_started``: skill, duration_s; ``practice_finished``: duration_s (as measured
   by the caller, seconds).

@@ -515,12 +515,14 @@ class Session:
             answers: {item id: answer}; validated against the step's items (``Item.check``).
 
         Returns:
-            The next step; an "ended" step when an eligibility answer screens the participant out.
+            The next step; an "ended" step (the protocol's ``texts.ineligible``) when an answer is
+            outside what its item accepts as eligible (``Item.is_eligible``): screened out.
         """
         slot = self._expect("submit_answers", "eligibility", "demographics", "questionnaire")
         step = self.plan.steps[slot.index]
         answers = step.check_answers(answers)
-        if step.kind == "eligibility":
+        # A screener, or any asking step with an item that screens (an age band): same outcome.
+        if step.kind == "eligibility" or any(item.screens for item in step.items):
             eligible = all(item.is_eligible(answers[item.id]) for item in step.items)
             self.log.append("step_done", step=step.id, kind=step.kind, answers=answers, eligible=eligible)
             if not eligible:

@@ -14,6 +14,11 @@ A protocol lists them in ``[[before]]`` (between the welcome and the task's inst
   answer ends the session (logged, kept out of the analysis).
 - ``demographics``: by default age (a whole number of years) and sex, what the paper reports;
   ``[[before.items]]`` replaces them.
+
+A number item of any asking step may also screen: ``eligible_minimum`` / ``eligible_maximum``
+(inside its valid ``minimum`` .. ``maximum``) bound the answers that keep a participant in the
+study, so that an age of 17 is a valid answer (not refused as a typo) that ends the session with
+the protocol's ``texts.ineligible``, logged as ``screened_out`` like a screener's answer.
 - ``questionnaire``: generic items, so that a lab adds NASA-TLX or SUS without code.
 
 Items (``[[before.items]]`` / ``[[after.items]]`` under their step): ``id``, ``kind`` and
@@ -61,6 +66,8 @@ class Item:
         integer: whether a number item takes whole numbers only.
         max_length: a text item's longest answer, characters.
         eligible: in an eligibility step, the answers that keep a participant in the study.
+        eligible_minimum, eligible_maximum: a number item's band of answers that keep a
+            participant in the study (None: open), inside ``minimum`` .. ``maximum``.
         units: a number item's units (for the data dictionary), e.g. "years".
     """
 
@@ -76,6 +83,13 @@ class Item:
     max_length: int = 2000
     eligible: tuple[str, ...] = ()
     units: str = ""
+    eligible_minimum: float | None = None
+    eligible_maximum: float | None = None
+
+    @property
+    def screens(self) -> bool:
+        """Whether some valid answer to this item screens a participant out."""
+        return bool(self.eligible) or self.eligible_minimum is not None or self.eligible_maximum is not None
 
     @property
     def choices(self) -> tuple[str, ...]:
@@ -114,8 +128,18 @@ class Item:
         return answer
 
     def is_eligible(self, answer) -> bool:
-        """In an eligibility step: whether ``answer`` keeps the participant in the study."""
-        return not self.eligible or answer in self.eligible
+        """Whether a (checked) ``answer`` keeps the participant in the study.
+
+        A skipped answer to an item that screens does not: eligibility is not assumed.
+        """
+        if not self.screens:
+            return True
+        if self.eligible:
+            return answer in self.eligible
+        if answer is None:
+            return False
+        return not ((self.eligible_minimum is not None and answer < self.eligible_minimum) or
+                    (self.eligible_maximum is not None and answer > self.eligible_maximum))
 
 
 #: What the paper reports of its participants: age and sex.
@@ -275,10 +299,14 @@ def _parse_items(check, entry, path, kind) -> tuple[Item, ...]:
             check.fail(where + ("id",), f"expected a unique item id in the step, got {item_id!r} again")
         seen.add(item_id)
         item_kind = check.get(raw, where + ("kind",), "text", choices=ITEM_KINDS)
+        for key in _BAND_KEYS:
+            if key in raw and item_kind != "number":
+                check.fail(where + (key,), f"expected {key} only on a number item (an eligible band of "
+                                           f"numbers), got it on a {item_kind} item")
         allowed = ["id", "kind", "prompt", "required"] + {
-            "likert": ["levels"], "choice": ["options"], "number": ["minimum", "maximum", "integer", "units"],
-            "text": ["max_length"]}[item_kind]
-        if kind == "eligibility":
+            "likert": ["levels"], "choice": ["options"],
+            "number": ["minimum", "maximum", "integer", "units", *_BAND_KEYS], "text": ["max_length"]}[item_kind]
+        if kind == "eligibility" and item_kind != "number":
             allowed.append("eligible")
         check.unknown(raw, where, tuple(allowed))
         prompt = check.get(raw, where + ("prompt",), "text", nonempty=True)
@@ -307,18 +335,43 @@ def _parse_items(check, entry, path, kind) -> tuple[Item, ...]:
                 check.fail(where + ("integer",), f"expected true or false, got {integer!r}")
             fields["integer"] = integer
             fields["units"] = check.get(raw, where + ("units",), "text", default="")
+            fields.update(_parse_band(check, raw, where, fields))
         if item_kind == "text":
             fields["max_length"] = check.get(raw, where + ("max_length",), "count", default=2000, minimum=1,
                                              maximum=100000)
-        if kind == "eligibility":
+        if kind == "eligibility" and item_kind == "number":
+            if fields["eligible_minimum"] is None and fields["eligible_maximum"] is None:
+                check.fail(where + ("eligible_minimum",), "expected eligible_minimum and/or eligible_maximum: "
+                                                          "a number item of an eligibility step screens by its band")
+        elif kind == "eligibility":
             eligible = raw.get("eligible")
             choices = fields.get("levels") or fields.get("options")
             if choices is None:
-                check.fail(where + ("kind",), "expected a likert or choice item in an eligibility step (its "
-                                              "eligible answers are listed)")
+                check.fail(where + ("kind",), "expected a likert or choice item (its eligible answers "
+                                              "listed) or a number item (its eligible band) in an eligibility step")
             if not isinstance(eligible, list) or not eligible or any(e not in choices for e in eligible):
                 check.fail(where + ("eligible",), f"expected a non-empty list of answers from {list(choices)}, "
                                                   f"got {eligible!r}")
             fields["eligible"] = tuple(eligible)
         items.append(Item(item_id, item_kind, prompt, required, **fields))
     return tuple(items)
+
+
+#: A number item's eligible band (see the module docstring).
+_BAND_KEYS = ("eligible_minimum", "eligible_maximum")
+
+
+def _parse_band(check, raw, where, fields) -> dict:
+    """A number item's eligible band, refused when it reaches outside the item's valid range:
+    an answer the form refuses can never be eligible, so such a band is a typo in the protocol."""
+    band = {key: check.get(raw, where + (key,), "number", minimum=-math.inf) if key in raw else None
+            for key in _BAND_KEYS}
+    low, high = fields.get("minimum", -math.inf), fields.get("maximum", math.inf)
+    for key, value in band.items():
+        if value is not None and not low <= value <= high:
+            check.fail(where + (key,), f"expected a number inside the item's valid range "
+                                       f"[{low:g}, {high:g}] (minimum, maximum), got {value:g}")
+    if None not in band.values() and band["eligible_minimum"] > band["eligible_maximum"]:
+        check.fail(where + ("eligible_maximum",), f"expected eligible_maximum >= eligible_minimum "
+                                                  f"({band['eligible_minimum']:g}), got {band['eligible_maximum']:g}")
+    return band

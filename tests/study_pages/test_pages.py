@@ -200,3 +200,61 @@ def test_a_participant_s_reload_of_the_lab_page_resumes_them_without_the_panel(t
     forged = LabStudyPage(PILOT, tmp_path / "logs", urlencode(dict(address, participant="L02")),
                           experimenter_code="s3cret")
     assert forged.view is None and forged.app is None and forged.session is None
+
+
+# -- an answer outside an item's eligible band ---------------------------------------------------------------
+
+ADULTS_ONLY = "You need to be 18 or older to take part, so the study ends here. Thank you for your interest."
+
+
+def _adults_only_pilot(tmp_path) -> Path:
+    """The pilot protocol with an age that screens under 18, and its own words for it."""
+    text = Path(PILOT).read_text()
+    text = re.sub(r'^ineligible = .*$', f'ineligible = "{ADULTS_ONLY}"', text, count=1, flags=re.M)
+    demographics = 'id = "demographics"\nkind = "demographics"\ntitle = "About you"\n'
+    assert demographics in text
+    text = text.replace(demographics, demographics + """
+[[before.items]]
+id = "age"
+kind = "number"
+prompt = "Your age, in years"
+minimum = 0
+maximum = 120
+integer = true
+eligible_minimum = 18
+
+[[before.items]]
+id = "sex"
+kind = "choice"
+prompt = "Your sex"
+options = ["female", "male"]
+""")
+    path = tmp_path / "adults_only.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("age, screened", [("17", True), ("18", False)])
+def test_an_age_under_the_band_shows_the_protocols_words_and_no_further_step(tmp_path, age, screened):
+    page = OnlineStudyPage(str(_adults_only_pilot(tmp_path)), tmp_path / "logs", prolific("A1"), redirect_delay_s=0)
+    while page.session.current_step().kind != "demographics":
+        act(page.view)
+    page.view.form.fields["age"].value = age
+    page.view.form.fields["sex"].value = "female"
+    page.view.form.continue_button.click()
+    page.view.form.continue_button.click()  # an impatient double click records nothing twice
+    shown = " ".join(without_scripts(t) for t in participant_texts(page))
+    events = read_events(tmp_path / "logs" / "A1.jsonl")[0]
+    done = [e for e in events if e["type"] == "step_done" and e["step"] == "demographics"]
+    assert len(done) == 1 and done[0]["eligible"] is (not screened)
+    if screened:
+        assert page.session.current_step().kind == "ended" and ADULTS_ONLY in shown
+        assert page.completion.code == "PILOTSCREEN"
+        assert redirect_of(page) == "http://localhost/prolific/complete?cc=PILOTSCREEN"
+        # No further step: no form, no button to go on, and the task's instructions never shown.
+        assert not [b for b in buttons_in(page.view.body)]
+        assert "please type" not in shown.lower()
+        assert [e["type"] for e in events][-1] == "screened_out"
+    else:
+        assert page.session.current_step().kind == "instructions" and ADULTS_ONLY not in shown
+        assert page.completion is None and redirect_of(page) is None
