@@ -169,7 +169,7 @@ class EpisodeWidget(VBox):
             "uarm-point", "uarm-line"), or a ``TeachingEpisode`` to show (then leave
             ``query_states`` and ``duration`` unset; its demonstrations so far are shown).
         query_states: (N, state_dim) states to demonstrate at; default
-            ``skill.query_states(seed=seed)`` (N = S, the teaching dimension).
+            ``skill.query_states(seed=seed)`` (N = S: the fewest that satisfy the rank condition on given query states).
         seed: Seed for the default query states.
         guidance: Show guidance after each demonstration (how: ``guidance_modality``).
         guidance_modality: what guidance shows: "arrows+words" (the optimal arrow beside the
