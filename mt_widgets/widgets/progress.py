@@ -10,7 +10,7 @@ class EffortProgress(VBox):
     """Two progress bars: demonstrations in this episode, and episodes in the phase.
 
     Args:
-        demonstration_budget: Demonstrations per episode (S, the fewest independent query states that teach Theta exactly).
+        demonstration_budget: Demonstrations per episode (S: the fewest states that teach Theta exactly).
         episode_budget: Episodes in the phase (e.g. 8 in the paper's phase 3).
         demonstrations_done: Demonstrations confirmed so far in this episode.
         episodes_done: Episodes finished before this one.
