@@ -145,7 +145,12 @@ def test_the_uarm_study_app_taught_by_hand_logs_the_modality_and_survives_a_pull
     for label in ("Continue", "I agree", "Start", "Start"):
         button = page.get_by_role("button", name=label, exact=True)
         button.first.wait_for(timeout=150_000)
-        button.first.click()
+        pressed = button.first.element_handle()
+        pressed.click()
+        # Two screens in a row have a "Start": the next press must find the next screen's button, not
+        # this one while the kernel is still replacing the screen (a pressed button acts only once).
+        page.wait_for_function("b => !b.isConnected || b.disabled || b.offsetParent === null", arg=pressed,
+                               timeout=60_000)
     s = wait_for_status(page, "s.in_episode && s.hand_shown && !s.hand_busy", timeout=60_000)
     hand_button = page.get_by_role("button", name="Teach by hand (H)")
     for index, step in enumerate([(1.5, 0.0), (0.0, 1.0)]):
