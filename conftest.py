@@ -6,8 +6,25 @@ wait for a person. The test-suite's own settings and marks are in tests/conftest
 """
 
 import pytest
+import zmq
+from jupyter_client.client import KernelClient
 
 from tests.notebook_parameters import inject
+
+
+def _unbounded_receive_context(self) -> zmq.Context:
+    """nbval reads a cell's iopub messages only once the cell has finished, and ZeroMQ keeps at most
+    1000 unread messages at each end by default (high-water marks), then drops the rest: a cell whose
+    widgets send more (tutorial 10's synthetic novice: about 4300 widget messages) lost its final
+    idle status, and nbval failed it with "Timeout of 5 seconds exceeded waiting for output". An
+    unbounded receive queue on the test run's side keeps every message."""
+    self._created_context = True
+    context = zmq.Context()
+    context.setsockopt(zmq.RCVHWM, 0)
+    return context
+
+
+KernelClient._context_default = _unbounded_receive_context
 
 
 @pytest.hookimpl(trylast=True)
