@@ -112,8 +112,13 @@ def test_teaching_by_hand_in_the_browser_with_a_pulled_cable_mid_move(uarm_voila
             page.screenshot(path=artifacts("hand-released"))
         _drag_tip(page, states[index], step)
         # A hand is not a ruler: the tip lands within a few mm of where the pointer went (0.5 px per mm).
+        # The arrow follows the tip at the app's 0.1 s polling: once the tip rests, the arrow is the
+        # measured displacement (a STATUS taken while the tip still moves shows an older poll).
+        x0, y0 = states[index] * 10
         s = wait_for_status(page, f"s.pending !== null && Math.abs(s.pending[0] - {step[0]}) < 0.3 "
-                                  f"&& Math.abs(s.pending[1] - {step[1]}) < 0.3", timeout=30_000)
+                                  f"&& Math.abs(s.pending[1] - {step[1]}) < 0.3 "
+                                  f"&& Math.abs(s.pending[0] - (s.tip_mm[0] - {x0}) / 10) < 0.02 "
+                                  f"&& Math.abs(s.pending[1] - (s.tip_mm[1] - {y0}) / 10) < 0.02", timeout=30_000)
         measured = (np.array(s["tip_mm"][:2]) - states[index] * 10) / 10
         assert s["pending"] == pytest.approx(measured, abs=0.02)  # the arrow is the measured displacement
         if index == 0:
