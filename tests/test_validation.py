@@ -111,6 +111,18 @@ def test_a_wrong_type_is_a_type_error_and_a_wrong_value_a_value_error(check, wro
     assert not isinstance(error.value, TypeError)
 
 
+def test_the_effort_bars_check_their_budgets_with_the_core_checks():
+    from mt_widgets.widgets.progress import EffortProgress
+    with pytest.raises(TypeError, match=r"^demonstration_budget: expected a whole number, got float 2.5"):
+        EffortProgress(2.5)
+    with pytest.raises(ValueError, match=r"^episode_budget: expected a whole number >= 1, got 0"):
+        EffortProgress(3, episode_budget=0)
+    with pytest.raises(ValueError, match=r"^demonstrations_done: expected a whole number >= 0, got -1"):
+        EffortProgress(3, demonstrations_done=-1)
+    bars = EffortProgress(3, 2, demonstrations_done=1)
+    assert (bars.demonstration_bar.max, bars.episode_bar.max, bars.demonstrations_done) == (3, 2, 1)
+
+
 def test_the_study_and_analysis_layers_check_with_the_core_checks():
     # One message and one convention for alpha, power and counts, in every layer.
     message = r": expected a number strictly between 0 and 1, got "
@@ -118,6 +130,10 @@ def test_the_study_and_analysis_layers_check_with_the_core_checks():
         AnalysisPlan(alpha="0.05")
     with pytest.raises(ValueError, match="^power" + message):
         AnalysisPlan(power=1.0)
+    with pytest.raises(TypeError, match=r"^effect_size: expected a real number, got str '0.9'"):
+        AnalysisPlan(effect_size="0.9")
+    with pytest.raises(ValueError, match=r"^effect_size: expected a non-zero number \(Cohen's d\), got 0"):
+        AnalysisPlan(effect_size=0)
     with pytest.raises(TypeError, match="^alpha" + message):
         analyse_changes(None, alpha=True)
     with pytest.raises(ValueError, match="^alpha" + message):

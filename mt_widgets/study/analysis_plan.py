@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from mt_widgets.core.validation import as_fraction
+from mt_widgets.core.validation import as_finite, as_fraction
 
 
 @dataclass(frozen=True)
@@ -85,8 +85,7 @@ class AnalysisPlan:
             raise ValueError(f"alternative: expected one of {list(ALTERNATIVES)}, got {self.alternative!r}")
         for name in ("alpha", "power"):
             as_fraction(name, getattr(self, name))
-        if isinstance(self.effect_size, bool) or not isinstance(self.effect_size, (int, float)) \
-                or self.effect_size == 0:
+        if as_finite("effect_size", self.effect_size) == 0:
             raise ValueError(f"effect_size: expected a non-zero number (Cohen's d), got {self.effect_size!r}")
 
     def as_dict(self) -> dict:

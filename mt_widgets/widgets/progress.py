@@ -5,6 +5,8 @@ from __future__ import annotations
 from ipywidgets import HTML, HBox, IntProgress, Layout, VBox
 from traitlets import Int, observe
 
+from mt_widgets.core.validation import as_count
+
 
 class EffortProgress(VBox):
     """Two progress bars: demonstrations in this episode, and episodes in the phase.
@@ -21,11 +23,8 @@ class EffortProgress(VBox):
 
     def __init__(self, demonstration_budget: int, episode_budget: int = 1, demonstrations_done: int = 0,
                  episodes_done: int = 0):
-        for name, value in (("demonstration_budget", demonstration_budget), ("episode_budget", episode_budget)):
-            if int(value) != value or value < 1:
-                raise ValueError(f"{name}: expected a positive whole number, got {value!r}")
-        self.demonstration_budget = int(demonstration_budget)
-        self.episode_budget = int(episode_budget)
+        self.demonstration_budget = as_count("demonstration_budget", demonstration_budget)
+        self.episode_budget = as_count("episode_budget", episode_budget)
         bar = Layout(width="260px")
         self.demonstration_bar = IntProgress(min=0, max=self.demonstration_budget, layout=bar,
                                              description="Demos", bar_style="info")
@@ -34,8 +33,8 @@ class EffortProgress(VBox):
         # The bars side by side (wrapping on a narrow page): the episode's canvas stays high on the page.
         super().__init__([HBox([self.demonstration_bar, self.episode_bar], layout=Layout(flex_flow="row wrap")),
                           self.label])
-        self.demonstrations_done = int(demonstrations_done)
-        self.episodes_done = int(episodes_done)
+        self.demonstrations_done = as_count("demonstrations_done", demonstrations_done, minimum=0)
+        self.episodes_done = as_count("episodes_done", episodes_done, minimum=0)
         self._refresh()
 
     @observe("demonstrations_done", "episodes_done")
