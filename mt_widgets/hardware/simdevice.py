@@ -1359,30 +1359,24 @@ class SimulatedSwiftPro:
         return 700 if pin == 5 else 0  # A5 reads the power supply (> 100 when powered)
 
     def _p2240(self, cmd, t):
-        if self.firmware == 4:
-            fields = scan4(_pattern("N d"), cmd.args)
-            if not fields or not 0 <= int(fields[0]) <= 69:
-                self._r4(cmd, t, 21)
-                return
-            self._r4(cmd, t, 0, f" V{self._pin_read(int(fields[0]))}")
-            return
-        if not self._seen(cmd, "N"):
-            self._r3(cmd, t, 21)
-            return
-        self._r3(cmd, t, 0, f"V{self._pin_read(marlin_int(self._after(cmd, 'N')) & 0xFF)}")
+        self._read_pin(cmd, t, 69, self._pin_read)   # digital pins 0-69
 
     def _p2241(self, cmd, t):
+        self._read_pin(cmd, t, 15, self._analog)     # analog pins 0-15
+
+    def _read_pin(self, cmd, t, highest: int, read) -> None:
+        """P2240/P2241: one pin's value; 4.x checks the pin's range, 3.x masks it to a byte as Marlin does."""
         if self.firmware == 4:
             fields = scan4(_pattern("N d"), cmd.args)
-            if not fields or not 0 <= int(fields[0]) <= 15:
+            if not fields or not 0 <= int(fields[0]) <= highest:
                 self._r4(cmd, t, 21)
                 return
-            self._r4(cmd, t, 0, f" V{self._analog(int(fields[0]))}")
+            self._r4(cmd, t, 0, f" V{read(int(fields[0]))}")
             return
         if not self._seen(cmd, "N"):
             self._r3(cmd, t, 21)
             return
-        self._r3(cmd, t, 0, f"V{self._analog(marlin_int(self._after(cmd, 'N')) & 0xFF)}")
+        self._r3(cmd, t, 0, f"V{read(marlin_int(self._after(cmd, 'N')) & 0xFF)}")
 
     def _p2242(self, cmd, t):
         """Raw 12-bit angle-sensor values (P2242 reference / P2243 register on 4.x)."""
