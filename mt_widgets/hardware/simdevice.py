@@ -1157,12 +1157,19 @@ class SimulatedSwiftPro:
     def _angles_text(self, base_plus_90, lower, upper) -> str:
         return f"B{self._num(base_plus_90)} L{self._num(lower)} R{self._num(upper)}"
 
+    def _three_floats4(self, cmd, t, letters: str) -> list | None:
+        """A 4.x command's three float fields (``letters`` in order), or None after answering E21."""
+        fields = scan4(_pattern(" ".join(f"{c} f" for c in letters)), cmd.args)
+        values = [grbl_read_float(v) for v in fields]
+        if len(fields) < 3 or None in values:
+            self._r4(cmd, t, 21)
+            return None
+        return values
+
     def _m2220(self, cmd, t):
         if self.firmware == 4:
-            fields = scan4(_pattern("X f Y f Z f"), cmd.args)
-            values = [grbl_read_float(v) for v in fields]
-            if len(fields) < 3 or None in values:
-                self._r4(cmd, t, 21)
+            values = self._three_floats4(cmd, t, "XYZ")
+            if values is None:
                 return
             angles = joint_angles(*values)
             b, lo, up = angles[:3] if angles else (math.degrees(math.atan2(values[1], values[0])), math.nan, math.nan)
@@ -1180,10 +1187,8 @@ class SimulatedSwiftPro:
 
     def _m2221(self, cmd, t):
         if self.firmware == 4:
-            fields = scan4(_pattern("B f L f R f"), cmd.args)
-            values = [grbl_read_float(v) for v in fields]
-            if len(fields) < 3 or None in values:
-                self._r4(cmd, t, 21)
+            values = self._three_floats4(cmd, t, "BLR")
+            if values is None:
                 return
         else:
             if not all(self._seen(cmd, c) for c in "BLR"):

@@ -368,6 +368,12 @@ def test_coordinates_to_angles_out_of_reach(arm):
         assert ret[0] == "E22"
 
 
+def test_coordinates_and_angles_need_all_three_fields(arm):
+    # Both dialects refuse a conversion with a field missing (E21), rather than assume a zero.
+    assert arm.send("M2220 X200 Y0")[0] == "E21"
+    assert arm.send("M2221 B90 L90")[0] == "E21"
+
+
 def test_reachability_m2222(arm):
     assert flag(arm.send(f"M2222 X{200.0} Y{0.0} Z{100.0} P{0}")) is True
     assert flag(arm.send(f"M2222 X{400.0} Y{0.0} Z{100.0} P{0}")) is False
