@@ -75,7 +75,7 @@ from collections.abc import Mapping
 import numpy as np
 
 import mt_widgets
-from mt_widgets.core import TeachingEpisode
+from mt_widgets.core import Demonstration, TeachingEpisode
 from mt_widgets.core.validation import as_bool, as_count, as_positive
 
 from .log import LogError, MemoryLog, ParticipantLog, read_events, to_jsonable
@@ -132,10 +132,14 @@ class Session:
         replayed = replay(migrate_events(log.events, protocol.sessions[0].id, str(log.path or "<memory>")),
                           self._slots, self.plan)
         self._position = replayed.position
+        #: {(phase_index, episode): its episode_started event} (states, guidance, seed, when).
         self._episodes: dict[tuple[int, int], dict] = replayed.episodes
-        self._actions: dict[tuple[int, int], list[np.ndarray]] = replayed.actions
-        self._finished_episodes: dict[tuple[int, int], dict] = replayed.finished
-        self._teaching_episodes: dict[tuple[int, int], TeachingEpisode] = {}
+        self._finished: set[tuple[int, int]] = set(replayed.finished)
+        #: {(phase_index, episode): its TeachingEpisode}: the one place an episode's demonstrations
+        #: live (rebuilt from the log on resume); the step's view demonstrates into it, the log
+        #: records it, ``Step.actions`` and the result read it.
+        self._teaching_episodes: dict[tuple[int, int], TeachingEpisode] = {
+            key: self._episode_from_log(key, replayed.demonstrations.get(key, ())) for key in self._episodes}
         self._ended: str | None = replayed.ended
         self._entered_at = time.monotonic()
 
@@ -388,9 +392,10 @@ class Session:
 
     def progress(self) -> dict:
         """Episodes done and in all, and demonstrations done in the current episode."""
-        done = len(self._finished_episodes)
+        done = len(self._finished)
         slot = self._slot
-        in_episode = len(self._actions.get((slot.phase_index, slot.episode), [])) if slot.episode else 0
+        teaching = self._teaching_episodes.get((slot.phase_index, slot.episode)) if slot.episode else None
+        in_episode = 0 if teaching is None else len(teaching.demonstrations)
         return {"episodes_done": done, "episodes_total": self.plan.n_episodes,
                 "demonstrations_done": in_episode}
 
@@ -421,43 +426,44 @@ class Session:
         key = (slot.phase_index, slot.episode)
         started = self._episodes[key]
         states = np.asarray(started["query_states"], dtype=float)
-        actions = tuple(self._actions.get(key, []))
-        common.update(episode=slot.episode, query_states=states, actions=actions, guidance=started["guidance"],
+        common.update(episode=slot.episode, query_states=states, guidance=started["guidance"],
                       guidance_modality=started["guidance_modality"],
-                      teaching_episode=self._teaching_episode(key))
+                      teaching_episode=self._teaching_episodes[key])
         if slot.kind == StepKind.DEMONSTRATION:
             return Step("demonstration", **common, index=slot.index, state=states[slot.index])
         if slot.kind == StepKind.EPISODE_END:
             return Step("episode_end", **common)
         return Step("reproduction", texts["reproduction"], **common, result=self._result(key))
 
-    def _new_teaching_episode(self, skill, states, actions=()) -> TeachingEpisode:
+    def _new_teaching_episode(self, skill, states) -> TeachingEpisode:
         """The episode of ``skill`` on ``states`` with this protocol's lambda and reproduction length."""
-        return TeachingEpisode.from_actions(skill, states, actions, lam=self.protocol.lam,
-                                            duration=self.protocol.reproduction_duration_s)
+        return TeachingEpisode(skill, states, lam=self.protocol.lam, duration=self.protocol.reproduction_duration_s)
 
     def _teaching_episode(self, key) -> TeachingEpisode:
-        """The episode's one ``TeachingEpisode`` (after a resume, rebuilt from the log). Never
-        changed here: a view may be demonstrating into it, each action after it is logged."""
-        if key not in self._teaching_episodes:
-            self._teaching_episodes[key] = self._episode_from_log(key)
+        """The episode's one ``TeachingEpisode``."""
         return self._teaching_episodes[key]
 
-    def _episode_from_log(self, key) -> TeachingEpisode:
-        """A finished episode with its logged actions; an unfinished one empty, on the logged
-        states: the view that continues it restores the logged actions into it (the step's
-        ``actions``), or ``finish_episode`` does."""
+    def _episode_from_log(self, key, events) -> TeachingEpisode:
+        """The episode a log describes: on its logged states, each logged demonstration recorded
+        as it was given (action, method, timings), so a resumed view shows what the log holds."""
         started = self._episodes[key]
-        actions = self._actions.get(key, []) if key in self._finished_episodes else []
-        return self._new_teaching_episode(self.protocol.skills[started["skill"]],
-                                          np.asarray(started["query_states"], dtype=float),
-                                          np.asarray(actions, dtype=float))
+        episode = self._new_teaching_episode(self.protocol.skills[started["skill"]],
+                                             np.asarray(started["query_states"], dtype=float))
+        for event in events:
+            given = event.get("input") or {}
+            redraws = given.get("redraws", 0)
+            episode.demonstrate(event["action"], method=str(given.get("method", "code")),
+                                time_to_first_input_s=event.get("time_to_first_input_s"),
+                                drawing_duration_s=event.get("drawing_duration_s"),
+                                redraws=redraws if isinstance(redraws, int) and not isinstance(redraws, bool) else 0,
+                                confirmed_at=_parse_time(event["time"]), guidance_shown=bool(event["guidance_shown"]),
+                                episode_index=key[1] - 1)
+        return episode
 
     def _result(self, key) -> EpisodeResult:
-        event = self._finished_episodes[key]
-        return EpisodeResult(event["phase"], event["phase_index"], event["episode"], event["skill"],
-                             np.asarray(event["theta_hat"]), event["teaching_error"], event["rho1"], event["rho2"],
-                             event["reproduction"]["diverged"], self._teaching_episode(key))
+        started = self._episodes[key]
+        return EpisodeResult(self._teaching_episodes[key], phase=started["phase"], phase_index=key[0],
+                             episode_number=key[1])
 
     # -- driving --------------------------------------------------------------------------------------
     def _expect(self, call: str, *kinds: str) -> Slot:
@@ -597,9 +603,12 @@ class Session:
         """Records the action for the current query state; returns once it is on disk.
 
         Args:
-            action: (R,) the demonstrated action, in the skill's action units.
+            action: (R,) the demonstrated action, in the skill's action units; or the
+                ``Demonstration`` a view built from the step's ``teaching_episode`` (its method,
+                timings and redraws are logged, and that very object is what the episode keeps).
             timings: ``time_to_first_input_s`` and ``drawing_duration_s`` in seconds (None
-                when unknown), plus any other input details to log (method, redraws, ...).
+                when unknown), plus any other input details to log (method, redraws, ...); None
+                with a ``Demonstration``, which carries its own.
             index: the 0-based demonstration the caller means; if given and not the current
                 one the call is refused (a double click cannot record an action twice).
 
@@ -612,13 +621,27 @@ class Session:
                                     f"it was already recorded or is not reached yet")
         key = (slot.phase_index, slot.episode)
         started = self._episodes[key]
-        skill = self.protocol.skills[started["skill"]]
-        try:
-            action = np.asarray(action, dtype=float).reshape(-1)
-        except (TypeError, ValueError):
-            raise ValueError(f"action: expected {skill.plant.action_dim} numbers, got {action!r}") from None
-        if action.shape != (skill.plant.action_dim,) or not np.all(np.isfinite(action)):
-            raise ValueError(f"action: expected {skill.plant.action_dim} finite numbers, got {action.tolist()}")
+        teaching = self._teaching_episodes[key]
+        if isinstance(action, Demonstration):
+            demonstration = action
+            if timings is not None:
+                raise ValueError(f"timings: expected None with a Demonstration (it carries its own), got "
+                                 f"{type(timings).__name__}")
+            if demonstration.index != slot.index or not np.array_equal(demonstration.state,
+                                                                        teaching.query_states[slot.index]):
+                raise SessionStateError(f"action: expected a Demonstration at the current state {slot.index} of "
+                                        f"{self._describe(slot)}, got one at state {demonstration.index} of "
+                                        f"another episode or state")
+            timings = {"time_to_first_input_s": demonstration.time_to_first_input_s,
+                       "drawing_duration_s": demonstration.drawing_duration_s, "method": demonstration.method,
+                       "redraws": demonstration.redraws}
+        else:
+            try:
+                teaching.check_action(action)
+            except ValueError as error:  # the episode's own check, said for this step
+                raise ValueError(f"action: expected {teaching.action_dim} finite numbers, got {action!r}: "
+                                 f"{error}"[:300]) from None
+            demonstration = None
         if timings is None:
             timings = {}
         if not isinstance(timings, Mapping):
@@ -632,25 +655,31 @@ class Session:
             except TypeError:
                 raise ValueError(f"timings[{name!r}]: expected JSON-like data (numbers, text, lists, dicts), "
                                  f"got {type(value).__name__}") from None
+        if demonstration is None:
+            redraws = timings.get("redraws", 0)
+            demonstration = teaching.analyse(
+                action, method=str(timings.get("method", "code")), **measured,
+                redraws=redraws if isinstance(redraws, int) and not isinstance(redraws, bool) else 0,
+                confirmed_at=time.time(), guidance_shown=started["guidance"], episode_index=slot.episode - 1)
         optimal = np.asarray(started["optimal"])[slot.index]
         self.log.append("demonstration", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
-                        index=slot.index, state=np.asarray(started["query_states"])[slot.index], action=action,
-                        optimal=optimal, guidance_shown=started["guidance"], **measured,
+                        index=slot.index, state=np.asarray(started["query_states"])[slot.index],
+                        action=demonstration.action, optimal=optimal, guidance_shown=started["guidance"], **measured,
                         response_time_s=time.monotonic() - self._entered_at, input=timings,
                         modality="hand" if timings.get("method") == "hand" else "drawn")
-        self._actions.setdefault(key, []).append(action)
+        teaching.record(demonstration)  # on disk: now the episode keeps it (a view's record: that object)
         self._complete()
-        return Feedback(slot.index, started["guidance"], optimal.copy() if started["guidance"] else None, action,
-                        started["guidance_modality"])
+        return Feedback(slot.index, started["guidance"], optimal.copy() if started["guidance"] else None,
+                        demonstration.action, started["guidance_modality"])
 
     def finish_episode(self, episode: TeachingEpisode | None = None) -> EpisodeResult:
         """Records the finished episode (what was learnt, its error and its reproduction) in the log.
 
         Args:
             episode: the ``TeachingEpisode`` a view ran on this step's query states with the
-                logged actions (e.g. ``EpisodeWidget.episode``); it is recorded as it is, so its
-                one reproduction serves both the view and the log. None: the session builds it
-                from the logged states and actions (scripts, synthetic teachers).
+                logged actions, when it is not the step's own ``teaching_episode`` (which a view
+                normally demonstrates into); it is checked against the log and kept as it is, so
+                its one reproduction serves both the view and the log. None: the step's own.
 
         Returns:
             The ``EpisodeResult`` (the next step is the reproduction).
@@ -658,12 +687,10 @@ class Session:
         slot = self._expect("finish_episode", "episode_end")
         key = (slot.phase_index, slot.episode)
         started = self._episodes[key]
-        if episode is not None:
-            self._check_recorded(episode, started, key)
+        if episode is not None and episode is not self._teaching_episodes[key]:
+            self._check_recorded(episode, started, self._teaching_episodes[key])
             self._teaching_episodes[key] = episode
-        else:
-            self._record_logged_actions(key)
-        teaching = self._teaching_episode(key)
+        teaching = self._teaching_episodes[key]
         trajectory = teaching.reproduction
         self.log.append(
             "episode_finished", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
@@ -674,26 +701,14 @@ class Session:
             reproduction={"diverged": trajectory.diverged, "diverged_at": trajectory.diverged_at,
                           "final_position": trajectory.final_position, "duration_s": float(trajectory.times[-1])},
             started_at=started["time"], duration_s=max(0.0, time.time() - _parse_time(started["time"])))
-        self._finished_episodes[key] = self.log.events[-1]
+        self._finished.add(key)
         self._complete()
         return self._result(key)
 
-    def _record_logged_actions(self, key) -> None:
-        """Brings the episode up to the logged actions (no view demonstrated into it: a script);
-        an episode holding other actions than the log is replaced by the log's (the log is the truth)."""
-        teaching = self._teaching_episode(key)
-        logged = np.asarray(self._actions.get(key, []), dtype=float).reshape(-1, teaching.action_dim)
-        held = teaching.actions.reshape(-1, teaching.action_dim)
-        if len(held) <= len(logged) and np.array_equal(held, logged[:len(held)]):
-            teaching.restore(logged[len(held):])
-        else:
-            self._teaching_episodes[key] = self._episode_from_log(key)
-
-    def _check_recorded(self, episode, started: dict, key) -> None:
+    def _check_recorded(self, episode, started: dict, logged: TeachingEpisode) -> None:
         """Refuses an episode that is not the one this step logged (other states, actions, lambda...)."""
         if not isinstance(episode, TeachingEpisode):
             raise ValueError(f"episode: expected a TeachingEpisode or None, got {type(episode).__name__}")
-        logged = np.asarray(self._actions[key], dtype=float)
         duration = self.protocol.reproduction_duration_s
         duration = self.protocol.skills[started["skill"]].default_duration if duration is None else duration
         checks = (
@@ -705,8 +720,9 @@ class Session:
              episode.duration),
             ("query_states", np.array_equal(episode.query_states, np.asarray(started["query_states"], dtype=float)),
              "this step's logged query states", "other states"),
-            ("actions", episode.complete and np.array_equal(episode.actions, logged),
-             f"the {len(logged)} logged actions, all given", f"{len(episode.demonstrations)} other or fewer"),
+            ("actions", episode.complete and np.array_equal(episode.actions, logged.actions),
+             f"the {len(logged.demonstrations)} logged actions, all given",
+             f"{len(episode.demonstrations)} other or fewer"),
         )
         for name, ok, wanted, got in checks:
             if not ok:
