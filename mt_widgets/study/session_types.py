@@ -1,5 +1,6 @@
 """What the session engine hands a view: the current ``Step``, a demonstration's ``Feedback`` and an
-episode's ``EpisodeResult`` (``mt_widgets.study.session`` builds them; views only read them).
+episode's ``EpisodeResult`` (``mt_widgets.study.session`` builds them; views only read them), and
+the ``SessionStateError`` a driver call that does not fit the step raises.
 
 The ``EpisodeResult`` is core's (``mt_widgets.core.EpisodeResult``), the one a widget reports
 too: the ``TeachingEpisode`` with its phase, phase index and ``episode_number``.
@@ -14,6 +15,10 @@ import numpy as np
 from mt_widgets.core import EpisodeResult, TeachingEpisode
 
 from .steps import StudyStep
+
+
+class SessionStateError(RuntimeError):
+    """A driver call that does not fit the current step (e.g. a second submission)."""
 
 
 @dataclass(frozen=True)
@@ -90,4 +95,4 @@ class Step:
         return () if self.teaching_episode is None else tuple(self.teaching_episode.actions)
 
 
-__all__ = ["EpisodeResult", "Feedback", "Step"]
+__all__ = ["EpisodeResult", "Feedback", "SessionStateError", "Step"]
