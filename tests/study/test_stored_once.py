@@ -2,11 +2,13 @@
 canvas, the session, the study step and the result all read that one object (there is no second
 list that could drift from it)."""
 
+import dataclasses
+
 import numpy as np
 
 from mt_widgets.apps import StudyApp
 from mt_widgets.core import Demonstration
-from mt_widgets.study import Session, read_events
+from mt_widgets.study import Session, Step, read_events
 
 from .scripted import SHORT_PROTOCOL, act
 
@@ -38,6 +40,7 @@ def test_a_confirmed_demonstration_is_one_object_read_by_the_widget_the_session_
     assert widget.records is widget.episode.demonstrations
     assert after.teaching_episode.demonstrations[0] is given, "the session kept another object than the widget's"
     # The step's actions and the traits are read from it, never a list of their own.
+    assert "actions" not in {f.name for f in dataclasses.fields(Step)}
     np.testing.assert_array_equal(after.actions[0], given.action)
     assert widget.demonstrations == widget.teaching.demonstrations == [list(given.action)]
     # The log wrote what the record says (format unchanged: method and redraws under "input").
