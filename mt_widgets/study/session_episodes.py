@@ -61,10 +61,6 @@ class SessionEpisodes:
         """The episode of ``skill`` on ``states`` with this protocol's lambda and reproduction length."""
         return TeachingEpisode(skill, states, lam=self.protocol.lam, duration=self.protocol.reproduction_duration_s)
 
-    def _teaching_episode(self, key) -> TeachingEpisode:
-        """The episode's one ``TeachingEpisode``."""
-        return self._teaching_episodes[key]
-
     def _episode_from_log(self, key, events) -> TeachingEpisode:
         """The episode a log describes: on its logged states, each logged demonstration recorded
         as it was given (action, method, timings), so a resumed view shows what the log holds."""
