@@ -13,6 +13,11 @@ RETIRED = [
     ("mt_widgets.in_silico.paper_results", "PAPER_SIMULATION_RESULTS"),
     ("mt_widgets.in_silico.teachers", "UARM_FITTED_FIELDS"),
     ("mt_widgets.study.session", "TEXT_STEPS"),
+    # One record of a demonstration (issue 21): the canvas confirms a core Demonstration, which the
+    # episode keeps; the session keeps no actions of its own and rebuilds no episode.
+    ("mt_widgets.widgets", "ConfirmedAction"),
+    ("mt_widgets.widgets.teaching", "ConfirmedAction"),
+    ("mt_widgets.study.session", "Session._record_logged_actions"),
 ]
 
 

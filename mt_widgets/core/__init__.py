@@ -7,7 +7,7 @@ query-state selection, rollouts, and the teaching episode that ties them togethe
 from .arm import ArmParameters, TwoLinkArm
 from .arm_plant import ArmPlant
 from .drawing import PlantDrawing, PoseSketch, TargetShape
-from .episode import DemonstrationAnalysis, EpisodeStateError, TeachingEpisode
+from .episode import Demonstration, DemonstrationAnalysis, EpisodeResult, EpisodeStateError, TeachingEpisode
 from .features import EndEffectorFeatures, FeatureMap, FunctionFeatures, PositionFeatures
 from .learner import DEFAULT_LAMBDA, RidgeLearner
 from .machine_teaching import (
@@ -30,7 +30,8 @@ from .workspace import AnnulusSector, Box
 
 __all__ = [
     "ActionDifference", "AnnulusSector", "ArmParameters", "ArmPlant", "Box", "ContinuousPlant", "DEFAULT_LAMBDA",
-    "DemonstrationAnalysis", "EndEffectorFeatures", "EpisodeStateError", "FeatureMap", "FunctionFeatures",
+    "Demonstration", "DemonstrationAnalysis", "EndEffectorFeatures", "EpisodeResult", "EpisodeStateError",
+    "FeatureMap", "FunctionFeatures",
     "KinematicPlant", "LineTarget", "Plant", "PlantDrawing", "PointTarget", "PoseSketch", "PositionFeatures",
     "RidgeLearner", "SKILLS", "SeedSchedule", "Skill", "SkillRegistry", "Target", "TargetShape", "TeachingAnalysis",
     "TeachingEpisode",

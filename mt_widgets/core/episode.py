@@ -22,7 +22,7 @@ Everything is computed from one SVD of Phi (``ridge_operator``), the same rank r
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -44,20 +44,33 @@ class EpisodeStateError(RuntimeError):
 
 
 @dataclass(frozen=True)
-class DemonstrationAnalysis:
-    """One demonstration and what can be said about it as soon as it is given.
+class Demonstration:
+    """One demonstration: what the person gave at a query state, and what can be said about it at once.
+
+    The one record of a demonstration: a view builds it (``TeachingEpisode.analyse``) when an
+    arrow is confirmed, the study log writes it, and the episode keeps it in ``demonstrations``.
+    Nothing copies it: a view, a session and a step all read the episode's.
 
     Attributes:
         index: 0-based position of the query state in the episode.
         state: (state_dim,) the query state.
         action: (R,) the demonstrated action u_n, in the skill's action units.
-        optimal_action: (R,) the optimal action u_bar_n at this state.
+        optimal_action: (R,) the optimal action u_bar_n at this state (computed whether or not
+            it is shown).
         gap: (R,) u_n - u_bar_n.
         action_difference: angle, size ratio and distance of the arrow against the optimal one
             (an ``ActionDifference``) for planar actions (R = 2); None otherwise.
         contribution_norm: ||a_n|| ||u_n - u_bar_n||, the size of this demonstration's term
             (u_n - u_bar_n) a_n^T in Theta_hat - Theta. Known before the episode is complete,
             since a_n depends only on the query states.
+        method: how it was given: "pointer", "keyboard", "numeric", "hand", "code", ...
+        time_to_first_input_s: seconds from the state appearing to the first input (None: not
+            measured, e.g. given by code).
+        drawing_duration_s: seconds from the first input to the confirmation (None: not measured).
+        redraws: how many times the arrow was set before it was confirmed.
+        confirmed_at: wall-clock time of the confirmation (``time.time()``), None when unknown.
+        guidance_shown: whether the optimal arrow was shown after this demonstration.
+        episode_index: the episode's index as its view was told (0 when none).
     """
 
     index: int
@@ -67,6 +80,17 @@ class DemonstrationAnalysis:
     gap: np.ndarray
     action_difference: ActionDifference | None
     contribution_norm: float
+    method: str = "code"
+    time_to_first_input_s: float | None = None
+    drawing_duration_s: float | None = None
+    redraws: int = 0
+    confirmed_at: float | None = None
+    guidance_shown: bool = False
+    episode_index: int = 0
+
+
+#: The name ``Demonstration`` had when it held the analysis only (kept: ``mt_widgets.core`` exports it).
+DemonstrationAnalysis = Demonstration
 
 
 def _frozen(array: np.ndarray) -> np.ndarray:
@@ -117,7 +141,8 @@ class TeachingEpisode:
             ``mt_widgets.core`` then warns with ``UnderdeterminedTeachingWarning``) and U_bar is
             the least-error one.
         rank: the rank of Phi.
-        demonstrations: the ``DemonstrationAnalysis`` of each demonstration given so far.
+        demonstrations: the ``Demonstration`` of each demonstration given so far, in order: the one
+            place they live (a view, a session and a study step read this list).
     """
 
     def __init__(self, skill: Skill, query_states=None, *, seed=None, lam: float = DEFAULT_LAMBDA,
@@ -148,7 +173,7 @@ class TeachingEpisode:
         self.rank = operator.rank
         self.exact = bool(operator.exact)
         self.rho1 = operator.rho1()
-        self.demonstrations: list[DemonstrationAnalysis] = []
+        self.demonstrations: list[Demonstration] = []
         self._reproduction = None
 
     @classmethod
@@ -195,38 +220,96 @@ class TeachingEpisode:
         """Validates one action (R,) without recording it; returns it as a float array."""
         return as_float_array("action", action, ndim=1, shape=(self.action_dim,))
 
-    def demonstrate(self, action) -> DemonstrationAnalysis:
-        """Records the action (R,) for the next query state and returns its analysis."""
+    def analyse(self, action, *, method: str = "code", time_to_first_input_s: float | None = None,
+                drawing_duration_s: float | None = None, redraws: int = 0, confirmed_at: float | None = None,
+                guidance_shown: bool = False, episode_index: int = 0) -> Demonstration:
+        """The ``Demonstration`` the action (R,) would be at the next query state, NOT recorded.
+
+        A view hands it to whoever must keep it first (the study log) and records it with
+        ``record`` once they did, so a demonstration the log refused is never counted.
+        The keyword arguments say how it was given (see ``Demonstration``).
+        """
         if self.complete:
             raise EpisodeStateError(f"demonstrate: expected at most {self.n_states} demonstrations (one per query "
                                     f"state); the episode is complete")
         action = _frozen(self.check_action(action))
+        if not isinstance(method, str):
+            raise TypeError(f"method: expected text (how the action was given), got {type(method).__name__}")
         index = len(self.demonstrations)
         optimal = self.optimal_actions[index]
         gap = _frozen(action - optimal)
         difference = action_difference(action, optimal) if self.action_dim == 2 else None
-        analysis = DemonstrationAnalysis(index, self.query_states[index], action, optimal, gap, difference,
-                                         float(self._a_norms[index] * np.linalg.norm(gap)))
-        self.demonstrations.append(analysis)
-        return analysis
+        return Demonstration(index, self.query_states[index], action, optimal, gap, difference,
+                             float(self._a_norms[index] * np.linalg.norm(gap)), method, time_to_first_input_s,
+                             drawing_duration_s, int(redraws), confirmed_at, bool(guidance_shown),
+                             int(episode_index))
 
-    def restore(self, actions) -> None:
-        """Records already-given actions (k, R) in order, after any given so far (resuming)."""
+    def record(self, demonstration: Demonstration) -> Demonstration:
+        """Keeps a ``Demonstration`` from ``analyse`` as the next one; returns it.
+
+        Recording the very demonstration already kept at its index again does nothing (a
+        session and the view it serves both record the one object: whoever comes first).
+        """
+        if not isinstance(demonstration, Demonstration):
+            raise TypeError(f"demonstration: expected a Demonstration (from analyse), got "
+                            f"{type(demonstration).__name__}")
+        index = demonstration.index
+        if index < len(self.demonstrations) and self.demonstrations[index] is demonstration:
+            return demonstration
+        if index != len(self.demonstrations):
+            raise EpisodeStateError(f"record: expected demonstration {len(self.demonstrations)} (the next one), "
+                                    f"got demonstration {index}")
+        if not (np.array_equal(demonstration.state, self.query_states[index])
+                and np.array_equal(demonstration.optimal_action, self.optimal_actions[index])):
+            raise ValueError(f"demonstration: expected one analysed by this episode (its query state {index} and "
+                             f"optimal action), got another episode's")
+        self.demonstrations.append(demonstration)
+        return demonstration
+
+    def demonstrate(self, action, **given) -> Demonstration:
+        """Records the action (R,) for the next query state and returns its ``Demonstration``
+        (``given``: how it was given, as for ``analyse``)."""
+        return self.record(self.analyse(action, **given))
+
+    def _check_actions(self, name: str, actions) -> np.ndarray:
+        """(k, R) actions, one per row; the one place their shape is checked."""
         try:
             given = len(actions)
         except TypeError:
-            raise ValueError(f"actions: expected shape (k, {self.action_dim}), one action per row, got "
+            raise ValueError(f"{name}: expected shape (k, {self.action_dim}), one action per row, got "
                              f"{type(actions).__name__} {actions!r}"[:200]) from None
         if given == 0:
-            return
-        actions = as_float_array("actions", actions)
+            return np.zeros((0, self.action_dim))
+        actions = as_float_array(name, actions)
         if actions.ndim != 2 or actions.shape[1] != self.action_dim:
-            raise ValueError(f"actions: expected shape (k, {self.action_dim}), one action per row, got "
+            raise ValueError(f"{name}: expected shape (k, {self.action_dim}), one action per row, got "
                              f"{actions.shape}")
+        return actions
+
+    def restore(self, actions) -> None:
+        """Records already-given actions (k, R) in order, after any given so far (resuming)."""
+        actions = self._check_actions("actions", actions)
         if len(self.demonstrations) + len(actions) > self.n_states:
             raise ValueError(f"actions: expected at most {self.n_states - len(self.demonstrations)} more (one per "
                              f"remaining query state), got {len(actions)}")
         for action in actions:
+            self.demonstrate(action)
+
+    def extend_to(self, actions, name: str = "actions") -> None:
+        """Brings the episode up to all of ``actions`` (k, R), k <= N, given so far (resuming a view).
+
+        The episode's own demonstrations must be the first of them: an episode holding other
+        actions is refused (``ValueError``), never rebuilt, so no recorded demonstration is lost.
+        ``name`` is the argument named in errors.
+        """
+        actions = self._check_actions(name, actions)
+        if len(actions) > self.n_states:
+            raise ValueError(f"{name}: expected at most {self.n_states} (one per query state), got {len(actions)}")
+        held = self.actions
+        if len(held) > len(actions) or not np.array_equal(held, actions[:len(held)]):
+            raise ValueError(f"{name}: expected the {len(held)} actions the episode holds first, then any more, "
+                             f"got {len(actions)} others")
+        for action in actions[len(held):]:
             self.demonstrate(action)
 
     # -- the result (complete episodes) -------------------------------------------------------------
@@ -319,4 +402,91 @@ class TeachingEpisode:
         return self._reproduction is not None
 
 
-__all__ = ["DemonstrationAnalysis", "EpisodeStateError", "TeachingEpisode", "target_reproduction"]
+@dataclass(frozen=True)
+class EpisodeResult:
+    """A finished episode as a view or a study session reports it: its ``TeachingEpisode``, with
+    where it was taught and how fast the view answered. Every number is read from the episode:
+    nothing is copied, so the result, the view and the log can never disagree.
+
+    Attributes:
+        episode: the complete ``TeachingEpisode`` (query states, demonstrations, theta_hat, ...).
+        feedback_latency_s: seconds from the last confirmation to the reproduction sent (a view's;
+            None from a session).
+        phase, phase_index: the study phase ("P3") and its 0-based index (None outside a study).
+        episode_number: the 1-based episode within the phase (None outside a study).
+    """
+
+    episode: TeachingEpisode = field(repr=False, compare=False)
+    feedback_latency_s: float | None = None
+    phase: str | None = None
+    phase_index: int | None = None
+    episode_number: int | None = None
+
+    def __post_init__(self):
+        if not isinstance(self.episode, TeachingEpisode):
+            raise TypeError(f"episode: expected a TeachingEpisode, got {type(self.episode).__name__}")
+        if not self.episode.complete:
+            raise EpisodeStateError(f"episode: expected a complete episode ({self.episode.n_states} "
+                                    f"demonstrations), got {len(self.episode.demonstrations)}")
+
+    @property
+    def teaching_episode(self) -> TeachingEpisode:
+        """The episode (the name a study step uses)."""
+        return self.episode
+
+    @property
+    def skill_key(self) -> str:
+        return self.episode.skill.key
+
+    @property
+    def query_states(self) -> np.ndarray:
+        """(N, state_dim)."""
+        return self.episode.query_states
+
+    @property
+    def demonstrations(self) -> np.ndarray:
+        """(N, R) the demonstrated actions (the episode's ``actions``)."""
+        return self.episode.actions
+
+    @property
+    def optimal_actions(self) -> np.ndarray:
+        """(N, R) U_bar for these states and ``lam``."""
+        return self.episode.optimal_actions
+
+    @property
+    def lam(self) -> float:
+        return self.episode.lam
+
+    @property
+    def theta_hat(self) -> np.ndarray:
+        """(R, S) the learnt policy."""
+        return self.episode.theta_hat
+
+    @property
+    def error(self) -> float:
+        """The teaching error E = ||vec(theta_hat) - vec(theta)||."""
+        return self.episode.error
+
+    #: The study log's name for ``error``.
+    teaching_error = error
+
+    @property
+    def rho1(self) -> float:
+        return self.episode.rho1
+
+    @property
+    def rho2(self) -> float:
+        return self.episode.rho2
+
+    @property
+    def trajectory(self):
+        """The learnt skill's reproduction: the episode's one rollout."""
+        return self.episode.reproduction
+
+    @property
+    def diverged(self) -> bool:
+        return bool(self.episode.reproduction.diverged)
+
+
+__all__ = ["Demonstration", "DemonstrationAnalysis", "EpisodeResult", "EpisodeStateError", "TeachingEpisode",
+           "target_reproduction"]

@@ -51,7 +51,10 @@ from .teachers import (
 # -- the batched engine ----------------------------------------------------------------------------
 
 @dataclass
-class _EpisodeResult:
+class _BatchOutcome:
+    """One episode of the protocol for B simulated teachers at once, as arrays (not an
+    ``EpisodeResult``: no ``TeachingEpisode`` is built per teacher; ``EpisodeBatch`` computes all B)."""
+
     actions: np.ndarray       # (B, N, R)
     optimal: np.ndarray       # (B, N, R)
     theta_hat: np.ndarray     # (B, R, S)
@@ -67,7 +70,7 @@ class _EpisodeResult:
 def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study_of: np.ndarray,
               states_by_episode: list[np.ndarray], progress: Progress | None = None,
               keep_demonstrations: bool = True, forgetting: Forgetting | None = None,
-              delays: dict | None = None) -> list[_EpisodeResult]:
+              delays: dict | None = None) -> list[_BatchOutcome]:
     """Runs B teachers through the protocol's episodes.
 
     Args:
@@ -111,7 +114,7 @@ def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study
         outcome = batch.complete(actions, study_of)
         if step["reproduced"]:
             population.see_reproduction()
-        results.append(_EpisodeResult(actions if keep_demonstrations else None,
+        results.append(_BatchOutcome(actions if keep_demonstrations else None,
                                       optimal if keep_demonstrations else None, outcome.theta_hat, outcome.error,
                                       outcome.rho1, outcome.rho2, batch, first, drawing))
         if progress is not None:

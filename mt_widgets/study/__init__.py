@@ -19,8 +19,12 @@ One concern per module::
     participants.py    IDs (typed and from a URL), re-entry codes, block randomisation
     timeline.py        a session unrolled into steps (StepKind), each episode's query states
     replay.py          a log replayed against the timeline
-    session.py         the engine: Session (start, resume, arrive, lesson, the driver calls)
-    session_types.py   what the engine hands a view: Step, Feedback, EpisodeResult
+    session.py         the engine: Session, where it stands (current_step) and the steps' driver calls
+    session_arrival.py which log a Session runs: start, resume, arrive (windows), lesson
+    session_episodes.py the episode steps: one TeachingEpisode per episode (the one store of its
+                       demonstrations), submit_demonstration, finish_episode, the EpisodeResult
+    session_types.py   what the engine hands a view: Step, Feedback, EpisodeResult (core's),
+                       SessionStateError
     schema.py          the files' schema version, the event types, migrations of older logs
     log.py             the append-only participant log (ParticipantLog, read_events, read_log)
     study_folder.py    the study folder: study.json, enrolments, outcomes, status

@@ -10,8 +10,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from .jsonl import LogError
 from .timeline import ENDING_EVENTS, Slot, StepKind
 
@@ -70,14 +68,15 @@ class Replayed:
     Attributes:
         position: index of the first slot without its event.
         episodes: {(phase_index, episode): the episode_started event}.
-        actions: {(phase_index, episode): the logged actions, in order}.
+        demonstrations: {(phase_index, episode): the logged demonstration events, in order} (the
+            session records them into each episode's ``TeachingEpisode``, the one place they live).
         finished: {(phase_index, episode): the episode_finished event}.
         ended: why the session ended early ("declined", "ineligible", "withdrawn"), or None.
     """
 
     position: int = 0
     episodes: dict = field(default_factory=dict)
-    actions: dict = field(default_factory=dict)
+    demonstrations: dict = field(default_factory=dict)
     finished: dict = field(default_factory=dict)
     ended: str | None = None
 
@@ -105,7 +104,7 @@ def replay(events: list[dict], slots: list[Slot], plan) -> Replayed:
                            f"but the protocol expects {describe(expected, plan)} next; the log does not match "
                            f"this protocol or holds a duplicate")
         if slot.kind == StepKind.DEMONSTRATION:
-            state.actions.setdefault((slot.phase_index, slot.episode), []).append(np.asarray(event["action"]))
+            state.demonstrations.setdefault((slot.phase_index, slot.episode), []).append(event)
         if slot.kind == StepKind.EPISODE_END:
             state.finished[(slot.phase_index, slot.episode)] = event
         state.position += 1

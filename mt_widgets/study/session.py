@@ -61,65 +61,40 @@ A later session's log is ``<ID>.ses-<session>.jsonl`` beside ``<ID>.jsonl`` (the
 the same event types; its ``session_started`` adds ``session``, and when the arrival was
 checked against a window, ``window`` (``WindowCheck.as_dict()``) and ``arrived_at``.
 
-The events it writes, the schema version they carry and the migration of older logs:
-``mt_widgets.study.schema``.
+A view passes the ``Demonstration`` its canvas confirmed instead of an action and timings
+(``session.submit_demonstration(record, index=record.index)``): its method and timings are
+logged, and that object is what the step's ``teaching_episode`` keeps, the one place an
+episode's demonstrations live (``mt_widgets.study.session_episodes``).
+
+The parts: this module (where a session stands, the steps around the episodes), its
+constructors (``mt_widgets.study.session_arrival``) and its episode steps
+(``mt_widgets.study.session_episodes``). The events it writes, the schema version they carry
+and the migration of older logs: ``mt_widgets.study.schema``.
 """
 
 from __future__ import annotations
 
-import datetime as _dt
-import platform
 import time
-from collections.abc import Mapping
 
 import numpy as np
 
-import mt_widgets
 from mt_widgets.core import TeachingEpisode
-from mt_widgets.core.validation import as_bool, as_count, as_positive
+from mt_widgets.core.validation import as_count, as_positive
 
-from .log import LogError, MemoryLog, ParticipantLog, read_events, to_jsonable
 from .protocol import Phase, Protocol
 from .replay import describe, replay
-from .schema import LOG_FORMAT, migrate_events
-from .session_plan import as_utc
-from .session_types import EpisodeResult, Feedback, Step
+from .schema import migrate_events
+from .session_arrival import SessionArrival, WindowError
+from .session_episodes import TIMING_KEYS, SessionEpisodes
+from .session_types import EpisodeResult, Feedback, SessionStateError, Step
 from .study_folder import StudyFolder
-from .timeline import ENDING_EVENTS, Slot, StepKind, episode_query_states, timeline  # noqa: F401 (ENDING_EVENTS: public here since format 1)
-
-#: Timing keys ``submit_demonstration`` reads (seconds, None when unknown).
-TIMING_KEYS = ("time_to_first_input_s", "drawing_duration_s")
+from .timeline import ENDING_EVENTS, Slot, StepKind, timeline
 
 
-class SessionStateError(RuntimeError):
-    """A driver call that does not fit the current step (e.g. a second submission)."""
-
-
-class WindowError(LogError):
-    """A participant who came back outside their next session's window, where the protocol refuses.
-
-    Attributes:
-        check: the ``WindowCheck`` (status "early" or "late", opens_at, closes_at, delay_s).
-        session: the id of the session refused.
-        message: the words for the participant (the protocol's too_early_text / too_late_text).
-    """
-
-    def __init__(self, check, session: str):
-        self.check, self.session, self.message = check, session, check.message
-        super().__init__(check.message)
-
-
-def _parse_time(stamp: str) -> float:
-    return _dt.datetime.fromisoformat(stamp.replace("Z", "+00:00")).timestamp()
-
-
-def _check_seconds(name: str, value):
-    """A duration in seconds (>= 0), or None for "not measured"."""
-    return None if value is None else as_positive(name, value, allow_zero=True)
-
-
-class Session:
-    """One participant's run through a protocol. Build with ``start``, ``resume`` or ``lesson``."""
+class Session(SessionArrival, SessionEpisodes):
+    """One participant's run through a protocol. Build with ``start``, ``resume``, ``arrive`` or
+    ``lesson`` (``mt_widgets.study.session_arrival``); its episode steps are
+    ``mt_widgets.study.session_episodes``'; the other steps, and where it stands, are here."""
 
     def __init__(self, protocol: Protocol, log, group: str, enrolment: dict, folder: StudyFolder | None = None,
                  around_task: bool = True, session: str | None = None):
@@ -132,194 +107,16 @@ class Session:
         replayed = replay(migrate_events(log.events, protocol.sessions[0].id, str(log.path or "<memory>")),
                           self._slots, self.plan)
         self._position = replayed.position
+        #: {(phase_index, episode): its episode_started event} (states, guidance, seed, when).
         self._episodes: dict[tuple[int, int], dict] = replayed.episodes
-        self._actions: dict[tuple[int, int], list[np.ndarray]] = replayed.actions
-        self._finished_episodes: dict[tuple[int, int], dict] = replayed.finished
-        self._teaching_episodes: dict[tuple[int, int], TeachingEpisode] = {}
+        self._finished: set[tuple[int, int]] = set(replayed.finished)
+        #: {(phase_index, episode): its TeachingEpisode}: the one place an episode's demonstrations
+        #: live (rebuilt from the log on resume); the step's view demonstrates into it, the log
+        #: records it, ``Step.actions`` and the result read it.
+        self._teaching_episodes: dict[tuple[int, int], TeachingEpisode] = {
+            key: self._episode_from_log(key, replayed.demonstrations.get(key, ())) for key in self._episodes}
         self._ended: str | None = replayed.ended
         self._entered_at = time.monotonic()
-
-    # -- construction -----------------------------------------------------------------------------
-    @classmethod
-    def start(cls, study: StudyFolder, participant_id: str, group: str | None = None,
-              parameters: dict | None = None) -> Session:
-        """Enrols a new participant (validating the ID, assigning the group) and starts their log
-        of the protocol's first session.
-
-        Args:
-            study: the study folder.
-            participant_id: a new pseudonymous ID.
-            group: None for the protocol's block randomisation, or the experimenter's choice.
-            parameters: identifying URL parameters to record with the enrolment (online).
-        """
-        if not isinstance(study, StudyFolder):
-            raise ValueError(f"study: expected a StudyFolder, got {type(study).__name__}")
-        enrolment = study.enrol(participant_id, group, parameters=parameters)
-        log = ParticipantLog.create(study.log_path(participant_id), study.meta["study"])
-        return cls._begin(study, log, enrolment)
-
-    @classmethod
-    def resume(cls, study: StudyFolder, participant_id: str, lock_timeout_s: float = 3.0,
-               session: str | None = None) -> Session:
-        """Continues an enrolled participant at the first step their log does not record.
-
-        Args:
-            study: the study folder.
-            participant_id: an enrolled participant.
-            lock_timeout_s: how long to wait for the participant's lock, which a writer holds
-                only while it writes one event. An older session of the same participant (a
-                reloaded page's kernel still alive) is taken over: its next write is refused.
-            session: which protocol session (None: the latest one the participant started).
-        """
-        if not isinstance(study, StudyFolder):
-            raise ValueError(f"study: expected a StudyFolder, got {type(study).__name__}")
-        enrolment = study.enrolment(participant_id)
-        cls._refuse_lost(study, participant_id)
-        if session is None:
-            started = [s.id for s in study.protocol.sessions if study.log_path(participant_id, s.id).exists()]
-            session = started[-1] if started else study.protocol.sessions[0].id
-        path = study.log_path(participant_id, session)
-        try:
-            log = ParticipantLog.open(path, lock_timeout_s=lock_timeout_s)
-        except LogError:
-            if path.exists() or session != study.protocol.sessions[0].id:
-                raise
-            # Enrolled, then stopped before the log was created: start the log now.
-            log = ParticipantLog.create(path, study.meta["study"], lock_timeout_s=lock_timeout_s)
-        log.study = study.meta["study"]
-        if not log.events:
-            return cls._begin(study, log, enrolment, session)
-        first = log.events[0]
-        if first.get("type") != "session_started" or first.get("protocol_hash") != study.protocol.hash:
-            log.close()
-            raise LogError(f"participant {participant_id!r}: the log was not started with this study's protocol "
-                           f"({study.protocol.hash[:19]}...); it will not be continued")
-        session_ = cls(study.protocol, log, first["group"], enrolment, study, session=session)
-        session_.window = first.get("window")
-        log.append("session_resumed", format=LOG_FORMAT, software_version=mt_widgets.__version__,
-                   protocol_hash=study.protocol.hash,
-                   at=session_._describe(session_._slot), repaired_torn_line=log.repaired_torn_bytes)
-        session_._enter()
-        return session_
-
-    @staticmethod
-    def _refuse_lost(study: StudyFolder, participant_id: str) -> None:
-        left = study.outcomes().get(participant_id)
-        if left is not None:
-            what = {"withdrawn": "withdrew from the study", "declined": "declined consent",
-                    "ineligible": "was screened out as ineligible", "dropped_out": "was marked as dropped out"}
-            raise LogError(f"participant_id: {participant_id!r} {what[left['outcome']]} ({left['at']}); their "
-                           f"session cannot be resumed. Enrol a new participant ID for a new person.")
-
-    @classmethod
-    def arrive(cls, study: StudyFolder, participant_id: str | None = None, *, reentry_code: str | None = None,
-               now=None, group: str | None = None, parameters: dict | None = None,
-               enrol_new: bool = True) -> Session:
-        """The right session for a participant who arrives now: starts, resumes or refuses.
-
-        - A new ID (when ``enrol_new``): enrolled (randomised unless ``group``) and started on
-          the first session.
-        - An enrolled participant (by ID, or by the re-entry code shown at the end of their
-          previous session) whose current session is unfinished: resumed there.
-        - One whose session is finished and whom another session follows: that session
-          starts if ``now`` is inside its window; outside it, the protocol's rule: "refuse"
-          raises ``WindowError`` with the words to show (nothing is written), "flag" starts it
-          and the ``session_started`` event (and ``session.window``) says it is early or late.
-        - One who completed the last session: that session, finished (its thank-you).
-
-        The group is the enrolment's, in every session.
-
-        Args:
-            study: the study folder.
-            participant_id: the participant's ID, or None when ``reentry_code`` is given.
-            reentry_code: the code shown at the end of a previous session ("K7QM-3XRD").
-            now: the arrival time, an aware datetime (None: the clock; tests pass their own).
-            group: the experimenter's choice for a new participant (None: randomised).
-            parameters: identifying URL parameters recorded with a new enrolment.
-            enrol_new: False refuses an ID that is not enrolled (a follow-up-only page).
-
-        Raises:
-            WindowError: outside the window of a session whose protocol says "refuse".
-            LogError: an unknown code, an unknown ID when ``enrol_new`` is False, or a participant
-                who withdrew, declined or was screened out.
-        """
-        if not isinstance(study, StudyFolder):
-            raise ValueError(f"study: expected a StudyFolder, got {type(study).__name__}")
-        enrol_new = as_bool("enrol_new", enrol_new)
-        now = as_utc(now)
-        if (participant_id is None) == (reentry_code is None):
-            raise ValueError("participant_id, reentry_code: expected exactly one of them")
-        if reentry_code is not None:
-            participant_id = study.participant_for_code(reentry_code)
-        if participant_id not in study.participant_ids():
-            if not enrol_new:
-                raise LogError(f"participant_id: {participant_id!r} is not enrolled in this study")
-            return cls.start(study, participant_id, group=group, parameters=parameters)
-        cls._refuse_lost(study, participant_id)
-        sessions = study.protocol.sessions
-        for position, plan in enumerate(sessions):
-            path = study.log_path(participant_id, plan.id)
-            if not path.exists():
-                if position == 0:
-                    return cls.resume(study, participant_id, session=plan.id)
-                break
-            events, _ = read_events(path)
-            finished = [e for e in events if e["type"] == "session_finished"]
-            if not finished or position == len(sessions) - 1:
-                return cls.resume(study, participant_id, session=plan.id)
-            previous_end = finished[0]["time"]
-        else:  # pragma: no cover - the loop returns at the last session
-            raise AssertionError("unreachable")
-        check = plan.window.check(_dt.datetime.fromisoformat(previous_end.replace("Z", "+00:00")), now)
-        if check.action == "refuse":
-            raise WindowError(check, plan.id)
-        enrolment = study.enrolment(participant_id)
-        log = ParticipantLog.create(path, study.meta["study"])
-        return cls._begin(study, log, enrolment, plan.id, window=check.as_dict(), arrived_at=now)
-
-    @classmethod
-    def _begin(cls, study, log, enrolment, session: str | None = None, window: dict | None = None,
-               arrived_at=None) -> Session:
-        plan = study.protocol.session(session)
-        extra = {}
-        if window is not None:
-            extra.update(window=window, arrived_at=as_utc(arrived_at).isoformat(timespec="milliseconds")
-                         .replace("+00:00", "Z"))
-        log.append("session_started", format=LOG_FORMAT, session=plan.id, software_version=mt_widgets.__version__,
-                   protocol_hash=study.protocol.hash, protocol_name=study.protocol.name, group=enrolment["group"],
-                   enrolment=enrolment,
-                   lam=study.protocol.lam, numpy_version=np.__version__, python_version=platform.python_version(),
-                   **extra)
-        session_ = cls(study.protocol, log, enrolment["group"], enrolment, study, session=plan.id)
-        session_.window = window
-        session_._enter()
-        return session_
-
-    @classmethod
-    def lesson(cls, protocol: Protocol, group: str | None = None, participant: str = "lesson") -> Session:
-        """The same engine, unlogged (events kept in memory), for a guided lesson: the task only,
-        without the protocol's steps around it (video, information, forms, questionnaires).
-
-        Args:
-            protocol: what to run.
-            group: which group's conditions to show (default: the first group, which sees
-                guidance where the protocol gives any).
-        """
-        if not isinstance(protocol, Protocol):
-            raise ValueError(f"protocol: expected a Protocol, got {type(protocol).__name__}")
-        group = protocol.groups[0] if group is None else group
-        if group not in protocol.groups:
-            raise ValueError(f"group: expected one of {list(protocol.groups)}, got {group!r}")
-        log = MemoryLog(participant, protocol.name)
-        enrolment = {"participant": participant, "index": 0, "group": group, "method": "lesson"}
-        log.append("session_started", format=LOG_FORMAT, session=protocol.sessions[0].id,
-                   software_version=mt_widgets.__version__, protocol_hash=protocol.hash, protocol_name=protocol.name,
-                   group=group, enrolment=enrolment, lam=protocol.lam,
-                   numpy_version=np.__version__, python_version=platform.python_version())
-        # A lesson is the task only: the study's video, forms and questionnaires are for participants.
-        session = cls(protocol, log, group, enrolment, around_task=False)
-        session._enter()
-        return session
 
     def _describe(self, slot: Slot | None) -> str:
         return describe(slot, self.plan)
@@ -343,23 +140,6 @@ class Session:
                             duration_s=self.protocol.practice.duration_s)
         elif slot.kind == StepKind.THANK_YOU and not any(e["type"] == "session_finished" for e in self.log.events):
             self.log.append("session_finished")
-
-    def _start_episode(self, slot: Slot) -> None:
-        phase = self._phase(slot)
-        skill = self.protocol.skills[phase.skill]
-        states, seed = episode_query_states(self.protocol, phase.states_index, slot.episode, phase.demonstrations,
-                                            phase.skill, participant=self.enrolment["index"])
-        teaching = self._new_teaching_episode(skill, states)
-        event = self.log.append(
-            "episode_started", phase=phase.id, phase_index=phase.index, episode=slot.episode, skill=phase.skill,
-            guidance=phase.guidance_for(self.group), guidance_modality=self.protocol.guidance_modality,
-            n_demonstrations=phase.demonstrations, query_states=states,
-            features=teaching.features, theta=skill.theta, lam=self.protocol.lam, optimal=teaching.optimal_actions,
-            exact=teaching.exact,
-            seed={"study_seed": self.protocol.seed, "spawn_key": list(seed.spawn_key)})
-        self._episodes[(phase.index, slot.episode)] = event
-        # Kept: the step's view shows this episode and the log records it (one per episode).
-        self._teaching_episodes[(phase.index, slot.episode)] = teaching
 
     # -- reading the state ----------------------------------------------------------------------------
     @property
@@ -388,9 +168,10 @@ class Session:
 
     def progress(self) -> dict:
         """Episodes done and in all, and demonstrations done in the current episode."""
-        done = len(self._finished_episodes)
+        done = len(self._finished)
         slot = self._slot
-        in_episode = len(self._actions.get((slot.phase_index, slot.episode), [])) if slot.episode else 0
+        teaching = self._teaching_episodes.get((slot.phase_index, slot.episode)) if slot.episode else None
+        in_episode = 0 if teaching is None else len(teaching.demonstrations)
         return {"episodes_done": done, "episodes_total": self.plan.n_episodes,
                 "demonstrations_done": in_episode}
 
@@ -421,43 +202,14 @@ class Session:
         key = (slot.phase_index, slot.episode)
         started = self._episodes[key]
         states = np.asarray(started["query_states"], dtype=float)
-        actions = tuple(self._actions.get(key, []))
-        common.update(episode=slot.episode, query_states=states, actions=actions, guidance=started["guidance"],
+        common.update(episode=slot.episode, query_states=states, guidance=started["guidance"],
                       guidance_modality=started["guidance_modality"],
-                      teaching_episode=self._teaching_episode(key))
+                      teaching_episode=self._teaching_episodes[key])
         if slot.kind == StepKind.DEMONSTRATION:
             return Step("demonstration", **common, index=slot.index, state=states[slot.index])
         if slot.kind == StepKind.EPISODE_END:
             return Step("episode_end", **common)
         return Step("reproduction", texts["reproduction"], **common, result=self._result(key))
-
-    def _new_teaching_episode(self, skill, states, actions=()) -> TeachingEpisode:
-        """The episode of ``skill`` on ``states`` with this protocol's lambda and reproduction length."""
-        return TeachingEpisode.from_actions(skill, states, actions, lam=self.protocol.lam,
-                                            duration=self.protocol.reproduction_duration_s)
-
-    def _teaching_episode(self, key) -> TeachingEpisode:
-        """The episode's one ``TeachingEpisode`` (after a resume, rebuilt from the log). Never
-        changed here: a view may be demonstrating into it, each action after it is logged."""
-        if key not in self._teaching_episodes:
-            self._teaching_episodes[key] = self._episode_from_log(key)
-        return self._teaching_episodes[key]
-
-    def _episode_from_log(self, key) -> TeachingEpisode:
-        """A finished episode with its logged actions; an unfinished one empty, on the logged
-        states: the view that continues it restores the logged actions into it (the step's
-        ``actions``), or ``finish_episode`` does."""
-        started = self._episodes[key]
-        actions = self._actions.get(key, []) if key in self._finished_episodes else []
-        return self._new_teaching_episode(self.protocol.skills[started["skill"]],
-                                          np.asarray(started["query_states"], dtype=float),
-                                          np.asarray(actions, dtype=float))
-
-    def _result(self, key) -> EpisodeResult:
-        event = self._finished_episodes[key]
-        return EpisodeResult(event["phase"], event["phase_index"], event["episode"], event["skill"],
-                             np.asarray(event["theta_hat"]), event["teaching_error"], event["rho1"], event["rho2"],
-                             event["reproduction"]["diverged"], self._teaching_episode(key))
 
     # -- driving --------------------------------------------------------------------------------------
     def _expect(self, call: str, *kinds: str) -> Slot:
@@ -593,125 +345,6 @@ class Session:
         self._complete()
         return self.current_step()
 
-    def submit_demonstration(self, action, timings: Mapping | None = None, index: int | None = None) -> Feedback:
-        """Records the action for the current query state; returns once it is on disk.
-
-        Args:
-            action: (R,) the demonstrated action, in the skill's action units.
-            timings: ``time_to_first_input_s`` and ``drawing_duration_s`` in seconds (None
-                when unknown), plus any other input details to log (method, redraws, ...).
-            index: the 0-based demonstration the caller means; if given and not the current
-                one the call is refused (a double click cannot record an action twice).
-
-        Returns:
-            ``Feedback``: the optimal action if this episode shows guidance, else None.
-        """
-        slot = self._expect("submit_demonstration", "demonstration")
-        if index is not None and index != slot.index:
-            raise SessionStateError(f"index: expected the current demonstration {slot.index}, got {index}; "
-                                    f"it was already recorded or is not reached yet")
-        key = (slot.phase_index, slot.episode)
-        started = self._episodes[key]
-        skill = self.protocol.skills[started["skill"]]
-        try:
-            action = np.asarray(action, dtype=float).reshape(-1)
-        except (TypeError, ValueError):
-            raise ValueError(f"action: expected {skill.plant.action_dim} numbers, got {action!r}") from None
-        if action.shape != (skill.plant.action_dim,) or not np.all(np.isfinite(action)):
-            raise ValueError(f"action: expected {skill.plant.action_dim} finite numbers, got {action.tolist()}")
-        if timings is None:
-            timings = {}
-        if not isinstance(timings, Mapping):
-            raise ValueError(f"timings: expected a mapping (e.g. {{'time_to_first_input_s': 1.2, "
-                             f"'drawing_duration_s': 0.8}}) or None, got {type(timings).__name__} {timings!r}")
-        timings = dict(timings)
-        measured = {key_: _check_seconds(f"timings[{key_!r}]", timings.pop(key_, None)) for key_ in TIMING_KEYS}
-        for name, value in timings.items():  # refused here, by name, rather than inside the log write
-            try:
-                to_jsonable(value)
-            except TypeError:
-                raise ValueError(f"timings[{name!r}]: expected JSON-like data (numbers, text, lists, dicts), "
-                                 f"got {type(value).__name__}") from None
-        optimal = np.asarray(started["optimal"])[slot.index]
-        self.log.append("demonstration", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
-                        index=slot.index, state=np.asarray(started["query_states"])[slot.index], action=action,
-                        optimal=optimal, guidance_shown=started["guidance"], **measured,
-                        response_time_s=time.monotonic() - self._entered_at, input=timings,
-                        modality="hand" if timings.get("method") == "hand" else "drawn")
-        self._actions.setdefault(key, []).append(action)
-        self._complete()
-        return Feedback(slot.index, started["guidance"], optimal.copy() if started["guidance"] else None, action,
-                        started["guidance_modality"])
-
-    def finish_episode(self, episode: TeachingEpisode | None = None) -> EpisodeResult:
-        """Records the finished episode (what was learnt, its error and its reproduction) in the log.
-
-        Args:
-            episode: the ``TeachingEpisode`` a view ran on this step's query states with the
-                logged actions (e.g. ``EpisodeWidget.episode``); it is recorded as it is, so its
-                one reproduction serves both the view and the log. None: the session builds it
-                from the logged states and actions (scripts, synthetic teachers).
-
-        Returns:
-            The ``EpisodeResult`` (the next step is the reproduction).
-        """
-        slot = self._expect("finish_episode", "episode_end")
-        key = (slot.phase_index, slot.episode)
-        started = self._episodes[key]
-        if episode is not None:
-            self._check_recorded(episode, started, key)
-            self._teaching_episodes[key] = episode
-        else:
-            self._record_logged_actions(key)
-        teaching = self._teaching_episode(key)
-        trajectory = teaching.reproduction
-        self.log.append(
-            "episode_finished", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
-            skill=started["skill"], guidance=started["guidance"], actions=teaching.actions,
-            optimal=teaching.optimal_actions, theta_hat=teaching.theta_hat, teaching_error=teaching.error,
-            rho1=teaching.rho1, rho2=teaching.rho2, bound=teaching.bound, residual=teaching.residual_norm,
-            contributions=teaching.contribution_norms, exact=teaching.exact,
-            reproduction={"diverged": trajectory.diverged, "diverged_at": trajectory.diverged_at,
-                          "final_position": trajectory.final_position, "duration_s": float(trajectory.times[-1])},
-            started_at=started["time"], duration_s=max(0.0, time.time() - _parse_time(started["time"])))
-        self._finished_episodes[key] = self.log.events[-1]
-        self._complete()
-        return self._result(key)
-
-    def _record_logged_actions(self, key) -> None:
-        """Brings the episode up to the logged actions (no view demonstrated into it: a script);
-        an episode holding other actions than the log is replaced by the log's (the log is the truth)."""
-        teaching = self._teaching_episode(key)
-        logged = np.asarray(self._actions.get(key, []), dtype=float).reshape(-1, teaching.action_dim)
-        held = teaching.actions.reshape(-1, teaching.action_dim)
-        if len(held) <= len(logged) and np.array_equal(held, logged[:len(held)]):
-            teaching.restore(logged[len(held):])
-        else:
-            self._teaching_episodes[key] = self._episode_from_log(key)
-
-    def _check_recorded(self, episode, started: dict, key) -> None:
-        """Refuses an episode that is not the one this step logged (other states, actions, lambda...)."""
-        if not isinstance(episode, TeachingEpisode):
-            raise ValueError(f"episode: expected a TeachingEpisode or None, got {type(episode).__name__}")
-        logged = np.asarray(self._actions[key], dtype=float)
-        duration = self.protocol.reproduction_duration_s
-        duration = self.protocol.skills[started["skill"]].default_duration if duration is None else duration
-        checks = (
-            ("skill", episode.skill.key == started["skill"]
-             and np.array_equal(episode.skill.theta, np.asarray(started["theta"], dtype=float)),
-             f"the skill {started['skill']!r} and its theta", repr(episode.skill.key)),
-            ("lam", episode.lam == self.protocol.lam, f"the protocol's lam {self.protocol.lam}", episode.lam),
-            ("duration", episode.duration == duration, f"the protocol's reproduction of {duration} s",
-             episode.duration),
-            ("query_states", np.array_equal(episode.query_states, np.asarray(started["query_states"], dtype=float)),
-             "this step's logged query states", "other states"),
-            ("actions", episode.complete and np.array_equal(episode.actions, logged),
-             f"the {len(logged)} logged actions, all given", f"{len(episode.demonstrations)} other or fewer"),
-        )
-        for name, ok, wanted, got in checks:
-            if not ok:
-                raise ValueError(f"episode: expected a TeachingEpisode with {wanted} (episode.{name}), got {got}")
-
     def close(self) -> None:
         """Releases the participant's log (the session can be resumed later)."""
         self.log.close()
@@ -724,3 +357,8 @@ class Session:
 
     def __repr__(self) -> str:
         return f"Session({self.participant!r} at {self._describe(self._slot)})"
+
+
+#: What this module has always offered (the engine's parts live in the modules above).
+__all__ = ["ENDING_EVENTS", "TIMING_KEYS", "EpisodeResult", "Feedback", "Session", "SessionStateError", "Step",
+           "WindowError", "timeline"]

@@ -1,5 +1,9 @@
 """What the session engine hands a view: the current ``Step``, a demonstration's ``Feedback`` and an
-episode's ``EpisodeResult`` (``mt_widgets.study.session`` builds them; views only read them).
+episode's ``EpisodeResult`` (``mt_widgets.study.session`` builds them; views only read them), and
+the ``SessionStateError`` a driver call that does not fit the step raises.
+
+The ``EpisodeResult`` is core's (``mt_widgets.core.EpisodeResult``), the one a widget reports
+too: the ``TeachingEpisode`` with its phase, phase index and ``episode_number``.
 """
 
 from __future__ import annotations
@@ -8,39 +12,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mt_widgets.core import TeachingEpisode
+from mt_widgets.core import EpisodeResult, TeachingEpisode
 
 from .steps import StudyStep
 
 
-@dataclass(frozen=True)
-class EpisodeResult:
-    """What the learner made of one episode.
-
-    Attributes:
-        theta_hat: (R, S) the learnt policy.
-        teaching_error: E = ||vec(theta_hat) - vec(theta)||.
-        rho1, rho2: the risk decomposition (see ``mt_widgets.core.TeachingEpisode``).
-        diverged: whether the reproduction left the plant's bounds.
-        episode: the ``TeachingEpisode`` recorded (query states, actions, contributions, ...).
-        trajectory: the reproduction (a ``Trajectory``) from the skill's start: the episode's
-            one rollout, made when first read.
-    """
-
-    phase: str
-    phase_index: int
-    episode: int
-    skill: str
-    theta_hat: np.ndarray
-    teaching_error: float
-    rho1: float
-    rho2: float
-    diverged: bool
-    teaching_episode: TeachingEpisode = field(repr=False, compare=False)
-
-    @property
-    def trajectory(self):
-        return self.teaching_episode.reproduction
+class SessionStateError(RuntimeError):
+    """A driver call that does not fit the current step (e.g. a second submission)."""
 
 
 @dataclass(frozen=True)
@@ -70,7 +48,8 @@ class Step:
         skill: the key of the skill taught (or practised).
         query_states: (N, state_dim) the episode's query states.
         state: (state_dim,) the current query state.
-        actions: the actions already given in this episode (to restore a view on resume).
+        actions: the actions already given in this episode, read from ``teaching_episode`` (a
+            property: the step holds no list of its own).
         guidance: whether guidance follows each demonstration in this episode.
         duration_s: the practice time.
         result: the ``EpisodeResult`` a reproduction step shows.
@@ -80,9 +59,9 @@ class Step:
         ended: why the session ended early ("declined", "ineligible", "withdrawn"), else None.
         teaching_episode: the step's ``TeachingEpisode`` (demonstration, episode end and
             reproduction steps): the one object a view shows and the log records, so an episode
-            is built (one SVD) and rolled out once. A view demonstrates into it (after a resume
-            it first restores the step's ``actions``); without a view the session records the
-            logged actions into it when it finishes the episode.
+            is built (one SVD) and rolled out once. It holds the demonstrations given so far
+            (after a resume, those the log holds): a view shows it as it stands and demonstrates
+            into it; ``Session.submit_demonstration`` records each one in it once it is logged.
         reentry_code: at the thank-you of a session that another follows, the code the
             participant notes to come back with (their ID works too); None otherwise.
         next_session: there too, {"id": the next session, "window": when, in words}.
@@ -99,7 +78,6 @@ class Step:
     skill: str | None = None
     query_states: np.ndarray | None = None
     state: np.ndarray | None = None
-    actions: tuple = ()
     guidance: bool = False
     duration_s: float | None = None
     result: EpisodeResult | None = None
@@ -110,3 +88,11 @@ class Step:
     teaching_episode: TeachingEpisode | None = field(default=None, repr=False, compare=False)
     reentry_code: str | None = None
     next_session: dict | None = None
+
+    @property
+    def actions(self) -> tuple:
+        """The actions already given in this episode (rows of ``teaching_episode.actions``), () outside one."""
+        return () if self.teaching_episode is None else tuple(self.teaching_episode.actions)
+
+
+__all__ = ["EpisodeResult", "Feedback", "SessionStateError", "Step"]

@@ -23,14 +23,14 @@ from .guidance import GuidancePanel
 from .progress import EffortProgress
 from .reproduction import ReproductionPlayer
 from .robots import RobotPainter, painter_for
-from .teaching import ConfirmedAction, TeachingCanvas
+from .teaching import TeachingCanvas
 from .theme import DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, Theme, get_theme
 
 # What a user builds a lesson or a page from. The helpers the views share (legend entries, arrow
 # styles, colour names, drawing batches, frame times, ...) stay in their modules
 # (``mt_widgets.widgets.theme``, ``.legend``, ``.redraw``, ``.animation``, ...), imported from there.
 __all__ = [
-    "DEFAULT_THEME", "PAPER_THEME", "PAPER_UARM_THEME", "THEMES", "ArmView", "ConfirmedAction", "DemoPage",
+    "DEFAULT_THEME", "PAPER_THEME", "PAPER_UARM_THEME", "THEMES", "ArmView", "DemoPage",
     "DemonstrationRecord", "EffortProgress", "EpisodeResult", "EpisodeWidget", "GuidancePanel", "ReproductionPlayer",
     "RobotPainter", "TeachingCanvas", "Theme", "ViewTransform", "draw_arrow", "get_theme", "painter_for",
     "play_frames", "retire", "stop_animations",

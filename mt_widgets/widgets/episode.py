@@ -7,10 +7,13 @@ Three lines give a full episode in a notebook::
     episode
 
 The episode itself is a ``mt_widgets.core.TeachingEpisode`` (``widget.episode``): it holds the
-query states, the optimal actions, the demonstrations with their analysis, what the robot
-learnt, the error and the reproduction (rolled out once). This widget only shows it: it takes
-the arrows, hands each to the episode, draws the guidance and plays the reproduction the
-episode gives. A study runner drives it through constructor arguments, the observable traits
+query states, the optimal actions, the demonstrations (each a ``mt_widgets.core.Demonstration``:
+the action, its analysis, how and when it was given), what the robot learnt, the error and the
+reproduction (rolled out once). This widget only shows it: its canvas hands each confirmed arrow
+to the episode, the widget draws the guidance and plays the reproduction the episode gives.
+Nothing here keeps a second list: ``records`` and the ``demonstrations`` trait read the episode.
+
+A study runner drives it through constructor arguments, the observable traits
 (``phase``, ``state_index``, ``demonstrations``, ``error``) and the two callbacks
 ``on_demonstration`` and ``on_finished``.
 """
@@ -19,85 +22,28 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
 
 import numpy as np
 from ipywidgets import HTML, Button, HBox, Layout, VBox
 from traitlets import Float, Int, List, Unicode
 
-from mt_widgets.core import DEFAULT_LAMBDA, SKILLS, Skill, TeachingEpisode
+from mt_widgets.core import DEFAULT_LAMBDA, SKILLS, Demonstration, EpisodeResult, Skill, TeachingEpisode
 from mt_widgets.core.guidance import guidance_parts
-from mt_widgets.core.validation import as_bool, as_count, as_float_array, as_positive
+from mt_widgets.core.validation import as_bool, as_count, as_positive
 
 from .callbacks import Callbacks
 from .guidance import GuidancePanel, explain_difference
 from .progress import EffortProgress
 from .reproduction import ReproductionPlayer
-from .teaching import ConfirmedAction, TeachingCanvas
+from .teaching import TeachingCanvas
 
 PHASES = ("teaching", "guidance", "finished")
 
 
-@dataclass(frozen=True)
-class DemonstrationRecord:
-    """What a study log needs about one confirmed demonstration.
-
-    Attributes:
-        episode_index: The episode's index as given to the widget.
-        index: Query-state index within the episode (0-based).
-        state: (state_dim,) the query state.
-        action: (R,) the confirmed action, in ``skill.action_units``.
-        optimal_action: (R,) the optimal action at this state (computed whether or not it is shown).
-        guidance_shown: True if the optimal arrow was shown after this demonstration.
-        method: "pointer", "keyboard", "numeric" or "code".
-        time_to_first_input_s: Seconds from the state appearing to the first input (None: code).
-        drawing_duration_s: Seconds from the first input to the confirmation (None: code).
-        redraws: Times the arrow was set before confirming.
-        confirmed_at: Wall-clock time of the confirmation (``time.time()``).
-    """
-
-    episode_index: int
-    index: int
-    state: np.ndarray
-    action: np.ndarray
-    optimal_action: np.ndarray
-    guidance_shown: bool
-    method: str
-    time_to_first_input_s: float | None
-    drawing_duration_s: float | None
-    redraws: int
-    confirmed_at: float
-
-
-@dataclass(frozen=True)
-class EpisodeResult:
-    """What an episode produced (read from its ``TeachingEpisode``).
-
-    Attributes:
-        skill_key: The skill's key.
-        query_states: (N, state_dim).
-        demonstrations: (N, R) the user's actions.
-        optimal_actions: (N, R) the optimal actions for these states and ``lam``.
-        lam: The learner's ridge parameter.
-        theta_hat: (R, S) the learnt policy.
-        error: The teaching error E = ||vec(theta_hat) - vec(theta)||.
-        trajectory: The learnt skill's reproduction (a core ``Trajectory``; the episode's one rollout).
-        diverged: True if the reproduction diverged.
-        feedback_latency_s: Seconds from the last confirmation to the animation sent.
-        episode: The ``TeachingEpisode`` all of the above comes from (rho1, rho2, contributions, ...).
-    """
-
-    skill_key: str
-    query_states: np.ndarray
-    demonstrations: np.ndarray
-    optimal_actions: np.ndarray
-    lam: float
-    theta_hat: np.ndarray
-    error: float
-    trajectory: object
-    diverged: bool
-    feedback_latency_s: float
-    episode: TeachingEpisode | None = field(default=None, repr=False, compare=False)
+#: The name of a confirmed demonstration's record in the widget API (``on_demonstration``'s
+#: argument): the core ``Demonstration`` the episode keeps (action, optimal action, method,
+#: timings, ``guidance_shown``, ``episode_index``).
+DemonstrationRecord = Demonstration
 
 
 #: Vertical room (CSS px) a canvas leaves in the window: for a page's heading above it (the demo's
@@ -181,11 +127,14 @@ class EpisodeWidget(VBox):
         duration: Reproduction length in seconds (default ``skill.default_duration``).
         ghost: Draw the target skill's own motion faintly during the reproduction.
         demonstrations: Already-given actions (k, R) to restore when resuming (k <= N);
-            if all N are given the episode finishes at once.
+            if all N are given the episode finishes at once. A shown ``TeachingEpisode``'s own
+            demonstrations must be the first of them.
         episode_index: This episode's index, for the progress bar and the records.
         episodes_total: Episodes in the phase, for the progress bar.
-        on_demonstration: ``callback(record: DemonstrationRecord)`` after each confirmation.
-        on_finished: ``callback(result: EpisodeResult)`` when the reproduction is sent.
+        on_demonstration: ``callback(record: Demonstration)`` after each confirmation, before the
+            episode records it (``DemonstrationRecord`` is the same class).
+        on_finished: ``callback(result: EpisodeResult)`` when the reproduction is sent (the
+            ``mt_widgets.core.EpisodeResult``: the episode, read, never copied).
         title: Heading shown above the episode (default: the skill's title).
         fps: Reproduction frames per second.
         width, height, css_width, action_length: As for ``ArmView``.
@@ -229,7 +178,6 @@ class EpisodeWidget(VBox):
         show_description = as_bool("show_description", show_description)
         self.episode_index = as_count("episode_index", episode_index, minimum=0)
         self.result: EpisodeResult | None = None
-        self.records: list[DemonstrationRecord] = []
         # Errors in callbacks propagate (ipywidgets' dispatcher would swallow them): a
         # demonstration a callback could not record is neither counted nor shown guidance.
         self._demonstration_callbacks = Callbacks()
@@ -241,7 +189,9 @@ class EpisodeWidget(VBox):
 
         view_args = dict(theme=theme, width=width, height=height, css_width=css_width, action_length=action_length,
                          target_label=target_label)
-        self.teaching = TeachingCanvas(self.skill, self.query_states, auto_advance=False, **view_args)
+        # The canvas demonstrates into this widget's episode: one list of demonstrations.
+        self.teaching = TeachingCanvas(episode, auto_advance=False, guidance=self.guidance,
+                                       episode_index=self.episode_index, **view_args)
         self.theme = self.teaching.theme
         self.player = ReproductionPlayer(self.skill, fps=fps, show_outcome=show_outcome, **view_args)
         self.progress = EffortProgress(len(self.query_states), max(int(episodes_total), self.episode_index + 1),
@@ -257,6 +207,8 @@ class EpisodeWidget(VBox):
         self.teaching.on_confirm(self._on_confirm)
         # Enter on the canvas while guidance is shown: what "Next state" does (keyboard users).
         self.teaching.on_enter_when_locked(lambda: self.next() if self.phase == "guidance" else None)
+        # The traits follow the canvas's (which its episode writes), from the start.
+        self.state_index, self.demonstrations = self.teaching.state_index, self.teaching.demonstrations
         self.teaching.observe(self._sync_traits, names=["state_index", "demonstrations"])
         #: Where a page puts what comes after the episode (the demo: its result and "Try again");
         #: it sits beside the canvas, where the person is looking when the reproduction plays.
@@ -294,9 +246,14 @@ class EpisodeWidget(VBox):
         if demonstrations is not None and len(demonstrations):
             self.restore(demonstrations)
         elif self.episode.demonstrations:  # an episode resumed in core: show what it holds
-            self.restore(self.episode.actions)
+            self._show_given()
 
     # -- the episode's facts, as the widget's attributes ------------------------------------------------
+    @property
+    def records(self) -> list[Demonstration]:
+        """The confirmed demonstrations: the episode's own list (``episode.demonstrations``), not a copy."""
+        return self.episode.demonstrations
+
     @property
     def skill(self) -> Skill:
         return self.episode.skill
@@ -330,7 +287,7 @@ class EpisodeWidget(VBox):
         return self.episode.duration
 
     # -- callbacks --------------------------------------------------------------------------------------
-    def on_demonstration(self, callback: Callable[[DemonstrationRecord], None], remove: bool = False) -> None:
+    def on_demonstration(self, callback: Callable[[Demonstration], None], remove: bool = False) -> None:
         """Register ``callback(record)``, called for each confirmed demonstration.
 
         Callbacks run before the demonstration is counted and before guidance is shown or the
@@ -349,7 +306,7 @@ class EpisodeWidget(VBox):
         self._finished_callbacks.register_callback(callback, remove=remove)
 
     # -- driving it from code ------------------------------------------------------------------------------
-    def demonstrate(self, action) -> DemonstrationRecord:
+    def demonstrate(self, action) -> Demonstration:
         """Set and confirm ``action`` (R,) at the current state, as if drawn (method "code")."""
         if self.phase == "guidance":
             raise RuntimeError("demonstrate: expected phase 'teaching', the episode is in 'guidance'; "
@@ -359,8 +316,7 @@ class EpisodeWidget(VBox):
                                f"{len(self.query_states)} demonstrations given); start a new EpisodeWidget to "
                                f"teach again")
         self.teaching.set_action(action)
-        self.teaching.confirm()
-        return self.records[-1]
+        return self.teaching.confirm()
 
     def next(self) -> None:
         """Leave the guidance of the current state: show the next state, or finish the episode."""
@@ -379,29 +335,17 @@ class EpisodeWidget(VBox):
         """Take already-given demonstrations (k, R) when resuming; finishes if all are there.
 
         Args:
-            demonstrations: (k, R) actions, k <= N, R = ``skill.plant.action_dim``. The episode
-                keeps the demonstrations it already holds when they are the first of these.
+            demonstrations: (k, R) actions, k <= N, R = ``skill.plant.action_dim``. The episode's
+                own demonstrations must be the first of these (``TeachingEpisode.extend_to``).
         """
-        action_dim = self.skill.plant.action_dim
-        if len(demonstrations) == 0:
-            actions = np.zeros((0, action_dim))
-        else:
-            actions = as_float_array("demonstrations", demonstrations)
-            if actions.ndim != 2 or actions.shape[1] != action_dim:
-                raise ValueError(f"demonstrations: expected shape (k, {action_dim}), one action of the skill per "
-                                 f"row, got {actions.shape}")
-        if len(actions) > len(self.query_states):
-            raise ValueError(f"demonstrations: expected at most {len(self.query_states)} (one per query state), "
-                             f"got {len(actions)}")
-        held = self.episode.actions
-        if len(held) <= len(actions) and np.array_equal(held, actions[:len(held)]):
-            self.episode.restore(actions[len(held):])
-        else:  # other actions than the episode holds: a fresh episode on the same states takes them
-            self.episode = TeachingEpisode.from_actions(self.skill, self.query_states, actions, lam=self.lam,
-                                                        duration=self.duration)
-        self.teaching.restore(actions)
-        self.progress.demonstrations_done = len(actions)
-        if len(actions) == len(self.query_states):
+        self.episode.extend_to(demonstrations, name="demonstrations")
+        self._show_given()
+
+    def _show_given(self) -> None:
+        """Show the episode's demonstrations as given; finish when all are there."""
+        self.teaching._show_given()
+        self.progress.demonstrations_done = len(self.episode.demonstrations)
+        if self.episode.complete:
             self.finish()
 
     def finish(self) -> EpisodeResult:
@@ -427,9 +371,7 @@ class EpisodeWidget(VBox):
         self.next_button.layout.display = "none"
         self.player.layout.display = None
         self.progress.episodes_done = min(self.episode_index + 1, self.progress.episode_budget)
-        self.result = EpisodeResult(self.skill.key, self.query_states.copy(), episode.actions,
-                                    self.optimal.copy(), self.lam, episode.theta_hat, episode.error, trajectory,
-                                    bool(trajectory.diverged), latency, episode)
+        self.result = EpisodeResult(episode, feedback_latency_s=latency)
         self.error = episode.error
         self.phase = "finished"
         self._finished_callbacks(self.result)
@@ -439,19 +381,13 @@ class EpisodeWidget(VBox):
     def _sync_traits(self, change) -> None:
         setattr(self, change["name"], change["new"])
 
-    def _on_confirm(self, confirmed: ConfirmedAction) -> None:
-        index = confirmed.index
-        record = DemonstrationRecord(
-            self.episode_index, index, confirmed.state, confirmed.action, self.optimal[index].copy(),
-            self.guidance, confirmed.method, confirmed.time_to_first_input_s, confirmed.drawing_duration_s,
-            confirmed.redraws, confirmed.confirmed_at)
+    def _on_confirm(self, demonstration: Demonstration) -> None:
+        index = demonstration.index
         # First the callbacks (the study app writes the log there): if one raises, the error
         # propagates through the canvas's confirm and nothing below happens, so the participant
         # never sees guidance for, or moves past, a demonstration that is not on disk.
-        self._demonstration_callbacks(record)
-        self.episode.demonstrate(confirmed.action)
-        self.teaching._record(confirmed)
-        self.records.append(record)
+        self._demonstration_callbacks(demonstration)
+        self.teaching._record(demonstration)
         self.progress.demonstrations_done = index + 1
         last = index + 1 >= len(self.query_states)
         if self.guidance:
@@ -460,8 +396,8 @@ class EpisodeWidget(VBox):
                 self.teaching.show_guidance(self.optimal[index], legend=self.guidance_words)
             if self.guidance_words:
                 # The arrows' legend is under the canvas (legend.py), with every other mark.
-                self.guidance_panel.show(confirmed.action, self.optimal[index], exact=self.exact, legend=False)
-                self.teaching.describe_guidance(explain_difference(confirmed.action, self.optimal[index],
+                self.guidance_panel.show(demonstration.action, self.optimal[index], exact=self.exact, legend=False)
+                self.teaching.describe_guidance(explain_difference(demonstration.action, self.optimal[index],
                                                                    self.skill.action_units))
             self.next_button.description = "Finish and watch" if last else "Next state"
             self.next_button.layout.display = None

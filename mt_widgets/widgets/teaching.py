@@ -12,8 +12,10 @@ Input, three ways to the same pending action:
 - numbers: components (u1, u2) or angle (degrees, counter-clockwise from +x) and magnitude.
 
 An arrow can be redrawn any number of times; ``Confirm`` records it as the demonstration
-for the current state. Everything observable is a trait: ``state_index``,
-``demonstrations`` (confirmed actions, in order) and ``pending_action``. A screen reader reads
+for the current state, a ``mt_widgets.core.Demonstration`` (the action, how it was given and
+when) kept by the canvas's ``TeachingEpisode`` (``canvas.episode``): the one place it lives.
+Everything observable is a trait: ``state_index``, ``demonstrations`` (the episode's actions,
+in order, written only from the episode) and ``pending_action``. A screen reader reads
 the canvas as its ``description`` says: the state, the velocity, the arrow and the guidance.
 """
 
@@ -24,13 +26,14 @@ import math
 import re
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from ipywidgets import HTML, Button, FloatText, HBox, Layout, ToggleButtons, VBox
 from traitlets import Any, Bool, Int, List
 
-from mt_widgets.core.validation import as_bool, as_float_array
+from mt_widgets.core import Demonstration, TeachingEpisode
+from mt_widgets.core.validation import as_bool, as_count
 
 from .arm_view import ArmView
 from .arrows import draw_arrow_pair
@@ -59,31 +62,6 @@ class InputTiming:
     redraws: int = 0
 
 
-@dataclass(frozen=True)
-class ConfirmedAction:
-    """One confirmed arrow, as the teaching canvas saw it.
-
-    Attributes:
-        index: Query-state index (0-based).
-        state: (state_dim,) the query state.
-        action: (R,) the confirmed action in ``action_units``.
-        method: "pointer", "keyboard", "numeric" or "code" (how the last change was made).
-        time_to_first_input_s: From the state appearing to the first input on it (None if
-            set by code without any input).
-        drawing_duration_s: From the first input to the confirmation.
-        redraws: How many times the arrow was set before it was confirmed.
-    """
-
-    index: int
-    state: np.ndarray
-    action: np.ndarray
-    method: str
-    time_to_first_input_s: float | None
-    drawing_duration_s: float | None
-    redraws: int
-    confirmed_at: float = field(default_factory=time.time)
-
-
 def describe_action(action, units: str) -> str:
     """The arrow in words: components, magnitude and direction (degrees from +x, anticlockwise)."""
     u = np.asarray(action, dtype=float)
@@ -108,27 +86,46 @@ class TeachingCanvas(VBox):
     """Draw one action arrow at each query state.
 
     Args:
-        skill: The skill being taught (its robot, units and target are drawn).
-        query_states: (N, state_dim) the states to demonstrate at, shown in order.
+        skill: The skill being taught (its robot, units and target are drawn), or the
+            ``TeachingEpisode`` to demonstrate into (then ``query_states`` is None).
+        query_states: (N, state_dim) the states to demonstrate at, shown in order (a new
+            ``TeachingEpisode`` of them holds the demonstrations).
         theme: A ``Theme`` or theme name.
         grab_radius: Pixels around the end-effector (and the arrow tip) where a press starts
             a drag (a finger gets at least a 48 CSS px target, up to ``TOUCH_RADIUS_FACTOR``
             times this).
         auto_advance: Move to the next state as soon as an arrow is confirmed (standalone
             use); the episode widget turns this off to show guidance first.
+        guidance: whether the optimal arrow is shown after each confirmation (recorded with each
+            ``Demonstration`` as ``guidance_shown``; the episode widget shows it).
+        episode_index: the episode's index, recorded with each ``Demonstration``.
         width, height, css_width, action_length: As for ``ArmView``.
     """
 
     state_index = Int(0, help="Index of the query state shown (== number confirmed; N when done).")
-    demonstrations = List(help="Confirmed actions, one [u1, u2] list per state so far.")
+    demonstrations = List(help="Confirmed actions, one [u1, u2] list per state so far (the episode's).")
     pending_action = Any(None, allow_none=True, help="The arrow drawn but not confirmed: [u1, u2] or None.")
     locked = Bool(False, help="True while input is disabled (guidance shown, episode over).")
 
-    def __init__(self, skill, query_states, theme=None, grab_radius: float = 28.0, auto_advance: bool = True,
-                 width=None, height=None, css_width=None, action_length=None, target_label: str | None = "goal"):
-        states = np.array(query_states, dtype=float)
-        if states.ndim != 2 or states.shape[1] != skill.state_dim or len(states) == 0:
-            raise ValueError(f"query_states: expected shape (N, {skill.state_dim}) with N >= 1, got {states.shape}")
+    def __init__(self, skill, query_states=None, theme=None, grab_radius: float = 28.0, auto_advance: bool = True,
+                 width=None, height=None, css_width=None, action_length=None, target_label: str | None = "goal",
+                 guidance: bool = False, episode_index: int = 0):
+        if isinstance(skill, TeachingEpisode):
+            if query_states is not None:
+                raise ValueError("query_states: expected None when a TeachingEpisode is given (it has its own), "
+                                 "got states")
+            episode = skill
+        else:
+            states = np.array(query_states, dtype=float)
+            if states.ndim != 2 or states.shape[1] != skill.state_dim or len(states) == 0:
+                raise ValueError(f"query_states: expected shape (N, {skill.state_dim}) with N >= 1, "
+                                 f"got {states.shape}")
+            episode = TeachingEpisode(skill, states)
+        #: The ``TeachingEpisode`` the confirmed demonstrations go to (the one place they live).
+        self.episode = episode
+        skill, states = episode.skill, episode.query_states
+        self.guidance = as_bool("guidance", guidance)
+        self.episode_index = as_count("episode_index", episode_index, minimum=0)
         self.skill = skill
         #: R, the number of action components.
         self.action_dim = int(skill.plant.action_dim)
@@ -201,7 +198,7 @@ class TeachingCanvas(VBox):
         super().__init__([HBox([canvas, VBox([controls, self.view.legend], layout=Layout(max_width="400px"))],
                                layout=Layout(flex_flow="row wrap", align_items="flex-start"))])
         self.add_class("mt-focus")  # a visible focus on each control (canvas_access.py)
-        self._show_current_state()
+        self._show_given()
 
     # -- public API ---------------------------------------------------------------------------------
     @property
@@ -213,12 +210,14 @@ class TeachingCanvas(VBox):
         """The query state being demonstrated, or None when all are done."""
         return self.query_states[self.state_index] if self.state_index < self.n_states else None
 
-    def on_confirm(self, callback: Callable[[ConfirmedAction], None], remove: bool = False) -> None:
-        """Register ``callback(confirmed: ConfirmedAction)``, called when an arrow is confirmed.
+    def on_confirm(self, callback: Callable[[Demonstration], None], remove: bool = False) -> None:
+        """Register ``callback(demonstration: Demonstration)``, called when an arrow is confirmed.
 
-        Callbacks run before the arrow is recorded in ``demonstrations``, and an exception in
-        one reaches the caller of ``confirm``: the arrow is then not recorded and stays pending,
-        to be confirmed again (a demonstration the study log could not write is not counted).
+        Callbacks run before the demonstration is recorded in the episode (and ``demonstrations``),
+        and an exception in one reaches the caller of ``confirm``: the arrow is then not recorded
+        and stays pending, to be confirmed again (a demonstration the study log could not write
+        is not counted). A callback may record it itself (``episode.record``) once its own work
+        succeeded: the canvas then finds it recorded.
         """
         self._confirm_callbacks.register_callback(callback, remove=remove)
 
@@ -258,8 +257,8 @@ class TeachingCanvas(VBox):
         self._update_readout()
         self._sync_entries()
 
-    def confirm(self) -> ConfirmedAction:
-        """Record the pending arrow as the demonstration at the current state."""
+    def confirm(self) -> Demonstration:
+        """Record the pending arrow as the demonstration at the current state; returns its ``Demonstration``."""
         if self.locked:
             raise RuntimeError("confirm: input is locked (guidance is shown or the episode is over)")
         if self.pending_action is None or self.current_state is None:
@@ -269,23 +268,29 @@ class TeachingCanvas(VBox):
         self._dragging = False
         now = time.monotonic()
         timing = self._timing
-        confirmed = ConfirmedAction(
-            index=self.state_index, state=self.current_state.copy(), action=np.array(self.pending_action),
-            method=timing.method or "code",
+        demonstration = self.episode.analyse(
+            self.pending_action, method=timing.method or "code",
             time_to_first_input_s=None if timing.first_input_at is None else timing.first_input_at - timing.shown_at,
             drawing_duration_s=None if timing.first_input_at is None else now - timing.first_input_at,
-            redraws=timing.redraws)
-        self._confirm_callbacks(confirmed)  # an error propagates: nothing is recorded
-        self._record(confirmed)
-        if self.auto_advance and self.state_index == confirmed.index:
+            redraws=timing.redraws, confirmed_at=time.time(), guidance_shown=self.guidance,
+            episode_index=self.episode_index)
+        self._confirm_callbacks(demonstration)  # an error propagates: nothing is recorded
+        self._record(demonstration)
+        if self.auto_advance and self.state_index == demonstration.index:
             self.advance()
-        return confirmed
+        return demonstration
 
-    def _record(self, confirmed: ConfirmedAction) -> None:
-        # Idempotent: a confirm callback may record the arrow itself, once its own work succeeded
-        # and before it moves the view on (the episode widget does).
-        if len(self.demonstrations) == confirmed.index:
-            self.demonstrations = self.demonstrations + [[float(a) for a in confirmed.action]]
+    def _record(self, demonstration: Demonstration) -> None:
+        # Idempotent (Demonstration.record): a confirm callback may record it itself, once its
+        # own work succeeded and before it moves the view on (the episode widget does).
+        self.episode.record(demonstration)
+        self._show_demonstrations()
+
+    def _show_demonstrations(self) -> None:
+        """The ``demonstrations`` trait, from the episode: the one place it is written."""
+        actions = [[float(a) for a in action] for action in self.episode.actions]
+        if actions != self.demonstrations:
+            self.demonstrations = actions
 
     def show_guidance(self, optimal_action, legend: bool = True) -> None:
         """Draw the optimal arrow (R,) beside the confirmed one at the current state.
@@ -311,19 +316,18 @@ class TeachingCanvas(VBox):
         self._show_current_state()
 
     def restore(self, actions) -> None:
-        """Take already-given demonstrations (k, R) as confirmed, without callbacks (resuming)."""
-        if len(actions) == 0:
-            actions = np.zeros((0, self.action_dim))
-        else:
-            actions = as_float_array("actions", actions)
-            if actions.ndim != 2 or actions.shape[1] != self.action_dim:
-                raise ValueError(f"actions: expected shape (k, {self.action_dim}), one action per row, "
-                                 f"got {actions.shape}")
-        if len(actions) > self.n_states:
-            raise ValueError(f"actions: expected at most {self.n_states} demonstrations, got {len(actions)}")
+        """Take already-given demonstrations (k, R) as confirmed, without callbacks (resuming).
+
+        The episode's own demonstrations must be the first of them (``TeachingEpisode.extend_to``).
+        """
+        self.episode.extend_to(actions)
+        self._show_given()
+
+    def _show_given(self) -> None:
+        """Show the episode as it stands: its demonstrations confirmed, the next state awaiting one."""
         self._dragging = False
-        self.demonstrations = [list(map(float, a)) for a in actions]
-        self.state_index = len(actions)
+        self._show_demonstrations()
+        self.state_index = len(self.episode.demonstrations)
         self.pending_action = None
         self._guidance = None
         self._guidance_words = ""

@@ -3,7 +3,6 @@ the guidance arrow named where the protocol gives guidance, then the reproductio
 
 from __future__ import annotations
 
-import numpy as np
 from ipywidgets import HTML
 
 from mt_widgets.core import TeachingEpisode
@@ -52,7 +51,8 @@ class EpisodeStep:
         # which the widget demonstrates into and the session then records.
         self.widget = view.prepare_episode(build_episode(
             protocol, view.theme, step.teaching_episode, None, step.guidance, step.episode - 1, step.n_episodes,
-            self._on_demonstration, self._on_finished, step.guidance_modality))
+            self._on_demonstration, None, step.guidance_modality))
+        self.widget.on_finished(self._on_finished)
         # The guidance arrow is named where it appears, for the groups that see it (the others
         # never get this text): a mark on the canvas nothing explains is a puzzle, not guidance.
         self.guidance_note = HTML()
@@ -63,10 +63,11 @@ class EpisodeStep:
         view.body.children = [instructions, self.widget]
         # Beside the canvas the reproduction plays in: what to do next is in view.
         self.widget.next_actions.children = [self.guidance_note, self.reproduction_text, self.continue_button]
-        if len(step.actions):
-            # Resuming: the given demonstrations are restored; if all are given the widget
-            # finishes at once, and _on_finished logs the end if it is not logged yet.
-            self.widget.restore(np.asarray(step.actions))
+        # Resuming: the session's episode already holds the logged demonstrations and the widget
+        # shows them; if all are given it finished at once, and the end is logged here if the
+        # log does not hold it yet (on_finished was called before this step could listen).
+        if self.widget.phase == "finished":
+            self._on_finished(self.widget.result)
 
     def _on_phase(self, change) -> None:
         self.guidance_note.value = guidance_arrow_words(self.view.theme) if change["new"] == "guidance" else ""
@@ -75,10 +76,8 @@ class EpisodeStep:
         session = self.view.session
 
         def submit():
-            session.submit_demonstration(
-                record.action, {"time_to_first_input_s": record.time_to_first_input_s,
-                                "drawing_duration_s": record.drawing_duration_s, "method": record.method,
-                                "redraws": record.redraws}, index=record.index)
+            # The widget's own record: logged, then kept by the session's episode (that object).
+            session.submit_demonstration(record, index=record.index)
         # Re-raised after stopping the page: the episode then neither counts the demonstration
         # nor shows guidance for it.
         self.view.safely(submit, reraise=True)
@@ -89,7 +88,7 @@ class EpisodeStep:
             if session.current_step().kind == "episode_end":
                 # The episode the participant saw is the one logged: its one reproduction
                 # (already played) is what the log describes.
-                session.finish_episode(result.episode)
+                session.finish_episode()
             self.show_reproduction_controls()
         self.view.safely(finish)
 
