@@ -128,6 +128,10 @@ class UArmTeaching:
         #: The stand-in for a hand on the simulated arm (None on a real arm).
         self.hand_view = SimulatedHand(device, floating=bool(self.geometry.pinned)) if device is not None else None
         self._hand_stop = threading.Event()
+        # stop() (kernel thread) and a hand move (worker) both say what a stop means; the
+        # worker's words, which know the arm is released, must come after stop()'s.
+        self._stop_words = threading.Lock()
+        self._stop_error: str | None = None
         self._reattach_on_resume = False
         self._hand_job: Future | None = None
         self.demonstration_modality = "drawn"
@@ -239,8 +243,11 @@ class UArmTeaching:
                 # Stopped mid-move: the arm stays released (it cannot move by itself); Resume
                 # attaches it again before anything moves it (on 4.0-4.4 nothing is sent while paused).
                 self._reattach_on_resume = True
-                self.panel.say("The arm is stopped and released. Press Resume arm when it is safe: it will hold "
-                               "itself again and go back to the situation.")
+                with self._stop_words:  # after stop() has said its words
+                    words = ("The arm is stopped and released. Press Resume arm when it is safe: it will hold "
+                             "itself again and go back to the situation.")
+                    error = self._stop_error
+                    self.panel.say(f"{error} {words}" if error else words, error=bool(error))
                 return
             self.panel.say("The arm holds itself again and goes back to the situation...")
             move.end()
@@ -322,13 +329,15 @@ class UArmTeaching:
     # ------------------------------------------------------------------ stop / resume
     def stop(self) -> None:
         """Halt the arm now (called from the kernel, not queued): no move starts until resume."""
-        message = self.bridge.stop()
-        self._hand_stop.set()
-        self.panel.resume_button.layout.display = None
-        if message:
-            self.panel.say(message, error=True)
-        else:
-            self.panel.say("The arm is stopped. Press Resume arm when it is safe to move it again.")
+        with self._stop_words:
+            message = self.bridge.stop()
+            self._stop_error = message
+            self._hand_stop.set()
+            self.panel.resume_button.layout.display = None
+            if message:
+                self.panel.say(message, error=True)
+            else:
+                self.panel.say("The arm is stopped. Press Resume arm when it is safe to move it again.")
 
     def resume(self) -> Future:
         """Let the arm move again and bring it back to the current query state.

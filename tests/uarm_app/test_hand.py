@@ -127,6 +127,32 @@ def test_stop_during_a_hand_move_keeps_the_arm_released_until_resume_attaches_an
         teaching.close()
 
 
+def test_a_slow_stop_command_still_ends_on_the_words_that_the_arm_is_released():
+    # The hand move's worker sees the stop as soon as the bridge holds it, while the kernel's
+    # stop() may still be waiting for the arm's answer: its generic words must not come last.
+    arm = SwiftPro(sim_url(), timeout=1.0)
+    arm.connect()
+    teaching = UArmTeaching(arm, demonstration_modality="hand")
+    try:
+        UArmEpisodePage(teaching, "uarm-point", seed=0, guidance=False)
+        teaching.wait(10)
+        job = teaching.teach_by_hand()
+        hand_step(teaching, (1.0, 0.0))
+        real_stop = teaching.bridge.stop
+
+        def slow_stop():
+            message = real_stop()
+            time.sleep(0.5)  # a slow link: five of the worker's 0.1 s polls
+            return message
+
+        teaching.bridge.stop = slow_stop
+        teaching.stop()
+        job.result(20)
+        assert "stopped and released" in teaching.panel.message.value
+    finally:
+        teaching.close()
+
+
 def test_drawn_modality_hides_teaching_by_hand():
     arm = SwiftPro(sim_url(), timeout=1.0)
     arm.connect()
