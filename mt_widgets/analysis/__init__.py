@@ -1,6 +1,10 @@
 """The analysis of a teaching study: statistics, power, figures and the comparison with the paper.
 
-- ``statistics``: the paper's changes, tests and effect sizes from tidy episode rows.
+- ``tables``: the episode rows checked, summarised by phase and by change.
+- ``effect_size``: Hedges' g with its confidence interval.
+- ``statistics``: the paper's tests of the changes, all in one ``StudyStatistics`` (and every
+  name of ``tables``, ``effect_size`` and ``summary``, importable from here as before).
+- ``summary``: the statistics in plain language.
 - ``power``: analytic power and power by simulation (in-silico studies).
 - ``figures``: the paper's figures (matplotlib).
 - ``paper_comparison``: a study's changes and baselines beside the paper's.

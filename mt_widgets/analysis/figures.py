@@ -26,8 +26,9 @@ from matplotlib.figure import Figure
 
 from mt_widgets.core import SKILLS, Box
 from mt_widgets.core.validation import as_bool
+from mt_widgets.study.analysis_plan import PAPER_CHANGES
 
-from .statistics import PAPER_CHANGES, episodes_frame, participant_changes, phase_summary, study_groups
+from .tables import episodes_frame, participant_changes, phase_summary, study_groups
 
 #: Okabe-Ito colours, a line style and a marker per group.
 GROUP_STYLE = {

@@ -8,7 +8,7 @@ from mt_widgets.in_silico.engine import InSilicoStudy
 from mt_widgets.in_silico.paper_results import implied_baselines, paper_changes
 from mt_widgets.in_silico.plan import experiment_of
 
-from .statistics import change_summary, participant_changes
+from .tables import change_summary, participant_changes
 
 
 def compare_with_paper(result, reference: dict | None = None, experiment: str | None = None) -> pd.DataFrame:

@@ -23,7 +23,8 @@ from mt_widgets.core.validation import as_bool, as_count, as_fraction
 from mt_widgets.in_silico.engine import run_many_studies
 from mt_widgets.in_silico.plan import resolve_protocol
 
-from .statistics import check_alternative, hedges_correction
+from .effect_size import hedges_correction
+from .statistics import check_alternative
 
 
 def analytic_power(n_per_group: int, effect_size: float, alpha: float = 0.05,

@@ -18,7 +18,7 @@ from pathlib import Path
 from mt_widgets.study.protocol import Protocol, load_protocol
 
 from .power import analytic_power, sample_size_per_group
-from .statistics import TEST_NAMES
+from .summary import TEST_NAMES
 
 
 def _flatten(value, prefix: str = "") -> list[tuple[str, object]]:

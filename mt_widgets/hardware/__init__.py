@@ -3,7 +3,9 @@
 Layers, bottom up: :mod:`.protocol` (the text of the lines), :mod:`.link` (the serial link),
 :mod:`.dialects` (firmware generations), :mod:`.stop` and :mod:`.motion` (the one stop
 mechanism; the motion and safety policy, with :mod:`.envelope`), :mod:`.connector`
-(:class:`SwiftPro`), :mod:`.bridge` (the teaching plant on the arm, no Jupyter).
+(:class:`SwiftPro`), :mod:`.bridge` (the teaching plant on the arm, no Jupyter). Beside them,
+:mod:`.simdevice` (:class:`SimulatedSwiftPro`, made of the ``sim_*`` modules: kinematics,
+number grammars, the firmware loop, the shared, 4.x and 3.x command sets, the EEPROM).
 
 Importing this package registers the pyserial URL handler ``uarm-sim://`` (also spelled
 ``uarmsim://``), so ``SwiftPro("uarm-sim://?firmware=4&latency=0.003")`` talks to the
@@ -37,7 +39,8 @@ from .errors import (
     UnsafeMoveError,
 )
 from .protocol import Event
-from .simdevice import SimulatedSwiftPro, is_reachable
+from .sim_kinematics import is_reachable
+from .simdevice import SimulatedSwiftPro
 from .stop import StopSwitch
 from .urlhandler import protocol_uarmsim
 
