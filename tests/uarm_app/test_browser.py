@@ -147,15 +147,17 @@ def test_the_uarm_study_app_taught_by_hand_logs_the_modality_and_survives_a_pull
                                                                                          artifacts):
     page = tall_page
     page.goto(uarm_voila.url("/voila/render/uarm_study_hand.ipynb"), timeout=60_000)
-    for label in ("Continue", "I agree", "Start", "Start"):
-        button = page.get_by_role("button", name=label, exact=True)
-        button.first.wait_for(timeout=150_000)
-        pressed = button.first.element_handle()
-        pressed.click()
-        # Two screens in a row have a "Start": the next press must find the next screen's button, not
-        # this one while the kernel is still replacing the screen (a pressed button acts only once).
-        page.wait_for_function("b => !b.isConnected || b.disabled || b.offsetParent === null", arg=pressed,
-                               timeout=60_000)
+    # Each screen is known by the protocol's text on it; its button is pressed through a locator
+    # (found again if the view is rebuilt under the pointer), then the screen must leave. Two
+    # screens in a row have a "Start": a press belongs to the screen whose text was seen.
+    # The phase's text stays above its episode: the last press ends when the episode is there.
+    for text, label in (("Welcome.", "Continue"), ("Consent.", "I agree"), ("Instructions.", "Start"),
+                        ("Skill 1.", "Start")):
+        screen = page.get_by_text(text, exact=True)
+        screen.wait_for(timeout=150_000)
+        page.get_by_role("button", name=label, exact=True).first.click()
+        if text != "Skill 1.":
+            screen.wait_for(state="detached", timeout=60_000)
     s = wait_for_status(page, "s.in_episode && s.hand_shown && !s.hand_busy", timeout=60_000)
     hand_button = page.get_by_role("button", name="Teach by hand (H)")
     for index, step in enumerate([(1.5, 0.0), (0.0, 1.0)]):

@@ -31,7 +31,10 @@ def teaching(request):
 def hand_step(teaching: UArmTeaching, step_cm) -> None:
     """Wait for the arm to let go, then move its tip by ``step_cm`` as a hand would."""
     dev = device_of(teaching.bridge.arm)
-    wait_until(dev.steppers_released, what="the arm to be released")
+    # As a person does: move the arm once the app says it is released (the arm's "ok" to the
+    # release has then been read; the device alone is limp a moment earlier).
+    wait_until(lambda: dev.steppers_released() and "The arm is released" in teaching.panel.message.value,
+               what="the app to say the arm is released")
     now = time.monotonic()
     x, y, z = dev.position_at(now)
     assert dev.hand_move((x + 10 * step_cm[0], y + 10 * step_cm[1], z), now, 0.05)
