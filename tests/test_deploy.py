@@ -23,8 +23,7 @@ def test_shipped_configuration_culls_idle_unconnected_kernels_and_preheats_only_
     assert culler.cull_busy is False
     assert config.Voila.tornado_settings == {"disable_check_xsrf": True,   # the pages' shutdown beacons
                                              "static_immutable_cache": ["/voila/labextensions/"]}
-    # The refill waits until the visitor's page is interactive; the widgets' extensions stay.
-    assert 2 <= config.VoilaKernelManager.fill_delay <= 30
+    # The widgets' extensions stay; the unused ones go.
     denied = config.VoilaConfiguration.extension_denylist
     assert "@jupyter/nbgrader" in denied and "@jupyter-notebook/lab-extension" in denied
     assert not {"@jupyter-widgets/jupyterlab-manager", "ipycanvas", "@voila-dashboards/widgets-manager8"} & set(denied)

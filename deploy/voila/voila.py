@@ -65,14 +65,13 @@ c.VoilaKernelManager.kernel_pools_config = {
     "study_sim.ipynb": {"pool_size": 1},
     "study_online.ipynb": {"pool_size": 1},
 }
-# Refill the pool 5 s after a visitor takes the spare (Voila waits 1 s). A refill is a kernel
-# starting, importing numpy, numba and ipycanvas and running the page (several seconds of CPU), and
-# the server rendering that page: started at once, it competes on a 2-core machine with the
-# visitor's browser and server for exactly the seconds the page takes to become interactive
-# (benchmarks/bench_kiosk.py priced it with --server "...=--VoilaKernelManager.fill_delay=0").
-# Visitors of a kiosk come one at a time, seconds apart at least; one who comes within the delay
-# and the refill gets the page without a spare, as from a server without preheating.
-c.VoilaKernelManager.fill_delay = 5.0
+# Refill the pool right after a visitor takes the spare (Voila waits 1 s by default). A refill
+# (a kernel starting, importing numpy, numba and ipycanvas, running the page) competes with the
+# visitor's page for the 2 cores; delaying it by 5 s was priced with benchmarks/bench_kiosk.py
+# (--server "refill after 5 s=--VoilaKernelManager.fill_delay=5") on the shared machine and came
+# out faster at load average 10 (p50 2.8 s against 4.0 s) and slower at 25 (8.9 s against 5.1 s):
+# no clear gain, so the spare stays ready as soon as possible for the next visitor.
+c.VoilaKernelManager.fill_delay = 0.0
 
 # --- Only the extensions a page uses ----------------------------------------------------------
 # Voila loads every JupyterLab extension installed beside it before it starts the widget
