@@ -4,7 +4,8 @@ Stock Voila keeps every visitor's kernel (about 200 MB) for good: the page's shu
 refused for want of an _xsrf cookie and nothing culls. With the shipped configuration a closed
 page ends its kernel at once, a page that vanished without closing (no ``beforeunload``) loses
 its kernel to the idle culler, an open page keeps its kernel however long it idles, and one
-preheated spare makes the next visitor's page interactive within 3 s; the widgets' scripts are cached for good and unused extensions are not loaded.
+preheated spare makes the next visitor's page interactive within 3 s; the widgets' scripts are
+cached for good and unused extensions are not loaded.
 
 The culler's timings are shortened here through the config's own knobs
 (``--MappingKernelManager.cull_idle_timeout`` / ``cull_interval`` on the command line win over
