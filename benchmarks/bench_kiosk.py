@@ -142,23 +142,24 @@ def run(browser, notebook: Path | None, loads: int, servers: dict, cache: bool =
 
 def _print(page: str, loads: int, results: dict) -> None:
     stock = results["stock Voila"]
+    w = max(24, *(len(name) + 1 for name in results))
     print(f"\n{page}, {loads} visits per server (each tab closed as a visitor closes it)")
-    print(f"{'server':<24} {'memory after':>13} {'kernels':>8} {'first':>8} {'p50 warm':>9} {'p95 warm':>9}"
+    print(f"{'server':<{w}} {'memory after':>13} {'kernels':>8} {'first':>8} {'p50 warm':>9} {'p95 warm':>9}"
           f"  {'memory / stock':>14} {'p50 / stock':>11} {'load avg':>9}")
     for name, r in results.items():
         own, children, kernels = r["after"]
         total = own + children
         stock_total = sum(stock["after"][:2])
-        print(f"{name:<24} {total:>10.0f} MB {kernels:>8d} {r['first_ms'] / 1000:>6.2f} s {r['p50_ms'] / 1000:>7.2f} s"
+        print(f"{name:<{w}} {total:>10.0f} MB {kernels:>8d} {r['first_ms'] / 1000:>6.2f} s {r['p50_ms'] / 1000:>7.2f} s"
               f" {r['p95_ms'] / 1000:>7.2f} s  {total / stock_total:>13.2f}x {r['p50_ms'] / stock['p50_ms']:>10.2f}x"
               f" {r['load']:>9.1f}")
     if all(r.get("phases") for r in results.values()):
         print("\nwhere a warm visit's time went (medians, s from navigation; then what was fetched)")
-        print(f"{'server':<24} {'HTML':>6} {'DOM':>6} {'load':>6} {'kernel':>7} {'canvas':>7} {'drawn':>6}"
+        print(f"{'server':<{w}} {'HTML':>6} {'DOM':>6} {'load':>6} {'kernel':>7} {'canvas':>7} {'drawn':>6}"
               f" {'answered':>9} {'requests':>9} {'served':>7} {'wire MB':>8} {'body MB':>8}")
         for name, r in results.items():
             p = r["phases"]
-            print(f"{name:<24} {p['html_ms'] / 1000:>6.2f} {p['dom_ms'] / 1000:>6.2f} {p['load_ms'] / 1000:>6.2f}"
+            print(f"{name:<{w}} {p['html_ms'] / 1000:>6.2f} {p['dom_ms'] / 1000:>6.2f} {p['load_ms'] / 1000:>6.2f}"
                   f" {p['kernel_ms'] / 1000:>7.2f} {p['canvas_ms'] / 1000:>7.2f} {p['drawn_ms'] / 1000:>6.2f}"
                   f" {r['p50_ms'] / 1000:>9.2f} {p['requests']:>9.0f} {p['served']:>7.0f} {p['transfer_mb']:>8.2f}"
                   f" {p['body_mb']:>8.2f}")
