@@ -21,7 +21,12 @@ def test_shipped_configuration_culls_idle_unconnected_kernels_and_preheats_only_
     assert 0 < culler.cull_interval <= culler.cull_idle_timeout / 5
     assert culler.cull_connected is False, "an open page (the kiosk's own screen) must keep its kernel"
     assert culler.cull_busy is False
-    assert config.Voila.tornado_settings == {"disable_check_xsrf": True}   # the pages' shutdown beacons
+    assert config.Voila.tornado_settings == {"disable_check_xsrf": True,   # the pages' shutdown beacons
+                                             "static_immutable_cache": ["/voila/labextensions/"]}
+    # The widgets' extensions stay; the unused ones go.
+    denied = config.VoilaConfiguration.extension_denylist
+    assert "@jupyter/nbgrader" in denied and "@jupyter-notebook/lab-extension" in denied
+    assert not {"@jupyter-widgets/jupyterlab-manager", "ipycanvas", "@voila-dashboards/widgets-manager8"} & set(denied)
     assert config.VoilaConfiguration.preheat_kernel is True
     assert config.VoilaConfiguration.multi_kernel_manager_class == "kiosk_kernels.KioskKernelManager"
     pools = config.VoilaKernelManager.kernel_pools_config

@@ -17,7 +17,16 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 # issue 1458) and each visit keeps its ~200 MB kernel for good. Voila serves these pages without
 # authentication, so the XSRF check guards nothing here: every endpoint it would protect needs
 # a kernel's random id, which only that kernel's page knows.
-c.Voila.tornado_settings = {"disable_check_xsrf": True}
+#
+# --- Extensions' scripts come from the browser's cache -----------------------------------------
+# Voila serves the widget extensions' scripts (/voila/labextensions/) with "no-cache", so every
+# visit of a warm kiosk asks the server again for each of them (a 304 each, 20-30 requests in
+# three rounds: entry points, their chunks, the widgets' chunks once the states arrived) before
+# the widget manager can start. Every file a page asks for there has its content's hash in its
+# name (remoteEntry.<hash>.js, <n>.<hash>.js?v=<hash>; an upgraded extension gets new names in
+# the page's config), so jupyter_server's immutable cache for that prefix is exact. (A server run
+# under another --Voila.base_url keeps Voila's revalidation: the prefix no longer matches.)
+c.Voila.tornado_settings = {"disable_check_xsrf": True, "static_immutable_cache": ["/voila/labextensions/"]}
 
 # --- Idle-kernel culling: what the beacon cannot catch -----------------------------------------
 # A tab that vanishes without `beforeunload` (a crashed or killed browser, a phone that
@@ -56,8 +65,22 @@ c.VoilaKernelManager.kernel_pools_config = {
     "study_sim.ipynb": {"pool_size": 1},
     "study_online.ipynb": {"pool_size": 1},
 }
-# Refill the pool right after a visitor takes the spare (Voila waits 1 s by default).
+# Refill the pool right after a visitor takes the spare (Voila waits 1 s by default). A refill
+# (a kernel starting, importing numpy, numba and ipycanvas, running the page) competes with the
+# visitor's page for the 2 cores; delaying it by 5 s was priced with benchmarks/bench_kiosk.py
+# (--server "refill after 5 s=--VoilaKernelManager.fill_delay=5") on the shared machine and came
+# out faster at load average 10 (p50 2.8 s against 4.0 s) and slower at 25 (8.9 s against 5.1 s):
+# no clear gain, so the spare stays ready as soon as possible for the next visitor.
 c.VoilaKernelManager.fill_delay = 0.0
+
+# --- Only the extensions a page uses ----------------------------------------------------------
+# Voila loads every JupyterLab extension installed beside it before it starts the widget
+# manager: three of them have nothing to do on these pages (nbgrader's and Jupyter Notebook's
+# Lab extensions, the pygments theme for code, which Voila strips), about 12 requests and
+# 0.2 MB of scripts to fetch and run before the first widget. The widgets' own
+# (@jupyter-widgets/jupyterlab-manager, ipycanvas, Voila's widgets manager) stay.
+c.VoilaConfiguration.extension_denylist = ["@jupyter/nbgrader", "@jupyter-notebook/lab-extension",
+                                           "jupyterlab_pygments"]
 
 # No tracebacks on a public page: errors go to the server's log.
 c.VoilaConfiguration.show_tracebacks = False

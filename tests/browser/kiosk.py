@@ -74,13 +74,29 @@ def memory_mb(server: Server) -> tuple[float, float, int]:
     return own / 2**20, children / 2**20, len(kernel_processes(server))
 
 
+def spares_pending(server: Server) -> int:
+    """How many preheated kernels the server still owes its pools (0 without preheating).
+
+    Voila logs "Using pre-heated kernel: <id> for <notebook>" when a visitor takes a spare and
+    "Kernel pool of <notebook> is filled" once the refill's kernel has started (after the
+    configured ``fill_delay``); the first fill logs the latter once.
+    """
+    log = server.log.read_text()
+    taken = re.findall(r"Using pre-heated kernel: \S+ for (.+)", log)
+    filled = re.findall(r"Kernel pool of (.+) is filled", log)
+    return sum(max(0, taken.count(name) + 1 - filled.count(name)) for name in set(taken) | set(filled))
+
+
 def wait_until_quiet(server: Server, window: float = 0.6, timeout: float = 60.0) -> None:
-    """Wait until the server and its kernels use no CPU for ``window`` seconds.
+    """Wait until the server's pools are refilled and it and its kernels use no CPU for ``window`` seconds.
 
     A preheated kernel is ready for the next visitor only once it has run the page's notebook;
-    Voila logs "pool filled" as soon as the kernel starts, so the idle CPU is the signal.
+    Voila logs "pool filled" as soon as the kernel starts (``spares_pending``), so the idle CPU
+    after that is the signal.
     """
     deadline = time.monotonic() + timeout
+    while spares_pending(server) and time.monotonic() < deadline:
+        time.sleep(0.1)
     root = psutil.Process(server.process.pid)
 
     def cpu() -> float:
@@ -128,8 +144,11 @@ class Visit:
     drawn_ms: float          # navigation -> the arm drawn on the teaching canvas
     answered_ms: float       # navigation -> a skill button's click answered by the new skill's canvas
     #: Where the time went, each from navigation (ms): the page's HTML received, DOMContentLoaded
-    #: done, the load event done (every script and style loaded), the first canvas element on the
-    #: page (the widgets rendered); and what was fetched: requests, MB over the wire, MB of bodies.
+    #: done, the load event done (the page's own scripts and styles loaded), the kernel asked for
+    #: (Voila's app has loaded its extensions and starts the widget manager's connection), the
+    #: first canvas element on the page (the widgets rendered); and what was fetched: requests,
+    #: MB over the wire, MB of bodies, and how many of the requests the server answered (not
+    #: the browser's cache: ``transferSize`` > 0).
     phases: dict | None = None
 
 
@@ -158,8 +177,11 @@ def visit(context, server: Server, *, unload: bool = True, keep_open: bool = Fal
     drawn = page.evaluate("performance.now()")
     phases = page.evaluate("""() => { const n = performance.getEntriesByType('navigation')[0];
         const r = performance.getEntriesByType('resource');
+        const kernel = r.find(e => /\\/api\\/kernels\\/[0-9a-f-]{36}/.test(e.name));
         return {html_ms: n.responseEnd, dom_ms: n.domContentLoadedEventEnd, load_ms: n.loadEventEnd,
-                requests: r.length + 1, transfer_mb: (n.transferSize + r.reduce((a, e) => a + e.transferSize, 0)) / 1e6,
+                kernel_ms: kernel ? kernel.startTime : NaN, requests: r.length + 1,
+                served: 1 + r.filter(e => e.transferSize > 0).length,
+                transfer_mb: (n.transferSize + r.reduce((a, e) => a + e.transferSize, 0)) / 1e6,
                 body_mb: (n.encodedBodySize + r.reduce((a, e) => a + e.encodedBodySize, 0)) / 1e6}; }""")
     phases["canvas_ms"] = canvas_ms
     page.get_by_role("button", name=ANSWER_BUTTON, exact=True).click()

@@ -4,7 +4,8 @@ Stock Voila keeps every visitor's kernel (about 200 MB) for good: the page's shu
 refused for want of an _xsrf cookie and nothing culls. With the shipped configuration a closed
 page ends its kernel at once, a page that vanished without closing (no ``beforeunload``) loses
 its kernel to the idle culler, an open page keeps its kernel however long it idles, and one
-preheated spare makes the next visitor's page interactive within 3 s.
+preheated spare makes the next visitor's page interactive within 3 s; the widgets' scripts are
+cached for good and unused extensions are not loaded.
 
 The culler's timings are shortened here through the config's own knobs
 (``--MappingKernelManager.cull_idle_timeout`` / ``cull_interval`` on the command line win over
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import statistics
 import time
 import urllib.error
@@ -23,7 +25,7 @@ import urllib.request
 
 import pytest
 
-from browser_support import ARTIFACTS
+from browser_support import ARTIFACTS, BIN
 
 from .helpers import OKABE, ee_pixel, wait_for_color
 from .kiosk import (
@@ -70,6 +72,23 @@ def test_voila_runs_the_shipped_culler_and_accepts_a_pages_shutdown_beacon(tmp_p
         # Stock Voila refuses the same request: the root of "every visit keeps its kernel".
         assert beacon(stock, "00000000-0000-0000-0000-000000000000") == 403
         assert "'_xsrf' argument missing from POST" in stock.log.read_text()
+
+        # The widgets' scripts: a warm kiosk takes them from its cache without asking (their names
+        # carry their content's hash); stock Voila makes the browser ask again on every visit.
+        manager = BIN.parent / "share" / "jupyter" / "labextensions" / "@jupyter-widgets" / "jupyterlab-manager"
+        entry = json.loads((manager / "package.json").read_text())["jupyterlab"]["_build"]["load"]
+        path = f"/voila/labextensions/@jupyter-widgets/jupyterlab-manager/{entry}"
+        for target, expected in ((server, "public, max-age=31536000, immutable"), (stock, "no-cache")):
+            with urllib.request.urlopen(target.url(path), timeout=10) as response:
+                assert response.headers["Cache-Control"] == expected, (target.base_url, dict(response.headers))
+        # The page loads the widgets' extensions and none of the three it does not use.
+        with urllib.request.urlopen(server.url("/"), timeout=60) as response:
+            html = response.read().decode()
+        config = json.loads(re.search(r'<script id="jupyter-config-data" type="application/json">(.*?)</script>',
+                                      html, re.S).group(1))
+        loaded = {extension["name"] for extension in config["federated_extensions"]}
+        assert {"@jupyter-widgets/jupyterlab-manager", "ipycanvas", "@voila-dashboards/widgets-manager8"} <= loaded
+        assert not loaded & {"@jupyter/nbgrader", "@jupyter-notebook/lab-extension", "jupyterlab_pygments"}, loaded
     finally:
         server.stop()
         stock.stop()
