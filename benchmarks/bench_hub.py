@@ -5,11 +5,12 @@ Starts deploy/jupyterhub/jupyterhub_config.py as root on loopback with a roster 
 
 1. every student logs in through the login form at the same moment (first login: they set
    their password) and their servers are started at once: spawn time from the start request to
-   the hub reporting the server ready, p50 / p95 / all;
+   the hub reporting the server ready, p50 / p95 / all, and the CPU time a server took to start
+   (which load does not inflate: thirty servers need at least their sum over the cores);
 2. first episode in a fresh kernel, imports included (what a student waits for the first time
    they press run): one student alone, then every student at once. Two figures each: inside the
    kernel (from the cell's first import to the reproduction sent) and from asking the server
-   for the kernel (kernel start included);
+   for the kernel (kernel start included), and a kernel's CPU time for both;
 3. at human pace, in that same kernel: every student teaches three episodes, confirming an
    arrow every 3 to 8 s at random, so episodes end at random times: feedback latency p50 / p95
    (``EpisodeResult.feedback_latency_s``: from the last confirmed arrow to the reproduction
@@ -128,6 +129,8 @@ def main() -> None:
             spawn = hub.spawn_class(students)
             spawn_wall = time.perf_counter() - started
             load_spawn = os.getloadavg()
+            # CPU a server took to start (its only process yet): load does not inflate it as it does wall time.
+            spawn_cpu = [_cpu_seconds(hub.processes(name)) for name in students]
             print(f"{len(students)} logged in at once in {login_wall:.1f} s; spawned at once in {spawn_wall:.1f} s",
                   flush=True)
 
@@ -149,6 +152,8 @@ def main() -> None:
                 firsts = list(pool.map(lambda item: run(item, FIRST_EPISODE), enumerate(students)))
             first_walls = [float(r["stdout"].split()[1]) for r in firsts]
             first_totals = [r["total_s"] for r in firsts]
+            # CPU of a kernel's start and first episode (the kernel's whole life so far).
+            first_cpu = [_cpu_seconds([p for p in hub.processes(name) if _is_kernel(p)]) for name in students]
             print("first episodes done", flush=True)
 
             human, per_core = [], None
@@ -196,12 +201,15 @@ def main() -> None:
           f"{load_spawn[0]:.1f}" + (f", after the human-pace episodes {load_human[0]:.1f}" if human else "")
           + f", after all at once {load_at_once[0]:.1f} ({os.cpu_count()} cores)")
     print(f"spawn: p50 {percentile(spawn_times, 0.5):.1f} s, p95 {percentile(spawn_times, 0.95):.1f} s, "
-          f"all ready {max(spawn_times):.1f} s (target {TARGETS['spawn_all_s']:.0f} s)")
+          f"all ready {max(spawn_times):.1f} s (target {TARGETS['spawn_all_s']:.0f} s); CPU per server start "
+          f"p50 {statistics.median(spawn_cpu):.2f} s, so {len(students)} need at least "
+          f"{sum(spawn_cpu) / os.cpu_count():.0f} s of all {os.cpu_count()} cores")
     print(f"first episode in a fresh kernel, imports included (target {TARGETS['first_episode_s']:.0f} s): "
           f"alone {first_alone:.2f} s in the kernel, {first_alone_total:.2f} s with its start; "
           f"{len(students)} at once p50 {percentile(first_walls, 0.5):.2f} s / "
           f"p95 {percentile(first_walls, 0.95):.2f} s in the kernel, p50 {percentile(first_totals, 0.5):.2f} s / "
-          f"p95 {percentile(first_totals, 0.95):.2f} s with its start")
+          f"p95 {percentile(first_totals, 0.95):.2f} s with its start; CPU per kernel start and first episode "
+          f"p50 {statistics.median(first_cpu):.2f} s")
     if human:
         print(f"feedback latency at human pace (an arrow every 3-8 s): p50 {percentile(human, 0.5):.0f} ms, "
               f"p95 {percentile(human, 0.95):.0f} ms (target {TARGETS['feedback_p95_ms']:.0f} ms)")
