@@ -427,10 +427,11 @@ def test_the_nbgrader_exchange_works_on_the_hub_and_keeps_submissions_apart(hub)
                  ("release_feedback", ASSIGNMENT)):
         as_instructor("nbgrader", *step)
     assert sorted(p.name for p in (course / "submitted").iterdir()) == sorted(submitters)
-    # Everything grading made is the instructor's, and nothing of it is open to others (umask 027).
+    # Everything grading made is the instructor's, inside a course folder closed to others (nbgrader
+    # sets some files' modes itself: the folder, not each file, keeps students out).
     made = [course / "gradebook.db", *(course / "autograded").rglob("*"), *(course / "feedback").rglob("*")]
     assert made and {p.stat().st_uid for p in made} == {teacher.pw_uid}
-    assert all(p.stat().st_mode & 0o007 == 0 for p in made)
+    assert hub.course.stat().st_mode & 0o007 == 0
     # A student's kernel cannot read the gradebook nor a classmate's graded notebook.
     graded = next((course / "autograded" / STUDENTS[8]).rglob("*.ipynb"))
     peek = hub.run_in_kernel(STUDENTS[9], "for path in ({!r}, {!r}):\n    try:\n        open(path).read()\n"
