@@ -5,21 +5,29 @@ Starts deploy/jupyterhub/jupyterhub_config.py as root on loopback with a roster 
 
 1. every student logs in through the login form at the same moment (first login: they set
    their password) and their servers are started at once: spawn time from the start request to
-   the hub reporting the server ready, p50 / p95 / all;
-2. in every student's fresh kernel, at once, one episode, imports included (what a student
-   waits for the first time they press run);
-3. at human pace: every student teaches three episodes, confirming an arrow every 3 to 8 s at
-   random, so episodes end at random times: feedback latency p50 / p95
+   the hub reporting the server ready, p50 / p95 / all, and the CPU time a server took to start
+   (which load does not inflate: thirty servers need at least their sum over the cores);
+2. first episode in a fresh kernel, imports included (what a student waits for the first time
+   they press run): one student alone, then every student at once. Two figures each: inside the
+   kernel (from the cell's first import to the reproduction sent) and from asking the server
+   for the kernel (kernel start included), and a kernel's CPU time for both;
+3. at human pace, in that same kernel: every student teaches three episodes, confirming an
+   arrow every 3 to 8 s at random, so episodes end at random times: feedback latency p50 / p95
    (``EpisodeResult.feedback_latency_s``: from the last confirmed arrow to the reproduction
    sent: learning, a 10 s rollout at 1 kHz, the animation message);
 4. all at once (the worst case): every student's three episodes with no pauses, together;
-5. memory per student (server plus one kernel after its episodes): resident (RSS, as the
-   issue measured it) and proportional (PSS: shared libraries split between the processes
-   using them, which is what the machine pays).
+5. memory per student, server plus their one kernel after its episodes: resident (RSS, as the
+   issue measured it), proportional (PSS: pages shared with other processes, such as a shared
+   library's code, divided between them: what the machine pays per student in a class) and
+   unique (USS: pages of that student's alone), the server and the kernel apart;
+6. students per core at that pace: the CPU time every student's server and kernel used during
+   step 3 (``psutil``'s user + system time, which a loaded machine does not inflate as it does
+   wall time), plus a student's share of the hub's and the proxy's, over the phase's wall time,
+   is the fraction of a core one student keeps busy; a core holds its inverse.
 
 Targets (issue 16, this 2-core machine, idle): thirty spawns within 30 s; first episode within
 3 s; feedback p95 <= 150 ms at human pace; <= 200 MiB per student. The load average is printed
-beside the figures: the machine may be shared.
+beside the figures: the machine may be shared. About five minutes for thirty students.
 
     python benchmarks/bench_hub.py --students 30        # as root
 
@@ -36,6 +44,8 @@ import tempfile
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+
+import psutil
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -69,10 +79,30 @@ def paced(code: str, number: int) -> str:
                                                            "        episode.demonstrate("))
 
 
+def _cpu_seconds(processes) -> float:
+    total = 0.0
+    for process in processes:
+        try:
+            times = process.cpu_times()
+            total += times.user + times.system
+        except (psutil.NoSuchProcess, psutil.AccessDenied, psutil.ZombieProcess):
+            continue
+    return total
+
+
+def _hub_processes(hub) -> list:
+    hub_process = psutil.Process(hub.process.pid)
+    return [hub_process, *hub_process.children(recursive=True)]
+
+
+def _is_kernel(process) -> bool:
+    return any("ipykernel" in part for part in process.cmdline())
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--students", type=int, default=30)
-    parser.add_argument("--skip-human-pace", action="store_true", help="leave out step 3 (about a minute)")
+    parser.add_argument("--skip-human-pace", action="store_true", help="leave out steps 3 and 6 (about 90 s)")
     args = parser.parse_args()
     if args.students < 1:
         parser.error(f"--students: expected at least 1, got {args.students}")
@@ -81,13 +111,15 @@ def main() -> None:
     sys.path[:0] = [str(ROOT / "tests"), str(ROOT)]
     from tests.course.hub_support import EPISODE_CODE, ClassHub, warm_numba_template
 
+    bench_started = time.perf_counter()
     students = [f"mtt-bench-{n:02d}" for n in range(args.students)]
     load_before = os.getloadavg()
+    kernels = {}
     with tempfile.TemporaryDirectory(prefix="mtt-bench-") as folder:
         template = warm_numba_template(Path(folder) / "numba-template")
         started = time.perf_counter()
         hub = ClassHub(students, numba_template=template)
-        print(f"hub up in {time.perf_counter() - started:.1f} s")
+        print(f"hub up in {time.perf_counter() - started:.1f} s", flush=True)
         try:
             started = time.perf_counter()
             with ThreadPoolExecutor(len(students)) as pool:
@@ -97,59 +129,102 @@ def main() -> None:
             spawn = hub.spawn_class(students)
             spawn_wall = time.perf_counter() - started
             load_spawn = os.getloadavg()
-            print(f"{len(students)} logged in at once in {login_wall:.1f} s; spawned at once in {spawn_wall:.1f} s")
+            # CPU a server took to start (its only process yet): load does not inflate it as it does wall time.
+            spawn_cpu = [_cpu_seconds(hub.processes(name)) for name in students]
+            print(f"{len(students)} logged in at once in {login_wall:.1f} s; spawned at once in {spawn_wall:.1f} s",
+                  flush=True)
 
-            def run(item, code, keep=False):
+            def run(item, code):
                 number, name = item
-                result = hub.run_in_kernel(name, code.format(number=number % 12), timeout=900)
+                result = hub.run_in_kernel(name, code.format(number=number % 12), timeout=900,
+                                           kernel_id=kernels.get(name))
                 if result["error"] or result["died"]:
                     raise SystemExit(f"{name}: {result}")
-                if not keep:  # one kernel per student at a time, as the memory figure means
-                    hub.server_api(name, "DELETE", f"/api/kernels/{result['kernel_id']}")
+                kernels[name] = result["kernel_id"]  # each student goes on in their one kernel
                 return result
 
+            alone = hub.run_in_kernel(students[0], FIRST_EPISODE.format(number=0), timeout=900)
+            if alone["error"] or alone["died"]:
+                raise SystemExit(f"{students[0]} alone: {alone}")
+            hub.server_api(students[0], "DELETE", f"/api/kernels/{alone['kernel_id']}")
+            first_alone, first_alone_total = float(alone["stdout"].split()[1]), alone["total_s"]
             with ThreadPoolExecutor(len(students)) as pool:
                 firsts = list(pool.map(lambda item: run(item, FIRST_EPISODE), enumerate(students)))
             first_walls = [float(r["stdout"].split()[1]) for r in firsts]
-            single = run((0, students[0]), FIRST_EPISODE)  # a fresh kernel of a student alone
-            first_alone = float(single["stdout"].split()[1])
+            first_totals = [r["total_s"] for r in firsts]
+            # CPU of a kernel's start and first episode (the kernel's whole life so far).
+            first_cpu = [_cpu_seconds([p for p in hub.processes(name) if _is_kernel(p)]) for name in students]
+            print("first episodes done", flush=True)
 
-            human = []
+            human, per_core = [], None
             if not args.skip_human_pace:
+                members = {name: hub.processes(name) for name in students}
+                hub_processes = _hub_processes(hub)
+                cpu_before = {name: _cpu_seconds(processes) for name, processes in members.items()}
+                hub_cpu_before = _cpu_seconds(hub_processes)
+                started = time.perf_counter()
                 with ThreadPoolExecutor(len(students)) as pool:
                     list(pool.map(lambda item: run(item, paced(EPISODE_CODE, item[0])), enumerate(students)))
+                human_wall = time.perf_counter() - started
+                student_cpu = [_cpu_seconds(members[name]) - cpu_before[name] for name in students]
+                hub_cpu = _cpu_seconds(hub_processes) - hub_cpu_before
                 human = [latency * 1000 for name in students
                          for latency in hub.read_json(name, "episode-result.json")["latencies_s"]]
                 load_human = os.getloadavg()
+                # One student keeps this fraction of a core busy at human pace; a core holds its inverse.
+                core_share = (statistics.mean(student_cpu) + hub_cpu / len(students)) / human_wall
+                per_core = 1 / core_share
+                print("human pace done", flush=True)
             with ThreadPoolExecutor(len(students)) as pool:
-                list(pool.map(lambda item: run(item, EPISODE_CODE, keep=True), enumerate(students)))
+                list(pool.map(lambda item: run(item, EPISODE_CODE), enumerate(students)))
             at_once = [latency * 1000 for name in students
                        for latency in hub.read_json(name, "episode-result.json")["latencies_s"]]
             load_at_once = os.getloadavg()
-            rss, pss = [], []
+            memory = {"server": {"rss": [], "pss": [], "uss": []}, "kernel": {"rss": [], "pss": [], "uss": []}}
+            totals = {"rss": [], "pss": [], "uss": []}
             for name in students:
                 processes = hub.processes(name)
-                rss.append(sum(p.memory_info().rss for p in processes) / 2**20)
-                pss.append(sum(p.memory_full_info().pss for p in processes) / 2**20)
+                kinds = [p for p in processes if _is_kernel(p)], [p for p in processes if not _is_kernel(p)]
+                if len(kinds[0]) != 1 or len(kinds[1]) != 1:
+                    raise SystemExit(f"{name}: expected one server and one kernel, found {processes}")
+                for kind, (process,) in zip(("kernel", "server"), kinds):
+                    info = process.memory_full_info()
+                    for measure in ("rss", "pss", "uss"):
+                        memory[kind][measure].append(getattr(info, measure) / 2**20)
+                for measure in totals:
+                    totals[measure].append(memory["server"][measure][-1] + memory["kernel"][measure][-1])
         finally:
             hub.stop()
             hub.kept_log.unlink()
     spawn_times = list(spawn.values())
-    print(f"load average (1 min) before {load_before[0]:.1f}, after spawning {load_spawn[0]:.1f}"
-          + (f", after the human-pace episodes {load_human[0]:.1f}" if human else "")
-          + f", after all at once {load_at_once[0]:.1f}")
+    print(f"\n{len(students)} students; load average (1 min) before {load_before[0]:.1f}, after spawning "
+          f"{load_spawn[0]:.1f}" + (f", after the human-pace episodes {load_human[0]:.1f}" if human else "")
+          + f", after all at once {load_at_once[0]:.1f} ({os.cpu_count()} cores)")
     print(f"spawn: p50 {percentile(spawn_times, 0.5):.1f} s, p95 {percentile(spawn_times, 0.95):.1f} s, "
-          f"all ready {max(spawn_times):.1f} s (target {TARGETS['spawn_all_s']:.0f} s)")
-    print(f"first episode in a fresh kernel, imports included: alone {first_alone:.2f} s; {len(students)} at once "
-          f"p50 {percentile(first_walls, 0.5):.2f} s, p95 {percentile(first_walls, 0.95):.2f} s "
-          f"(target {TARGETS['first_episode_s']:.0f} s)")
+          f"all ready {max(spawn_times):.1f} s (target {TARGETS['spawn_all_s']:.0f} s); CPU per server start "
+          f"p50 {statistics.median(spawn_cpu):.2f} s, so {len(students)} need at least "
+          f"{sum(spawn_cpu) / os.cpu_count():.0f} s of all {os.cpu_count()} cores")
+    print(f"first episode in a fresh kernel, imports included (target {TARGETS['first_episode_s']:.0f} s): "
+          f"alone {first_alone:.2f} s in the kernel, {first_alone_total:.2f} s with its start; "
+          f"{len(students)} at once p50 {percentile(first_walls, 0.5):.2f} s / "
+          f"p95 {percentile(first_walls, 0.95):.2f} s in the kernel, p50 {percentile(first_totals, 0.5):.2f} s / "
+          f"p95 {percentile(first_totals, 0.95):.2f} s with its start; CPU per kernel start and first episode "
+          f"p50 {statistics.median(first_cpu):.2f} s")
     if human:
         print(f"feedback latency at human pace (an arrow every 3-8 s): p50 {percentile(human, 0.5):.0f} ms, "
               f"p95 {percentile(human, 0.95):.0f} ms (target {TARGETS['feedback_p95_ms']:.0f} ms)")
     print(f"feedback latency all at once ({len(students)} students' episodes together): "
           f"p50 {percentile(at_once, 0.5):.0f} ms, p95 {percentile(at_once, 0.95):.0f} ms")
-    print(f"memory per student (server + one kernel): RSS p50 {statistics.median(rss):.0f} MiB "
-          f"(max {max(rss):.0f}), PSS p50 {statistics.median(pss):.0f} MiB (target {TARGETS['memory_mib']:.0f} MiB)")
+    print(f"memory per student, server + one kernel (target {TARGETS['memory_mib']:.0f} MiB), p50: "
+          + "; ".join(f"{measure.upper()} {statistics.median(totals[measure]):.0f} MiB (server "
+                      f"{statistics.median(memory['server'][measure]):.0f} + kernel "
+                      f"{statistics.median(memory['kernel'][measure]):.0f})" for measure in ("rss", "pss", "uss")))
+    if human:
+        print(f"CPU at human pace: {statistics.mean(student_cpu):.1f} s per student (server + kernel) and "
+              f"{hub_cpu:.1f} s for the hub and proxy over {human_wall:.0f} s: students per core at that pace "
+              f"{per_core:.0f} (= {human_wall:.0f} s / ({statistics.mean(student_cpu):.2f} s + "
+              f"{hub_cpu:.2f} s / {len(students)}))")
+    print(f"benchmark took {time.perf_counter() - bench_started:.0f} s")
 
 
 if __name__ == "__main__":

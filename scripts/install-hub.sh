@@ -8,7 +8,8 @@
 #    down to the interpreter, and a pyenv Python under /root (mode 0700) is out of their reach.
 #    .venv/students is a venv of the system's python3 of the same minor version (same ABI), whose
 #    site-packages, share/ and etc/ are .venv's own (symlinks): one installation, nothing copied;
-#    the hub finds it through MT_HUB_STUDENT_PYTHON (tests/course/hub_support.py sets it).
+#    the hub finds it through MT_HUB_STUDENT_PYTHON (tests/course/hub_support.py sets it). Its bin/
+#    holds .venv's commands (nbgrader, jupyter, alembic) run by that Python, for instructors.
 #
 # Prints the folder to put first on PATH (for the proxy) as its last line. Sourced by
 # run-tests.sh, so the hub tests find the proxy.
@@ -48,6 +49,19 @@ students_python() {
             [ -e "$VENV/$shared" ] && ln -sfn "$VENV/$shared" "$students/$shared"
         done
     fi
+    # .venv's commands (nbgrader, alembic, jupyter, ...) for everyone on the hub, instructors
+    # included: the same scripts with the students' Python as interpreter (an instructor grades
+    # with nbgrader as their own user, and nbgrader runs alembic by name).
+    local script first
+    for script in "$VENV"/bin/*; do
+        [ -f "$script" ] && [ ! -L "$script" ] || continue
+        first="$(head -c 200 "$script" | head -n 1)"
+        if [ "$first" = "#!$VENV/bin/python" ] || [ "$first" = "#!$VENV/bin/python3" ]; then
+            { echo "#!$students/bin/python"; tail -n +2 "$script"; } > "$students/bin/.$(basename "$script").new"
+            chmod 755 "$students/bin/.$(basename "$script").new"
+            mv -f "$students/bin/.$(basename "$script").new" "$students/bin/$(basename "$script")"
+        fi
+    done
     echo "students' Python: $students/bin/python ($("$students/bin/python" --version 2>&1))" >&2
 }
 

@@ -217,7 +217,10 @@ c.Spawner.environment = {
     "PYTHONPATH": _python_path,
     # Students' servers find no node: JupyterLab's import asks yarn (a node process, ~2 s) for the
     # npm registry at every start when node is on PATH, for building extensions no student builds.
-    "PATH": lambda spawner: os.environ.get("PATH", "") if spawner.user.admin else str(STUDENT_PYTHON.parent),
+    # Instructors' terminals find nbgrader and jupyter run by the Python they can run first
+    # (scripts/install-hub.sh puts them beside it).
+    "PATH": lambda spawner: (os.pathsep.join([str(STUDENT_PYTHON.parent), os.environ.get("PATH", "")])
+                             if spawner.user.admin else str(STUDENT_PYTHON.parent)),
     **{name: os.environ[name] for name in _passed_on if os.environ.get(name)},
 }
 

@@ -10,6 +10,7 @@ their cgroups. Nothing here retries: a lost kernel is a failure.
 
 from __future__ import annotations
 
+import grp
 import json
 import os
 import pwd
@@ -172,6 +173,39 @@ class ClassHub:
         if result.returncode != 0:
             raise RuntimeError(f"set-password {login}: {result.stderr}")
 
+    # -- a member's own commands, as their system user -------------------------------------------------
+    def member_env(self, login: str, **extra: str | None) -> dict:
+        """The environment ``login``'s own shell on the hub has (their server's: home, the commands
+        they can run first on PATH, their numba cache, the class's folders), plus ``extra`` (a
+        value None leaves that variable out)."""
+        home = self.homes / login
+        students_bin = Path(self.env["MT_HUB_STUDENT_PYTHON"]).parent
+        env = {key: value for key, value in self.env.items() if not key.startswith("MT_HUB_")}
+        env.update({"HOME": str(home), "USER": login, "LOGNAME": login,
+                    "PATH": f"{students_bin}{os.pathsep}{self.env['PATH']}",
+                    "NUMBA_CACHE_DIR": str(home / ".cache" / "numba"),
+                    "MPLCONFIGDIR": str(home / ".cache" / "matplotlib"),
+                    "PYTHONDONTWRITEBYTECODE": "1", "JUPYTER_RUNTIME_DIR": str(self.runtime / login)})
+        for key, value in extra.items():  # None leaves a variable out
+            if value is None:
+                env.pop(key, None)
+            else:
+                env[key] = value
+        return env
+
+    def run_as(self, login: str, argv, cwd: Path, timeout: float = 600,
+               **env: str | None) -> subprocess.CompletedProcess:
+        """Runs ``argv`` as ``login``'s system user (their groups, umask 027, their environment), as
+        they would in a terminal of their own server; returns the finished process (output as text).
+        ``argv[0]`` is looked up on their PATH (``scripts/install-hub.sh`` puts the installation's
+        commands beside the students' Python)."""
+        user = pwd.getpwnam(login)
+        member_env = self.member_env(login, **env)
+        command = shutil.which(argv[0], path=member_env["PATH"]) or argv[0]
+        groups = [group.gr_gid for group in grp.getgrall() if login in group.gr_mem]
+        return subprocess.run([command, *argv[1:]], cwd=cwd, env=member_env, user=user.pw_uid, group=user.pw_gid,
+                              extra_groups=groups, umask=0o027, capture_output=True, text=True, timeout=timeout)
+
     # -- logging in as a person does ------------------------------------------------------------------
     def login(self, name: str, password: str) -> requests.Session:
         """Logs in through the hub's login form; returns the browser-like session with its cookie.
@@ -246,15 +280,20 @@ class ClassHub:
             raise RuntimeError(f"{method} /user/{name}{path}: {response.status_code} {response.text[:800]}")
         return response.json() if response.content else None
 
-    def run_in_kernel(self, name: str, code: str, timeout: float = 180) -> dict:
-        """Starts a kernel in ``name``'s server, runs ``code``, and returns its output and timings.
+    def run_in_kernel(self, name: str, code: str, timeout: float = 180, kernel_id: str | None = None) -> dict:
+        """Runs ``code`` in a new kernel of ``name``'s server (or in their kernel ``kernel_id``) and
+        returns its output and timings.
 
         Returns:
             {"stdout": text printed, "error": the error's name and value or None,
              "died": True when the kernel died (was restarted) before answering,
-             "kernel_id": ..., "seconds": wall time of the execution}
+             "kernel_id": ..., "seconds": wall time of the execution,
+             "total_s": from asking for the kernel (when new) to the execution's end}
         """
-        kernel = self.server_api(name, "POST", "/api/kernels", json={"name": "python3"})
+        requested = time.perf_counter()
+        if kernel_id is None:
+            kernel_id = self.server_api(name, "POST", "/api/kernels", json={"name": "python3"})["id"]
+        kernel = {"id": kernel_id}
         ws_url = self.user_url(name, f"/api/kernels/{kernel['id']}/channels").replace("http://", "ws://")
         connection = websocket.create_connection(ws_url, header=[f"Authorization: token {self.token}"],
                                                  timeout=timeout)
@@ -289,8 +328,9 @@ class ClassHub:
                     idle = True
         finally:
             connection.close()
+        ended = time.perf_counter()
         return {"stdout": "".join(stdout), "error": error, "died": died, "kernel_id": kernel["id"],
-                "seconds": time.perf_counter() - started}
+                "seconds": ended - started, "total_s": ended - requested}
 
     def read_json(self, name: str, path: str) -> dict:
         """A JSON file in ``name``'s home, read through their server's contents API."""

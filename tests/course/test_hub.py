@@ -38,7 +38,7 @@ from browser_support import REPO, artifact_path, local_page
 from mt_widgets.classroom import read_class, summarise
 from tests.browser.helpers import drag, ee_pixel, reference_episode
 
-from .course_support import copy_course, course_env, nbgrader, source_notebook
+from .course_support import source_notebook
 from .hub_support import (
     EPISODE_CODE,
     TEST_INSTRUCTORS,
@@ -379,11 +379,26 @@ def test_a_class_of_thirty_logs_in_at_once_and_every_episode_completes(hub, brow
 
 @pytest.mark.timeout(600)
 def test_the_nbgrader_exchange_works_on_the_hub_and_keeps_submissions_apart(hub):
-    course = copy_course(hub.course / "mt-widgets")
-    env = course_env(MT_WIDGETS_EXCHANGE=str(hub.exchange))
+    # The instructor works as a real one does: logged in to the hub (their server gives them their
+    # numba cache, as everyone's), with nbgrader run as their own system user, never root, in a
+    # course folder only instructors reach. Grading records no progress (no class folder).
+    hub.ensure_running(INSTRUCTOR)
+    teacher = pwd.getpwnam(INSTRUCTOR)
+    course = hub.course / "mt-widgets"
+
+    def as_instructor(*argv):
+        result = hub.run_as(INSTRUCTOR, argv, cwd=course if course.exists() else hub.course,
+                            MT_WIDGETS_CLASS_FOLDER=None)
+        assert result.returncode == 0, f"{argv}: {result.stdout}{result.stderr}"
+        return result
+
+    as_instructor("python", "-c", "import shutil; shutil.copytree({!r}, {!r}, ignore=shutil.ignore_patterns("
+                  "'gradebook.db', 'release', 'submitted', 'autograded', 'feedback', '.ipynb_checkpoints'))"
+                  .format(str(REPO / "course"), str(course)))
     for step in (("generate_assignment", ASSIGNMENT, "--force"), ("release_assignment", ASSIGNMENT, "--force")):
-        result = nbgrader(course, *step, env=env)
-        assert result.returncode == 0, result.stdout + result.stderr
+        as_instructor("nbgrader", *step)
+    outbound = hub.exchange / "mt-widgets" / "outbound" / ASSIGNMENT
+    assert outbound.stat().st_uid == teacher.pw_uid  # released by the instructor's own user
     submitters = {STUDENTS[8]: "solution", STUDENTS[9]: "untouched"}
     for name in submitters:
         hub.ensure_running(name)
@@ -410,9 +425,20 @@ def test_the_nbgrader_exchange_works_on_the_hub_and_keeps_submissions_apart(hub)
     assert {p.stat().st_uid for p in inbound.iterdir()} == {pwd.getpwnam(n).pw_uid for n in submitters}
     for step in (("collect", ASSIGNMENT), ("autograde", ASSIGNMENT, "--create"), ("generate_feedback", ASSIGNMENT),
                  ("release_feedback", ASSIGNMENT)):
-        result = nbgrader(course, *step, env=env)
-        assert result.returncode == 0, result.stdout + result.stderr
+        as_instructor("nbgrader", *step)
     assert sorted(p.name for p in (course / "submitted").iterdir()) == sorted(submitters)
+    # Everything grading made is the instructor's, inside a course folder closed to others (nbgrader
+    # sets some files' modes itself: the folder, not each file, keeps students out).
+    made = [course / "gradebook.db", *(course / "autograded").rglob("*"), *(course / "feedback").rglob("*")]
+    assert made and {p.stat().st_uid for p in made} == {teacher.pw_uid}
+    assert hub.course.stat().st_mode & 0o007 == 0
+    # A student's kernel cannot read the gradebook nor a classmate's graded notebook.
+    graded = next((course / "autograded" / STUDENTS[8]).rglob("*.ipynb"))
+    peek = hub.run_in_kernel(STUDENTS[9], "for path in ({!r}, {!r}):\n    try:\n        open(path).read()\n"
+                                          "        print('read')\n    except PermissionError:\n"
+                                          "        print('denied')\n".format(str(course / "gradebook.db"),
+                                                                            str(graded)))
+    assert peek["stdout"].split() == ["denied", "denied"], peek
     for name, kind in submitters.items():
         fetched = hub.server_api(name, "POST", "/assignments/fetch_feedback", data=ids)
         assert fetched["success"], fetched

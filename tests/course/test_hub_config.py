@@ -185,7 +185,12 @@ def test_students_servers_use_ipc_kernels_and_leave_out_what_lessons_do_not_use(
     assert student.KernelManager.transport == "ipc"
     assert student.ServerApp.terminals_enabled is False
     off = {name for name, enabled in student.ServerApp.jpserver_extensions.items() if not enabled}
-    assert off == {"jupyter_lsp", "jupyter_server_terminals", "nbgrader.server_extensions.formgrader"}
+    assert off == {"jupyter_lsp", "jupyter_server_terminals", "nbgrader.server_extensions.formgrader",
+                   "nbgrader.server_extensions.assignment_list", "nbgrader.server_extensions.validate_assignment",
+                   "nbgrader.server_extensions.course_list"}
+    # nbgrader's student side instead comes from student-site/, loaded at first use.
+    assert student.ServerApp.jpserver_extensions["mt_hub_nbgrader"] is True
+    assert (HUB / "student-site" / "mt_hub_nbgrader.py").is_file()
     instructor = _server_config("instructor")
     assert instructor.KernelManager.transport == "ipc"
     assert "jpserver_extensions" not in instructor.ServerApp
@@ -219,6 +224,7 @@ def test_the_zero_to_jupyterhub_values_carry_the_same_authenticator_roster_isola
     assert values["cull"]["enabled"] is True and values["cull"]["timeout"] == class_hub.DEFAULT_CULL_IDLE_S
     dockerfile = (HUB / "z2jh" / "Dockerfile").read_text()
     assert f"COPY deploy/jupyterhub/student-config {single['extraEnv']['JUPYTER_CONFIG_PATH']}" in dockerfile
+    assert f"COPY deploy/jupyterhub/student-site {single['extraEnv']['PYTHONPATH']}" in dockerfile
     assert "roster_authenticator.py" in dockerfile and "AS hub" in dockerfile and "AS singleuser" in dockerfile
 
 

@@ -7,7 +7,8 @@
   use``, then a lost kernel). Files cannot collide: each kernel's names come from its own id.
 - umask 027: nothing a member writes is readable by classmates.
 - Students get what a lesson uses: JupyterLab, Voila's pages, nbgrader's assignment list and
-  validation; not the language server, terminals (their shell is nologin anyway) or
+  validation (loaded at first use: ``student-site/mt_hub_nbgrader.py``, on the servers'
+  PYTHONPATH); not the language server, terminals (their shell is nologin anyway) or
   nbgrader's formgrader, which only instructors (``MT_HUB_ROLE=instructor``) load. Each
   extension left out is start-up time and memory a student does not pay.
 """
@@ -26,4 +27,10 @@ if os.environ.get("MT_HUB_ROLE") != "instructor":
         "jupyter_lsp": False,
         "jupyter_server_terminals": False,
         "nbgrader.server_extensions.formgrader": False,
+        # nbgrader's student side, imported at its first use rather than at every start (35 MiB
+        # a server): the same handlers, routed by student-site/mt_hub_nbgrader.py.
+        "nbgrader.server_extensions.assignment_list": False,
+        "nbgrader.server_extensions.validate_assignment": False,
+        "nbgrader.server_extensions.course_list": False,
+        "mt_hub_nbgrader": True,
     }
