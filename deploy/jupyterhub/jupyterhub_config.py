@@ -202,7 +202,7 @@ c.Spawner.start_timeout = 300
 c.Spawner.http_timeout = 300
 
 # Passed on from the hub's environment: the class folder, the exchange, and (tests) the checkout.
-_passed_on = ("MT_WIDGETS_CLASS_FOLDER", "MT_WIDGETS_EXCHANGE", "MT_WIDGETS_FAST")
+_passed_on = ("MT_WIDGETS_CLASS_FOLDER", "MT_WIDGETS_EXCHANGE")
 # student-site/ first: it leaves out a package that costs every server seconds at start (its docstring).
 _python_path = os.pathsep.join([str(HERE / "student-site"), *filter(None, [os.environ.get("PYTHONPATH")])])
 c.Spawner.environment = {
