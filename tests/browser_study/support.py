@@ -87,7 +87,8 @@ def wait_for_log(server, participant, predicate, timeout=15.0):
         if predicate(events):
             return events
         time.sleep(0.05)
-    raise AssertionError(f"the log never satisfied the condition; last event: {log_events(server, participant)[-1:]}")
+    raise AssertionError(f"{participant}: the log never satisfied the condition; last event: "
+                         f"{log_events(server, participant)[-1:]}")
 
 
 def drag(page, ee_pixel, offset):
@@ -108,23 +109,48 @@ def drag(page, ee_pixel, offset):
     page.mouse.up()
 
 
+#: How long the kernel may take to answer a drag's release (Confirm enabled). Measured on a
+#: 2-core machine: 0.4 s at the slowest of 137 drags at load average 3, 0.9 s of 130 at load
+#: average 45; every press reached the kernel on the current state's hand and started the drag.
+#: A kernel shared with other pages can be busy for longer: wait for the answer, never drag again.
+CONFIRM_WITHIN_MS = 30_000
+
+
+def drag_and_wait(page, ee_pixel, offset):
+    """Drags once from the hand and waits until the kernel took the arrow (Confirm enabled).
+
+    Never drags again: a person's first drag after the state is drawn must count (each drag is
+    one pending arrow; a second would replace it, hiding a canvas that ignored the first)."""
+    drag(page, ee_pixel, offset)
+    confirm = button(page, "Confirm")
+    try:
+        page.wait_for_function("b => !b.disabled", arg=confirm.element_handle(), timeout=CONFIRM_WITHIN_MS)
+    except Exception:
+        page.screenshot(path=artifact_path("study-page-drag-not-taken", f"{round(ee_pixel[0])}-{round(ee_pixel[1])}"))
+        raise AssertionError(f"a drag from the hand at canvas pixel {tuple(round(v) for v in ee_pixel)} was not "
+                             f"taken within {CONFIRM_WITHIN_MS} ms; the page says: "
+                             f"{page.inner_text('body')[:1500]}") from None
+    return confirm
+
+
 YELLOW = (240, 228, 66)  # the end-effector marker (Okabe-Ito yellow)
 
 
-def wait_for_marker(page, ee_pixel, timeout=15_000):
-    """Waits until the page holds one episode (two canvases: teaching, reproduction) and the
-    teaching canvas shows the end-effector marker at ``ee_pixel``: drawn, not just present."""
+def wait_for_marker(page, ee_pixel, timeout=15_000, canvases=2):
+    """Waits until the page holds ``canvases`` canvases (an episode: teaching, reproduction; a
+    practice round: teaching only) and the teaching canvas shows the end-effector marker at
+    ``ee_pixel``: drawn, not just present."""
     page.wait_for_function(
-        """([x, y, rgb]) => {
+        """([x, y, rgb, n]) => {
             const all = document.querySelectorAll('canvas');
-            if (all.length !== 2) return false;
+            if (all.length !== n) return false;
             const d = all[0].getContext('2d').getImageData(Math.round(x) - 2, Math.round(y) - 2, 5, 5).data;
             for (let i = 0; i < d.length; i += 4) {
                 if (Math.abs(d[i] - rgb[0]) < 40 && Math.abs(d[i + 1] - rgb[1]) < 40
                     && Math.abs(d[i + 2] - rgb[2]) < 40 && d[i + 3] > 200) return true;
             }
             return false;
-        }""", arg=[float(ee_pixel[0]), float(ee_pixel[1]), list(YELLOW)], timeout=timeout)
+        }""", arg=[float(ee_pixel[0]), float(ee_pixel[1]), list(YELLOW), int(canvases)], timeout=timeout)
 
 
 def current_episode(server, participant):
@@ -145,15 +171,17 @@ def demonstrate(page, server, participant, phase, index, offset):
     except Exception:
         page.screenshot(path=artifact_path("study-page-no-marker", f"{episode['phase']}-{index}"))
         raise
-    confirm = button(page, "Confirm")
-    for _ in range(3):  # the canvas takes the drag once the state is drawn: retry a missed one
-        drag(page, ee, offset)
-        try:
-            page.wait_for_function("b => !b.disabled", arg=confirm.element_handle(), timeout=3_000)
-            break
-        except Exception:
-            continue
+    confirm = drag_and_wait(page, ee, offset)
     confirm.click()
     key = (episode["phase"], episode["episode"], index)
-    return wait_for_log(server, participant, lambda events: any(
+    events = wait_for_log(server, participant, lambda events: any(
         (e["phase"], e["episode"], e["index"]) == key for e in events if e["type"] == "demonstration"))
+    assert_one_drag([e for e in events if e["type"] == "demonstration"
+                     and (e["phase"], e["episode"], e["index"]) == key][-1])
+    return events
+
+
+def assert_one_drag(demonstration):
+    """The logged demonstration was drawn by the one drag made: one press taken, by the pointer."""
+    given = demonstration["input"]
+    assert given["method"] == "pointer" and given["redraws"] == 1, given
