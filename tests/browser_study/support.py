@@ -10,46 +10,29 @@ from browser_support import artifact_path
 from mt_widgets import SKILLS
 from mt_widgets.study import read_events
 from mt_widgets.widgets import ArmView
+from protocols import BROWSER_TEXTS, phase, protocol_toml
 
 #: The experimenter's code the test servers are given ($MT_WIDGETS_EXPERIMENTER_CODE).
 EXPERIMENTER_CODE = "lab-code-4711"
 
 PAGE = "/voila/render/study_sim.ipynb"
 
+
+def two_part_protocol(second: str = "P3", guided: bool = True, seed: int = 5, practice_s: float = 10,
+                      practice_text: str = "Practice freely.", reproduction_s: float = 2.0) -> str:
+    """A short study named "browser" (``open_and_fill`` waits for that name): skill 1 taught in
+    two parts of one 3-state episode each, the second (``second``) guided for the target group
+    when ``guided``."""
+    return protocol_toml("browser", [
+        phase("P1", "sim-point", demonstrations=3, instructions="First part: teach skill 1."),
+        phase(second, "sim-point", demonstrations=3, **({"guidance": ["target"]} if guided else {}),
+              instructions="Second part: teach skill 1 again.")],
+        seed=seed, practice_s=practice_s, practice_text=practice_text, texts=BROWSER_TEXTS,
+        top={"reproduction_duration_s": reproduction_s})
+
+
 #: The short study the study-page tests take part in (test_study_page.py, test_touch_drawing.py).
-PROTOCOL = """
-format = 1
-name = "browser"
-lambda = 0.01
-seed = 5
-reproduction_duration_s = 2.0
-[assignment]
-block_size = 2
-seed = 1
-[texts]
-welcome = "Welcome to the test study."
-consent = "Consent text."
-instructions = "How to teach."
-reproduction = "This is what the robot learnt."
-thank_you = "Thank you, all done."
-[practice]
-skill = "sim-point"
-duration_s = 10
-text = "Practice freely."
-[[phases]]
-id = "P1"
-skill = "sim-point"
-episodes = 1
-demonstrations = 3
-instructions = "First part: teach skill 1."
-[[phases]]
-id = "P3"
-skill = "sim-point"
-episodes = 1
-demonstrations = 3
-guidance = ["target"]
-instructions = "Second part: teach skill 1 again."
-"""
+PROTOCOL = two_part_protocol()
 
 
 def button(page, name):
