@@ -93,9 +93,10 @@ def drag(page, ee_pixel, offset):
 
 
 #: How long the kernel may take to answer a drag's release (Confirm enabled). Measured on a
-#: 2-core machine: 0.4 s at the slowest of 137 drags at load average 3, 0.9 s of 130 at load
-#: average 45; every press reached the kernel on the current state's hand and started the drag.
-#: A kernel shared with other pages can be busy for longer: wait for the answer, never drag again.
+#: 2-core machine over every drag of these tests: at most 0.4 s of 136 at load average 3, 0.9 s
+#: of 136 at load average 20-45 (three busy loops beside the tests); each press reached the
+#: kernel on the current state's hand and started the drag. A kernel shared with other pages can
+#: be busy for longer: wait for the answer, never drag again.
 CONFIRM_WITHIN_MS = 30_000
 
 
