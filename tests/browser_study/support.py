@@ -105,8 +105,11 @@ def drag_and_wait(page, ee_pixel, offset):
 
     Never drags again: a person's first drag after the state is drawn must count (each drag is
     one pending arrow; a second would replace it, hiding a canvas that ignored the first)."""
-    drag(page, ee_pixel, offset)
     confirm = button(page, "Confirm")
+    # A new state's marker is drawn before its disabled Confirm reaches the page (the kernel sends
+    # the drawing first): wait for that, or the previous arrow's Confirm would be taken as this one's.
+    page.wait_for_function("b => b.disabled", arg=confirm.element_handle(), timeout=CONFIRM_WITHIN_MS)
+    drag(page, ee_pixel, offset)
     try:
         page.wait_for_function("b => !b.disabled", arg=confirm.element_handle(), timeout=CONFIRM_WITHIN_MS)
     except Exception:
