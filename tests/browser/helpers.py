@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -161,6 +162,22 @@ def reference(skill="sim-point", guidance=False, seed=0):
     if not guidance:
         page.guidance_switch.value = False
     return page.episode
+
+
+@contextmanager
+def demo_at(browser, voila_server, width: int, height: int):
+    """``(page, episode)``: the demo page in a fresh local page of ``width`` x ``height``, its
+    teaching canvas drawn (the reference episode's hand is yellow); the page is closed after."""
+    from browser_support import local_page
+    context, page = local_page(browser, width, height)
+    try:
+        page.goto(voila_server.url("/voila/render/demo.ipynb"), timeout=60_000)
+        page.wait_for_selector("canvas", timeout=60_000)
+        episode = reference(guidance=True)
+        wait_for_color(page, 0, *ee_pixel(episode), OKABE["yellow"])
+        yield page, episode
+    finally:
+        context.close()
 
 
 def teach_by_numbers(page, episode, guidance: bool) -> None:

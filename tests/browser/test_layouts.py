@@ -5,9 +5,7 @@ Screenshots of each size (teaching and finished) go to test-artifacts/ for a per
 
 import pytest
 
-from browser_support import local_page
-
-from .helpers import OKABE, ee_pixel, reference, teach_by_numbers, wait_for_color
+from .helpers import OKABE, demo_at, teach_by_numbers, wait_for_color
 
 pytestmark = pytest.mark.browser
 
@@ -23,12 +21,7 @@ CUT = """() => Array.from(document.querySelectorAll('button, .widget-label, .wid
 
 @pytest.mark.parametrize("width, height", SCREENS)
 def test_the_canvas_uses_the_screen_and_no_label_is_cut(browser, voila_server, artifacts, width, height):
-    context, page = local_page(browser, width, height)
-    try:
-        page.goto(voila_server.url("/voila/render/demo.ipynb"), timeout=60_000)
-        page.wait_for_selector("canvas", timeout=60_000)
-        episode = reference(guidance=True)
-        wait_for_color(page, 0, *ee_pixel(episode), OKABE["yellow"])
+    with demo_at(browser, voila_server, width, height) as (page, episode):
         box = page.locator("canvas").nth(0).bounding_box()
         if width < 600:
             assert box["width"] >= 0.9 * width, box                  # a phone: the whole width
@@ -49,5 +42,3 @@ def test_the_canvas_uses_the_screen_and_no_label_is_cut(browser, voila_server, a
             words = page.get_by_text("After ").first.bounding_box()
             assert words["y"] + words["height"] <= height, words
         page.screenshot(path=artifacts("finished"))
-    finally:
-        context.close()

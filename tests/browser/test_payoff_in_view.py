@@ -3,9 +3,7 @@ are on screen where the visitor is looking, on a large screen, a laptop and a ta
 
 import pytest
 
-from browser_support import local_page
-
-from .helpers import OKABE, ee_pixel, reference, teach_by_numbers, wait_for_color
+from .helpers import OKABE, demo_at, teach_by_numbers, wait_for_color
 
 pytestmark = pytest.mark.browser
 
@@ -26,12 +24,7 @@ def _in_view(page, locator, fraction: float = 1.0) -> float:
                                                          (768, 1024, 0.9)])
 def test_after_finish_and_watch_the_reproduction_the_result_and_try_again_are_in_view(
         browser, voila_server, artifacts, width, height, canvas_share):
-    context, page = local_page(browser, width, height)
-    try:
-        page.goto(voila_server.url("/voila/render/demo.ipynb"), timeout=60_000)
-        page.wait_for_selector("canvas", timeout=60_000)
-        episode = reference(guidance=True)
-        wait_for_color(page, 0, *ee_pixel(episode), OKABE["yellow"])
+    with demo_at(browser, voila_server, width, height) as (page, episode):
         teaching = page.locator("canvas").nth(0)
         box = teaching.bounding_box()
         assert box["width"] >= 300, f"the teaching canvas is only {box['width']:.0f} px wide"
@@ -50,5 +43,3 @@ def test_after_finish_and_watch_the_reproduction_the_result_and_try_again_are_in
         assert page.locator("canvas").nth(0).is_hidden()
         final = episode.player.view.transform.to_pixel(episode.skill.target.point)
         wait_for_color(page, 1, *final, OKABE["vermillion"])
-    finally:
-        context.close()

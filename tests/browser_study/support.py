@@ -10,46 +10,29 @@ from browser_support import artifact_path
 from mt_widgets import SKILLS
 from mt_widgets.study import read_events
 from mt_widgets.widgets import ArmView
+from protocols import BROWSER_TEXTS, phase, protocol_toml
 
 #: The experimenter's code the test servers are given ($MT_WIDGETS_EXPERIMENTER_CODE).
 EXPERIMENTER_CODE = "lab-code-4711"
 
 PAGE = "/voila/render/study_sim.ipynb"
 
+
+def two_part_protocol(second: str = "P3", guided: bool = True, seed: int = 5, practice_s: float = 10,
+                      practice_text: str = "Practice freely.", reproduction_s: float = 2.0) -> str:
+    """A short study named "browser" (``open_and_fill`` waits for that name): skill 1 taught in
+    two parts of one 3-state episode each, the second (``second``) guided for the target group
+    when ``guided``."""
+    return protocol_toml("browser", [
+        phase("P1", "sim-point", demonstrations=3, instructions="First part: teach skill 1."),
+        phase(second, "sim-point", demonstrations=3, **({"guidance": ["target"]} if guided else {}),
+              instructions="Second part: teach skill 1 again.")],
+        seed=seed, practice_s=practice_s, practice_text=practice_text, texts=BROWSER_TEXTS,
+        top={"reproduction_duration_s": reproduction_s})
+
+
 #: The short study the study-page tests take part in (test_study_page.py, test_touch_drawing.py).
-PROTOCOL = """
-format = 1
-name = "browser"
-lambda = 0.01
-seed = 5
-reproduction_duration_s = 2.0
-[assignment]
-block_size = 2
-seed = 1
-[texts]
-welcome = "Welcome to the test study."
-consent = "Consent text."
-instructions = "How to teach."
-reproduction = "This is what the robot learnt."
-thank_you = "Thank you, all done."
-[practice]
-skill = "sim-point"
-duration_s = 10
-text = "Practice freely."
-[[phases]]
-id = "P1"
-skill = "sim-point"
-episodes = 1
-demonstrations = 3
-instructions = "First part: teach skill 1."
-[[phases]]
-id = "P3"
-skill = "sim-point"
-episodes = 1
-demonstrations = 3
-guidance = ["target"]
-instructions = "Second part: teach skill 1 again."
-"""
+PROTOCOL = two_part_protocol()
 
 
 def button(page, name):
@@ -87,7 +70,8 @@ def wait_for_log(server, participant, predicate, timeout=15.0):
         if predicate(events):
             return events
         time.sleep(0.05)
-    raise AssertionError(f"the log never satisfied the condition; last event: {log_events(server, participant)[-1:]}")
+    raise AssertionError(f"{participant}: the log never satisfied the condition; last event: "
+                         f"{log_events(server, participant)[-1:]}")
 
 
 def drag(page, ee_pixel, offset):
@@ -108,23 +92,52 @@ def drag(page, ee_pixel, offset):
     page.mouse.up()
 
 
+#: How long the kernel may take to answer a drag's release (Confirm enabled). Measured on a
+#: 2-core machine over every drag of these tests: at most 0.4 s of 136 at load average 3, 0.9 s
+#: of 136 at load average 20-45 (three busy loops beside the tests); each press reached the
+#: kernel on the current state's hand and started the drag. A kernel shared with other pages can
+#: be busy for longer: wait for the answer, never drag again.
+CONFIRM_WITHIN_MS = 30_000
+
+
+def drag_and_wait(page, ee_pixel, offset):
+    """Drags once from the hand and waits until the kernel took the arrow (Confirm enabled).
+
+    Never drags again: a person's first drag after the state is drawn must count (each drag is
+    one pending arrow; a second would replace it, hiding a canvas that ignored the first)."""
+    confirm = button(page, "Confirm")
+    # A new state's marker is drawn before its disabled Confirm reaches the page (the kernel sends
+    # the drawing first): wait for that, or the previous arrow's Confirm would be taken as this one's.
+    page.wait_for_function("b => b.disabled", arg=confirm.element_handle(), timeout=CONFIRM_WITHIN_MS)
+    drag(page, ee_pixel, offset)
+    try:
+        page.wait_for_function("b => !b.disabled", arg=confirm.element_handle(), timeout=CONFIRM_WITHIN_MS)
+    except Exception:
+        page.screenshot(path=artifact_path("study-page-drag-not-taken", f"{round(ee_pixel[0])}-{round(ee_pixel[1])}"))
+        raise AssertionError(f"a drag from the hand at canvas pixel {tuple(round(v) for v in ee_pixel)} was not "
+                             f"taken within {CONFIRM_WITHIN_MS} ms; the page says: "
+                             f"{page.inner_text('body')[:1500]}") from None
+    return confirm
+
+
 YELLOW = (240, 228, 66)  # the end-effector marker (Okabe-Ito yellow)
 
 
-def wait_for_marker(page, ee_pixel, timeout=15_000):
-    """Waits until the page holds one episode (two canvases: teaching, reproduction) and the
-    teaching canvas shows the end-effector marker at ``ee_pixel``: drawn, not just present."""
+def wait_for_marker(page, ee_pixel, timeout=15_000, canvases=2):
+    """Waits until the page holds ``canvases`` canvases (an episode: teaching, reproduction; a
+    practice round: teaching only) and the teaching canvas shows the end-effector marker at
+    ``ee_pixel``: drawn, not just present."""
     page.wait_for_function(
-        """([x, y, rgb]) => {
+        """([x, y, rgb, n]) => {
             const all = document.querySelectorAll('canvas');
-            if (all.length !== 2) return false;
+            if (all.length !== n) return false;
             const d = all[0].getContext('2d').getImageData(Math.round(x) - 2, Math.round(y) - 2, 5, 5).data;
             for (let i = 0; i < d.length; i += 4) {
                 if (Math.abs(d[i] - rgb[0]) < 40 && Math.abs(d[i + 1] - rgb[1]) < 40
                     && Math.abs(d[i + 2] - rgb[2]) < 40 && d[i + 3] > 200) return true;
             }
             return false;
-        }""", arg=[float(ee_pixel[0]), float(ee_pixel[1]), list(YELLOW)], timeout=timeout)
+        }""", arg=[float(ee_pixel[0]), float(ee_pixel[1]), list(YELLOW), int(canvases)], timeout=timeout)
 
 
 def current_episode(server, participant):
@@ -145,15 +158,17 @@ def demonstrate(page, server, participant, phase, index, offset):
     except Exception:
         page.screenshot(path=artifact_path("study-page-no-marker", f"{episode['phase']}-{index}"))
         raise
-    confirm = button(page, "Confirm")
-    for _ in range(3):  # the canvas takes the drag once the state is drawn: retry a missed one
-        drag(page, ee, offset)
-        try:
-            page.wait_for_function("b => !b.disabled", arg=confirm.element_handle(), timeout=3_000)
-            break
-        except Exception:
-            continue
+    confirm = drag_and_wait(page, ee, offset)
     confirm.click()
     key = (episode["phase"], episode["episode"], index)
-    return wait_for_log(server, participant, lambda events: any(
+    events = wait_for_log(server, participant, lambda events: any(
         (e["phase"], e["episode"], e["index"]) == key for e in events if e["type"] == "demonstration"))
+    assert_one_drag([e for e in events if e["type"] == "demonstration"
+                     and (e["phase"], e["episode"], e["index"]) == key][-1])
+    return events
+
+
+def assert_one_drag(demonstration):
+    """The logged demonstration was drawn by the one drag made: one press taken, by the pointer."""
+    given = demonstration["input"]
+    assert given["method"] == "pointer" and given["redraws"] == 1, given

@@ -17,7 +17,7 @@ from mt_widgets import SKILLS
 from mt_widgets.study.protocol import PROTOCOL_FOLDER
 from mt_widgets.widgets import ArmView
 
-from .support import button, drag, log_events, open_and_fill, wait_for_log, wait_for_marker
+from .support import assert_one_drag, button, drag_and_wait, log_events, open_and_fill, wait_for_log, wait_for_marker
 
 pytestmark = pytest.mark.browser
 
@@ -130,14 +130,7 @@ def test_every_study_button_double_clicked_acts_once(page, voila_study, shot, tm
         state = [e for e in started if e["type"] == "episode_started"][-1]["query_states"][index]
         hand = ArmView(SKILLS["sim-point"]).end_effector_pixel(np.asarray(state))
         wait_for_marker(page, hand)
-        for _ in range(3):  # the canvas takes the drag once the state is drawn: retry a missed one
-            drag(page, hand, (50 - 30 * index, -40))
-            try:
-                page.wait_for_function("b => !b.disabled", arg=button(page, "Confirm").element_handle(),
-                                       timeout=3_000)
-                break
-            except Exception:
-                continue
+        drag_and_wait(page, hand, (50 - 30 * index, -40))
         try:
             double(page, "Confirm")
         except Exception:
@@ -165,6 +158,8 @@ def test_every_study_button_double_clicked_acts_once(page, voila_study, shot, tm
                     "questionnaire"], done
     assert [e["type"] for e in events].count("consent_given") == 1
     assert [e["index"] for e in events if e["type"] == "demonstration"] == [0, 1]
+    for demonstration in (e for e in events if e["type"] == "demonstration"):
+        assert_one_drag(demonstration)
     video_done = [e for e in events if e.get("step") == "video"][0]
     assert video_done["watched_to_end"] is True
 

@@ -13,42 +13,13 @@ import pytest
 from mt_widgets import SKILLS
 from mt_widgets.widgets import ArmView
 
-from .support import button, current_episode, open_and_fill, wait_for_log, wait_for_marker
+from .support import button, current_episode, open_and_fill, two_part_protocol, wait_for_log, wait_for_marker
 
 pytestmark = pytest.mark.browser
 
-PROTOCOL = """
-format = 1
-name = "browser"  # open_and_fill waits for this name
-lambda = 0.01
-seed = 7
-reproduction_duration_s = 10.0
-[assignment]
-block_size = 2
-seed = 1
-[texts]
-welcome = "Welcome to the test study."
-consent = "Consent text."
-instructions = "How to teach."
-reproduction = "This is what the robot learnt."
-thank_you = "Thank you, all done."
-[practice]
-skill = "sim-point"
-duration_s = 0
-text = "No practice."
-[[phases]]
-id = "P1"
-skill = "sim-point"
-episodes = 1
-demonstrations = 3
-instructions = "First part: teach skill 1."
-[[phases]]
-id = "P2"
-skill = "sim-point"
-episodes = 1
-demonstrations = 3
-instructions = "Second part: teach skill 1 again."
-"""
+# The second part unguided; a 10 s reproduction to replay.
+PROTOCOL = two_part_protocol(second="P2", guided=False, seed=7, practice_s=0, practice_text="No practice.",
+                             reproduction_s=10.0)
 
 DRAWN_WITHIN_MS = 1000
 

@@ -26,7 +26,7 @@ from mt_widgets.study.practice import PRACTICE_SKILLS
 from mt_widgets.widgets import ArmView
 from mt_widgets.widgets.theme import DEFAULT_THEME
 
-from .support import unlock
+from .support import assert_one_drag, button, drag_and_wait, unlock, wait_for_marker
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
@@ -35,10 +35,6 @@ PROTOCOL = load_protocol("paper-sim")
 # The words of guidance (how the arrow differs from the optimal one); the legend naming the dashed
 # arrow is a label of what is drawn, not guidance in words.
 GUIDANCE_WORDS = re.compile(r"off by|too long|too short|Direction:|Size:|° off", re.IGNORECASE)
-
-
-def button(page, name):
-    return page.get_by_role("button", name=re.compile(rf"^\W*{re.escape(name)}\s*$"))
 
 
 def log_events(logs, participant):
@@ -76,44 +72,10 @@ def count_colour(page, rgb, canvas_index=0) -> int:
 
 
 OFFSETS = ((50, -40), (-50, -30), (40, 45), (-45, 40), (55, 10))
-MARKER = [240, 228, 66]  # the end-effector marker (Okabe-Ito yellow)
-
-
-def wait_for_marker(page, pixel, canvases, timeout=30_000):
-    page.wait_for_function("""([x, y, rgb, n]) => {
-        const all = document.querySelectorAll('canvas');
-        if (all.length !== n) return false;
-        const d = all[0].getContext('2d').getImageData(Math.round(x) - 2, Math.round(y) - 2, 5, 5).data;
-        for (let i = 0; i < d.length; i += 4)
-            if (Math.abs(d[i] - rgb[0]) < 40 && Math.abs(d[i + 1] - rgb[1]) < 40 && Math.abs(d[i + 2] - rgb[2]) < 40
-                && d[i + 3] > 200) return true;
-        return false;
-    }""", arg=[float(pixel[0]), float(pixel[1]), MARKER, canvases], timeout=timeout)
 
 
 def drag_and_confirm(page, pixel, offset):
-    element = page.locator("canvas").first
-    box = element.bounding_box()
-    width, height = element.evaluate("c => [c.width, c.height]")
-
-    def to_page(x, y):
-        return box["x"] + x * box["width"] / width, box["y"] + y * box["height"] / height
-
-    confirm = button(page, "Confirm")
-    for _ in range(4):  # the canvas takes the drag once the state is drawn: retry a missed one
-        start = to_page(*pixel)
-        end = to_page(pixel[0] + offset[0], pixel[1] + offset[1])
-        page.mouse.move(*start)
-        page.mouse.down()
-        for fraction in np.linspace(0.25, 1.0, 4):
-            page.mouse.move(start[0] + fraction * (end[0] - start[0]), start[1] + fraction * (end[1] - start[1]))
-        page.mouse.up()
-        try:
-            page.wait_for_function("b => !b.disabled", arg=confirm.element_handle(), timeout=4_000)
-            break
-        except Exception:
-            continue
-    confirm.click()
+    drag_and_wait(page, pixel, offset).click()
 
 
 def wait_enabled(page, name, timeout=60_000):
@@ -163,7 +125,7 @@ def practice(page, shot):
     skill = PRACTICE_SKILLS["sim-practice"]
     state = skill.query_states(seed=np.random.SeedSequence(12345).spawn(1)[0])[0]
     pixel = ArmView(skill).end_effector_pixel(state)
-    wait_for_marker(page, pixel, canvases=1)   # drawing only: no reproduction canvas
+    wait_for_marker(page, pixel, timeout=30_000, canvases=1)   # drawing only: no reproduction canvas
     drag_and_confirm(page, pixel, (50, -30))
     if shot:
         page.screenshot(path=shot("practice"))
@@ -187,7 +149,7 @@ def phases(page, logs, participant, group, shot, withdraw_in_p1=False):
             guided = group in phase.guidance
             for index in range(phase.demonstrations):
                 pixel = view.end_effector_pixel(np.asarray(started["query_states"][index]))
-                wait_for_marker(page, pixel, canvases=2)
+                wait_for_marker(page, pixel, timeout=30_000)
                 # Arrows long enough to see (and to count on the canvas), in varied directions.
                 drag_and_confirm(page, pixel, OFFSETS[index % len(OFFSETS)])
                 wait_for_log(logs, participant, lambda ev, key=key + (index,): any(
@@ -289,7 +251,8 @@ def test_paper_sim_end_to_end_with_the_steps_around_the_task_and_a_withdrawal(vo
         assert done["eligibility"]["eligible"] is True and done["questionnaire"]["answers"]["difficulty"] == "easy"
         demos = [e for e in events if e["type"] == "demonstration"]
         assert len(demos) == sum(p.episodes * p.demonstrations for p in PROTOCOL.phases)
-        assert all(d["input"]["method"] == "pointer" for d in demos)
+        for demonstration in demos:
+            assert_one_drag(demonstration)
         practice_event = [e for e in events if e["type"] == "practice_started"][0]
         assert practice_event["skill"] == "sim-practice"
     assert {e["step"]: e for e in log_events(logs, "T01") if e["type"] == "step_done"}["video"]["plays"] >= 2
