@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -25,6 +27,12 @@ CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networki
                  "--disable-sync", "--no-first-run", "--disable-quic"]
 BIN = Path(sys.executable).parent
 LOCAL_PREFIXES = ("http://127.0.0.1", "ws://127.0.0.1", "data:", "blob:")
+# Every test server's kernels talk over IPC sockets, not TCP ports: jupyter_client picks a kernel's
+# ports by binding port 0 and closing it again, so another process can take one before the kernel
+# binds it; the kernel then dies at start, and Voila 0.5 keeps such a page loading for ever (its
+# renderer's task fails and never ends the stream: seen in CI as a 240 s Page.goto timeout).
+# deploy/voila/voila.py ships the same choice; the hub's servers have it too.
+IPC_KERNELS = "--KernelManager.transport=ipc"
 
 
 def free_port() -> int:
@@ -48,10 +56,16 @@ def wait_for_port(port: int, process: subprocess.Popen, log: Path, timeout: floa
 def jupyter_env(root: Path, **extra: str) -> dict:
     """The environment of a test server: its own JUPYTER_* folders under ``root``."""
     env = dict(os.environ)
-    for name in ("JUPYTER_CONFIG_DIR", "JUPYTERLAB_SETTINGS_DIR", "JUPYTERLAB_WORKSPACES_DIR", "JUPYTER_RUNTIME_DIR"):
+    for name in ("JUPYTER_CONFIG_DIR", "JUPYTERLAB_SETTINGS_DIR", "JUPYTERLAB_WORKSPACES_DIR"):
         path = root / name.lower()
         path.mkdir(parents=True, exist_ok=True)
         env[name] = str(path)
+    # The runtime folder holds Jupyter Lab's kernels' IPC sockets, whose paths may not exceed 107
+    # bytes: a short folder of its own rather than one under pytest's deep temporary folders.
+    runtime = root / "runtime-link"
+    if not runtime.exists():
+        runtime.symlink_to(tempfile.mkdtemp(prefix="mtw-rt-"))
+    env["JUPYTER_RUNTIME_DIR"] = str(runtime.resolve())
     # Keep off-screen outputs in the page and no news toast over the notebook.
     settings = root / "jupyterlab_settings_dir"
     (settings / "@jupyterlab" / "notebook-extension").mkdir(parents=True, exist_ok=True)
@@ -62,6 +76,10 @@ def jupyter_env(root: Path, **extra: str) -> dict:
         json.dumps({"fetchNews": "false"}))
     env.update(extra)
     return env
+
+
+# The servers running now: a failing test's report carries the end of each one's log (tests/conftest.py).
+RUNNING: list["Server"] = []
 
 
 class Server:
@@ -78,11 +96,12 @@ class Server:
 
     def __init__(self, command: list[str], port: int, root: Path, name: str, base_url: str, token: str = "",
                  env: dict | None = None):
-        self.port, self.token, self.base_url = port, token, base_url
+        self.port, self.token, self.base_url, self.root = port, token, base_url, root
         self.log = root / f"{name}.log"
         self._log_file = open(self.log, "w")
         self.process = subprocess.Popen(command, cwd=root / "notebooks", env=jupyter_env(root, **(env or {})),
                                         stdout=self._log_file, stderr=subprocess.STDOUT, start_new_session=True)
+        RUNNING.append(self)
         try:
             wait_for_port(port, self.process, self.log)
         except BaseException:
@@ -93,6 +112,8 @@ class Server:
         return f"{self.base_url}{path}"
 
     def stop(self) -> None:
+        if self in RUNNING:
+            RUNNING.remove(self)
         if self.process.poll() is None:
             os.killpg(self.process.pid, signal.SIGTERM)
             try:
@@ -101,13 +122,17 @@ class Server:
                 os.killpg(self.process.pid, signal.SIGKILL)
                 self.process.wait(5)
         self._log_file.close()
+        runtime = self.root / "runtime-link"
+        if runtime.is_symlink():
+            shutil.rmtree(runtime.resolve(), ignore_errors=True)
+            runtime.unlink()
 
 
 def voila(root: Path, *options: str, env: dict | None = None) -> Server:
     """Voila serving ``root/notebooks`` on a free port of 127.0.0.1."""
     port = free_port()
     return Server([str(BIN / "voila"), str(root / "notebooks"), "--no-browser", f"--port={port}",
-                   "--Voila.ip=127.0.0.1", *options], port, root, "voila", f"http://127.0.0.1:{port}", env=env)
+                   "--Voila.ip=127.0.0.1", IPC_KERNELS, *options], port, root, "voila", f"http://127.0.0.1:{port}", env=env)
 
 
 def local_page(browser, width: int = 1280, height: int = 1100):

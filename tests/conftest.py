@@ -10,7 +10,7 @@ import sys  # noqa: E402
 
 import pytest  # noqa: E402
 
-from browser_support import CHROMIUM, CHROMIUM_ARGS, artifact_path  # noqa: E402
+from browser_support import CHROMIUM, CHROMIUM_ARGS, RUNNING, artifact_path  # noqa: E402
 from tiers import HUB_TESTS, LINT_TESTS  # noqa: E402
 
 
@@ -70,3 +70,15 @@ def fresh_animation_queue(monkeypatch):
     animation = sys.modules.get("mt_widgets.widgets.animation")
     if animation is not None:
         monkeypatch.setattr(animation._Queue, "free_at", 0.0)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    """A failing test's report ends with the last lines of every test server still running: what
+    the server saw is often the cause (a kernel that died, a cell's error)."""
+    outcome = yield
+    report = outcome.get_result()
+    if report.failed and call.when == "call":
+        for server in RUNNING:
+            text = server.log.read_text(errors="replace") if server.log.exists() else "(no log)"
+            report.sections.append((f"{server.log} (its end)", text[-4000:]))

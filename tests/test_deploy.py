@@ -28,6 +28,10 @@ def test_shipped_configuration_culls_idle_unconnected_kernels_and_preheats_only_
     assert "@jupyter/nbgrader" in denied and "@jupyter-notebook/lab-extension" in denied
     assert not {"@jupyter-widgets/jupyterlab-manager", "ipycanvas", "@voila-dashboards/widgets-manager8"} & set(denied)
     assert config.VoilaConfiguration.preheat_kernel is True
+    # Kernels over IPC sockets (no ports to collide on when the pools start kernels together), in a
+    # connection folder short enough for a socket's path (at most 107 bytes).
+    assert config.KernelManager.transport == "ipc"
+    assert len(f"{config.Voila.connection_dir_root}/voila_xxxxxxxx/kernel-{'0' * 36}-ipc-5") <= 107
     assert config.VoilaConfiguration.multi_kernel_manager_class == "kiosk_kernels.KioskKernelManager"
     pools = config.VoilaKernelManager.kernel_pools_config
     assert pools["default"]["pool_size"] == 0

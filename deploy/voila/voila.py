@@ -3,6 +3,7 @@
 # tests/browser/test_kiosk.py checks these values and what they do; benchmarks/bench_kiosk.py
 # measures memory and time to interactive with and without them.
 import sys
+import tempfile
 from pathlib import Path
 
 c = get_config()  # noqa: F821 (traitlets' config loader provides it)
@@ -27,6 +28,19 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 # the page's config), so jupyter_server's immutable cache for that prefix is exact. (A server run
 # under another --Voila.base_url keeps Voila's revalidation: the prefix no longer matches.)
 c.Voila.tornado_settings = {"disable_check_xsrf": True, "static_immutable_cache": ["/voila/labextensions/"]}
+
+# --- Kernels over IPC sockets, not TCP ports ---------------------------------------------------
+# jupyter_client picks a kernel's five ports by binding port 0 and closing it again; the preheated
+# pools below start their kernels at the same moment, and any process can take such a port before
+# the kernel binds it. That kernel dies at start, and Voila 0.5 then keeps the visitor's page
+# loading for ever (the renderer's task fails and never ends the streamed page). IPC sockets have
+# no ports to collide on; they live in Voila's private (0700) connection folder, a fresh
+# voila_<random> in connection_dir_root, and a socket's path may have at most 107 bytes.
+_connection_root = tempfile.gettempdir()
+if len(f"{_connection_root}/voila_xxxxxxxx/kernel-{'0' * 36}-ipc-5") > 107:
+    _connection_root = "/tmp"
+c.Voila.connection_dir_root = _connection_root
+c.KernelManager.transport = "ipc"
 
 # --- Idle-kernel culling: what the beacon cannot catch -----------------------------------------
 # A tab that vanishes without `beforeunload` (a crashed or killed browser, a phone that

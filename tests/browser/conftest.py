@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from browser_support import BIN, Server, free_port, local_page, voila
+from browser_support import BIN, IPC_KERNELS, Server, free_port, local_page, voila
 
 PAGES = Path(__file__).parent / "pages"
 DEMO = Path(__file__).resolve().parents[2] / "notebooks" / "demo.ipynb"      # the visitors' page, served as is
@@ -56,7 +56,7 @@ def lab_server(tmp_path_factory):
     _copy_pages(root)
     port, token = free_port(), "mt-widgets-test"
     server = Server([str(BIN / "jupyter"), "lab", "--no-browser", "--ip=127.0.0.1", f"--port={port}",
-                     "--port-retries=0", "--allow-root", f"--IdentityProvider.token={token}",
+                     "--port-retries=0", "--allow-root", IPC_KERNELS, f"--IdentityProvider.token={token}",
                      f"--ServerApp.root_dir={root / 'notebooks'}", "--LabApp.extension_manager=readonly"],
                     port, root, "lab", f"http://127.0.0.1:{port}", token)
     yield server

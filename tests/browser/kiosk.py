@@ -18,7 +18,7 @@ from pathlib import Path
 
 import psutil
 
-from browser_support import BIN, LOCAL_PREFIXES, REPO, Server, free_port
+from browser_support import BIN, IPC_KERNELS, LOCAL_PREFIXES, REPO, Server, free_port
 from mt_widgets.widgets import DemoPage
 
 from .helpers import OKABE, ee_pixel, wait_for_color
@@ -43,7 +43,10 @@ def start_page_server(root: Path, notebook: Path = DEMO, *, shipped_config: bool
     page = root / "notebooks" / notebook.name
     shutil.copy(notebook, page)
     port = free_port()
-    config = [f"--Voila.config_file_paths={DEPLOY}"] if shipped_config else [f"--Voila.config_file_paths={root}"]
+    # The shipped config sets IPC kernels itself; stock Voila gets them from the command line, as
+    # every test server does (tests/browser_support.py says why).
+    config = [f"--Voila.config_file_paths={DEPLOY}"] if shipped_config else [f"--Voila.config_file_paths={root}",
+                                                                            IPC_KERNELS]
     return Server([str(BIN / "voila"), str(page), "--no-browser", f"--port={port}", "--Voila.ip=127.0.0.1",
                    *config, *overrides], port, root, "voila", f"http://127.0.0.1:{port}")
 

@@ -22,6 +22,7 @@ import statistics
 import time
 import urllib.error
 import urllib.request
+from pathlib import Path
 
 import pytest
 
@@ -67,6 +68,12 @@ def test_voila_runs_the_shipped_culler_and_accepts_a_pages_shutdown_beacon(tmp_p
                 return error.code
 
         (spare,) = kernel_processes(server)
+        # The spare talks to the server over IPC sockets in Voila's private connection folder.
+        command = kernel_processes(server)[spare].cmdline()
+        connection = Path(command[command.index("-f") + 1])
+        info = json.loads(connection.read_text())
+        assert info["transport"] == "ipc" and Path(f"{info['ip']}-{info['shell_port']}").is_socket(), info
+        assert connection.parent.stat().st_mode & 0o077 == 0, "the connection folder is the server's alone"
         assert beacon(server, spare) == 204
         wait_for_exit(server, spare, 10)
         # Stock Voila refuses the same request: the root of "every visit keeps its kernel".
