@@ -79,7 +79,7 @@ def jupyter_env(root: Path, **extra: str) -> dict:
 
 
 # The servers running now: a failing test's report carries the end of each one's log (tests/conftest.py).
-RUNNING: list["Server"] = []
+RUNNING: list[Server] = []
 
 
 class Server:
@@ -132,7 +132,8 @@ def voila(root: Path, *options: str, env: dict | None = None) -> Server:
     """Voila serving ``root/notebooks`` on a free port of 127.0.0.1."""
     port = free_port()
     return Server([str(BIN / "voila"), str(root / "notebooks"), "--no-browser", f"--port={port}",
-                   "--Voila.ip=127.0.0.1", IPC_KERNELS, *options], port, root, "voila", f"http://127.0.0.1:{port}", env=env)
+                   "--Voila.ip=127.0.0.1", IPC_KERNELS, *options],
+                  port, root, "voila", f"http://127.0.0.1:{port}", env=env)
 
 
 def local_page(browser, width: int = 1280, height: int = 1100):
