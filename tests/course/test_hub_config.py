@@ -187,10 +187,11 @@ def test_students_servers_use_ipc_kernels_and_leave_out_what_lessons_do_not_use(
     off = {name for name, enabled in student.ServerApp.jpserver_extensions.items() if not enabled}
     assert off == {"jupyter_lsp", "jupyter_server_terminals", "nbgrader.server_extensions.formgrader",
                    "nbgrader.server_extensions.assignment_list", "nbgrader.server_extensions.validate_assignment",
-                   "nbgrader.server_extensions.course_list"}
-    # nbgrader's student side instead comes from student-site/, loaded at first use.
-    assert student.ServerApp.jpserver_extensions["mt_hub_nbgrader"] is True
-    assert (HUB / "student-site" / "mt_hub_nbgrader.py").is_file()
+                   "nbgrader.server_extensions.course_list", "voila.server_extension", "notebook"}
+    # nbgrader's student side and Voila's pages instead come from student-site/, loaded at first use.
+    for lazy in ("mt_hub_nbgrader", "mt_hub_voila"):
+        assert student.ServerApp.jpserver_extensions[lazy] is True
+        assert (HUB / "student-site" / f"{lazy}.py").is_file()
     instructor = _server_config("instructor")
     assert instructor.KernelManager.transport == "ipc"
     assert "jpserver_extensions" not in instructor.ServerApp

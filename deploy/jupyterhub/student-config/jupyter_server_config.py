@@ -6,11 +6,13 @@
   kernels at once another kernel binds the same port in between (``ZMQError: Address already in
   use``, then a lost kernel). Files cannot collide: each kernel's names come from its own id.
 - umask 027: nothing a member writes is readable by classmates.
-- Students get what a lesson uses: JupyterLab, Voila's pages, nbgrader's assignment list and
-  validation (loaded at first use: ``student-site/mt_hub_nbgrader.py``, on the servers'
-  PYTHONPATH); not the language server, terminals (their shell is nologin anyway) or
-  nbgrader's formgrader, which only instructors (``MT_HUB_ROLE=instructor``) load. Each
-  extension left out is start-up time and memory a student does not pay.
+- Students get what a lesson uses: JupyterLab, Voila's pages and nbgrader's assignment list and
+  validation (these two loaded at first use: ``student-site/mt_hub_voila.py`` and
+  ``student-site/mt_hub_nbgrader.py``, on the servers' PYTHONPATH); not the language server,
+  terminals (their shell is nologin anyway), the classic Notebook interface (``notebook``: the
+  hub opens JupyterLab) or nbgrader's formgrader, which only instructors
+  (``MT_HUB_ROLE=instructor``) load. Each extension left out is start-up time and memory a
+  student does not pay (benchmarks/bench_hub.py measures a student's server).
 """
 
 import os
@@ -33,4 +35,8 @@ if os.environ.get("MT_HUB_ROLE") != "instructor":
         "nbgrader.server_extensions.validate_assignment": False,
         "nbgrader.server_extensions.course_list": False,
         "mt_hub_nbgrader": True,
+        # Voila's pages, from student-site/mt_hub_voila.py at the first page a student opens.
+        "voila.server_extension": False,
+        "mt_hub_voila": True,
+        "notebook": False,
     }
