@@ -96,7 +96,8 @@ def _hub_processes(hub) -> list:
 
 
 def _is_kernel(process) -> bool:
-    return any("ipykernel" in part for part in process.cmdline())
+    # ipykernel's launcher, or the students' (deploy/jupyterhub/student-site/mt_hub_kernel.py).
+    return any(part in ("ipykernel_launcher", "mt_hub_kernel") for part in process.cmdline())
 
 
 def main() -> None:

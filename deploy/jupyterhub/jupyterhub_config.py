@@ -214,6 +214,8 @@ c.Spawner.environment = {
     # nbgrader's student side and the server's settings (IPC kernels, extensions) come from here.
     "JUPYTER_CONFIG_PATH": str(HERE / "student-config"),
     "MT_HUB_ROLE": lambda spawner: "instructor" if spawner.user.admin else "student",
+    # Students' "python3" kernel spec: ipykernel without its debugger (student-site/mt_hub_kernel.py).
+    "JUPYTER_PATH": lambda spawner: "" if spawner.user.admin else str(HERE / "student-share"),
     "PYTHONPATH": _python_path,
     # Students' servers find no node: JupyterLab's import asks yarn (a node process, ~2 s) for the
     # npm registry at every start when node is on PATH, for building extensions no student builds.

@@ -78,7 +78,7 @@ display(confirmed, episode)
 
 #: Run in one student's kernel: what it can reach of others' work and of the installation.
 PROBE_CODE = """
-import json, os, pathlib
+import json, os, pathlib, sys
 from mt_widgets.classroom import ProgressRecorder, pseudonym, read_class_meta
 
 def attempt(action):
@@ -109,6 +109,8 @@ result = {{
     "write_package": attempt(lambda: open(installed / "planted.py", "w").write("x = 1")),
     "write_stdlib": attempt(lambda: open(site / "planted.py", "w").write("x = 1")),
     "become_root": attempt(lambda: os.setuid(0)),
+    "kernel_command": open("/proc/self/cmdline").read().split("\\0"),
+    "debugger_loaded": "debugpy" in sys.modules and sys.modules["debugpy"] is not None,
 }}
 print(json.dumps(result))
 """
@@ -234,6 +236,8 @@ def test_a_students_kernel_is_their_own_user_and_reaches_no_one_elses_work(hub):
     assert probe["uid"] == probe["euid"] == account.pw_uid != 0
     assert grp.getgrnam(TEST_INSTRUCTORS).gr_gid not in probe["groups"]
     assert probe["own_progress_lines"] >= 1  # the student's own progress is recorded
+    # A student's kernel is the students' spec: ipykernel without its debugger (mt_hub_kernel.py).
+    assert "mt_hub_kernel" in probe["kernel_command"] and probe["debugger_loaded"] is False, probe["kernel_command"]
     denied = ["read_classmate_home", "read_classmate_file", "list_class_folder", "read_classmate_progress",
               "append_classmate_progress", "take_classmate_lock", "list_course", "read_course_source",
               "write_package", "write_stdlib", "become_root"]

@@ -7,6 +7,7 @@ run as root, like the hub, and remove what they made.
 from __future__ import annotations
 
 import grp
+import json
 import os
 import pwd
 import secrets
@@ -192,6 +193,10 @@ def test_students_servers_use_ipc_kernels_and_leave_out_what_lessons_do_not_use(
     for lazy in ("mt_hub_nbgrader", "mt_hub_voila"):
         assert student.ServerApp.jpserver_extensions[lazy] is True
         assert (HUB / "student-site" / f"{lazy}.py").is_file()
+    # Students' kernels (student-share/ first on their JUPYTER_PATH): ipykernel without its debugger.
+    spec = json.loads((HUB / "student-share" / "kernels" / "python3" / "kernel.json").read_text())
+    assert spec["argv"][:3] == ["{prefix}/bin/python", "-m", "mt_hub_kernel"] and spec["metadata"]["debugger"] is False
+    assert (HUB / "student-site" / "mt_hub_kernel.py").is_file()
     instructor = _server_config("instructor")
     assert instructor.KernelManager.transport == "ipc"
     assert "jpserver_extensions" not in instructor.ServerApp

@@ -40,3 +40,5 @@ if os.environ.get("MT_HUB_ROLE") != "instructor":
         "mt_hub_voila": True,
         "notebook": False,
     }
+    # Students' kernels run without JupyterLab's debugger: the hub puts student-share/ first on
+    # their JUPYTER_PATH, whose kernels/python3 spec starts student-site/mt_hub_kernel.py.
