@@ -5,26 +5,44 @@ capstone (tutorial 10) would run as a student's session, enrol "me" in ~/mt-widg
 wait for a person. The test-suite's own settings and marks are in tests/conftest.py.
 """
 
+import nbval.kernel
 import pytest
 import zmq
-from jupyter_client.client import KernelClient
+from jupyter_client.manager import KernelManager
 
 from tests.notebook_parameters import inject
 
 
-def _unbounded_receive_context(self) -> zmq.Context:
-    """nbval reads a cell's iopub messages only once the cell has finished, and ZeroMQ keeps at most
-    1000 unread messages at each end by default (high-water marks), then drops the rest: a cell whose
-    widgets send more (tutorial 10's synthetic novice: about 4300 widget messages) lost its final
-    idle status, and nbval failed it with "Timeout of 5 seconds exceeded waiting for output". An
-    unbounded receive queue on the test run's side keeps every message."""
-    self._created_context = True
+def _start_kernel_keeping_every_message(startup_timeout=60, kernel_name="python", **kwargs):
+    """nbval's ``start_new_kernel`` (nbval/kernel.py), with a client whose receive queues are unbounded.
+
+    nbval reads a cell's iopub messages only once the cell has finished, and ZeroMQ keeps at most
+    1000 unread messages at each end by default (high-water marks), then drops the rest: a cell
+    whose widgets send more (tutorial 10's synthetic novice: about 4300 widget messages) lost its
+    final idle status, and nbval failed it with "Timeout of 5 seconds exceeded waiting for output".
+    With no receive limit, ZeroMQ's I/O thread drains the kernel's socket into memory as the
+    messages come (as JupyterLab's server does), and the kernel's own limit is never reached.
+    The context goes to ``client()`` because a client makes its own otherwise (a default set on
+    ``KernelClient`` does not reach ``BlockingKernelClient``); tests/data/many_iopub_messages.ipynb
+    fails without this.
+    """
+    manager = KernelManager(kernel_name=kernel_name, kernel_spec_manager=nbval.kernel.NbvalKernelspecManager())
+    manager.start_kernel(**kwargs)
     context = zmq.Context()
     context.setsockopt(zmq.RCVHWM, 0)
-    return context
+    client = manager.client(context=context)
+    client.start_channels()
+    try:
+        client.wait_for_ready(timeout=startup_timeout)
+    except RuntimeError:
+        client.stop_channels()
+        manager.shutdown_kernel()
+        context.term()
+        raise
+    return manager, client
 
 
-KernelClient._context_default = _unbounded_receive_context
+nbval.kernel.start_new_kernel = _start_kernel_keeping_every_message
 
 
 @pytest.hookimpl(trylast=True)
