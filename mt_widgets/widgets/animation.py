@@ -30,6 +30,7 @@ import numpy as np
 from IPython import get_ipython
 
 from .redraw import drawing_batch
+from .tree import widget_tree
 
 DEFAULT_FPS = 60.0
 #: Seconds of frames in one message.
@@ -192,18 +193,26 @@ def stop_animations(widget) -> None:
         stop_animation(node)
 
 
-def retire(widget) -> None:
-    """Takes a widget tree off the page for good: stops its animations, and closes every widget in it
-    once the browser has played what was already sent (closing earlier would leave queued
-    commands pointing at a closed canvas, which stops ipycanvas' drawing for the whole page).
+def retire(widget, keep=None) -> None:
+    """Takes a widget tree off the page for good: stops its animations, and closes every widget it
+    owns (``tree.widget_tree``: layouts, styles and off-page parts included) once the browser has
+    played what was already sent (closing earlier would leave queued commands pointing at a closed
+    canvas, which stops ipycanvas' drawing for the whole page).
+
+    Args:
+        widget: the view leaving the page.
+        keep: the page that stays, or None: a widget it shows when the close comes (a part the page
+            moved into its new view) stays open.
     """
-    nodes = list(_canvases(widget))
+    nodes = list(widget_tree(widget))
     for node in nodes:
         stop_animation(node)
 
     def close():
+        kept = {id(node) for node in widget_tree(keep, shown_only=True)} if keep is not None else set()
         for node in nodes:
-            node.close()
+            if id(node) not in kept:
+                node.close()
 
     loop = kernel_loop()
     if loop is None:

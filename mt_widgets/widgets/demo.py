@@ -109,16 +109,19 @@ class DemoPage(VBox):
         """
         if as_bool("new_states", new_states):
             self.seed += 1
-        if self.episode is not None:
-            # The page's own widgets move to the next episode; the rest leaves the kernel too (a
-            # kiosk page may run for hours), once the browser has played what it holds for them.
-            self.episode.next_actions.children = []
-            retire(self.episode)
+        shown = self.episode
+        if shown is not None:
+            # The page's own widgets move to the next episode.
+            shown.next_actions.children = []
         self.episode = EpisodeWidget(self.skills[self.skill_chooser.value], seed=self.seed,
                                      guidance=self.guidance_switch.value, demonstrations=keep,
                                      on_finished=self._on_finished, **self.episode_options)
         self.episode.next_actions.children = [self.result_line, self.new_states_button]
         self.episode_slot.children = [self.episode]
+        if shown is not None:
+            # The rest leaves the kernel too (a kiosk page may run for hours), once the browser has
+            # played what it holds for it; after the new one is shown, which stays open.
+            retire(shown, keep=self)
         self.result_line.value = ""
         return self.episode
 

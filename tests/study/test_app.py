@@ -9,12 +9,15 @@ import types
 import numpy as np
 import pytest
 from ipywidgets import Button
+from ipywidgets.widgets.widget import _instances
 
 from blinding_support import participant_texts, without_scripts
 from mt_widgets import SKILLS
 from mt_widgets.apps import StudyApp
 from mt_widgets.study import LogError, SessionStateError, read_events
 from mt_widgets.study.protocol import PROTOCOL_FOLDER
+from mt_widgets.widgets import EpisodeWidget
+from mt_widgets.widgets.tree import widget_tree
 
 from .scripted import SHORT_PROTOCOL, act, click_primary
 
@@ -339,3 +342,26 @@ def test_the_guidance_arrow_is_named_for_the_guided_group_only_while_it_is_shown
                 named += 1
             act(app)
         assert (named > 0) == (group == "target")
+
+
+def test_a_whole_session_keeps_a_bounded_number_of_widgets_open(tmp_path, protocol_file):
+    # An episode leaving the page closes its widgets (tests/widgets/test_retire.py): a study of twelve
+    # episodes kept about 1,760 open in the kernel and the browser.
+    app = StudyApp(protocol=protocol_file, log_folder=tmp_path / "logs")
+    app.start_participant("P01", group="target")
+    before = len(_instances)
+    episodes, open_after_episode = [], []
+    while not app.session.finished:
+        act(app)
+        episode = app.participant_view.episode
+        if isinstance(episode, EpisodeWidget) and (not episodes or episode is not episodes[-1]):
+            episodes.append(episode)
+            open_after_episode.append(len(_instances) - before)
+    assert len(episodes) == 6   # the practice's, then the five of the study
+    # Every episode but the last left the page and is closed, its off-page parts too.
+    for old in episodes[:-1]:
+        assert not any(w.comm is not None for w in widget_tree(old)), "an episode that left the page kept widgets open"
+    # Each new episode brings about 120 widgets; without retiring them the count grew by that
+    # much per episode (five episodes: over 600).
+    assert max(open_after_episode) - min(open_after_episode) < 60, open_after_episode
+    assert len(_instances) - before < 250

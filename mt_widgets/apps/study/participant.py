@@ -23,7 +23,7 @@ import numpy as np
 from ipywidgets import HTML, Button, HBox, Layout, VBox
 
 from mt_widgets.study import Session
-from mt_widgets.widgets import EpisodeWidget, stop_animations
+from mt_widgets.widgets import EpisodeWidget, retire
 
 from .controls import Choice
 from .episode_step import EpisodeStep, build_episode
@@ -94,6 +94,18 @@ class ParticipantView(VBox):
     def prepare_episode(self, episode: EpisodeWidget) -> EpisodeWidget:
         return episode if self._prepare_episode is None else self._prepare_episode(episode)
 
+    def retire_replaced(self, episode) -> None:
+        """``episode`` (an episode or practice canvas this page showed) has been replaced: it leaves
+        the page for good.
+
+        A replay still playing must not hold up what comes next, and its widgets close once the
+        browser has played what it was sent (``widgets/animation.py``'s ``retire``): kept open, a
+        session of twelve episodes held about 1,760 widgets in the kernel and in the browser.
+        Called once the replacement is on the page, so nothing the page shows is closed.
+        """
+        if episode is not None and episode is not self.episode:
+            retire(episode, keep=self)
+
     def safely(self, action, reraise: bool = False) -> None:
         """Runs a participant action; any error stops the participant flow (``stop_for_experimenter``).
 
@@ -146,11 +158,9 @@ class ParticipantView(VBox):
         if self.stopped_by is not None:
             return
         step = self.session.current_step()
+        shown = self.episode
         self._cancel_timer()
         in_episode = step.kind in ("demonstration", "episode_end", "reproduction")
-        if isinstance(self.episode, EpisodeWidget) and not in_episode:
-            # The episode leaves the page: a replay still playing must not hold up what comes next.
-            stop_animations(self.episode)
         if not in_episode:
             self._episode_step = None
         # Withdrawing is offered on every page of a logged session until it is over.
@@ -171,11 +181,10 @@ class ParticipantView(VBox):
         elif in_episode:
             key = (step.phase_index, step.episode)
             if self._episode_step is None or self._episode_step.key != key:
-                if isinstance(self.episode, EpisodeWidget):
-                    stop_animations(self.episode)
                 self._episode_step = EpisodeStep(self, step)
             if self.session.current_step().kind == "reproduction":
                 self._episode_step.show_reproduction_controls()
+        self.retire_replaced(shown)
         if self.session.finished and not self._ended_reported:
             self._ended_reported = True
             if self._on_end is not None:

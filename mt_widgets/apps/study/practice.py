@@ -8,7 +8,7 @@ import time
 
 from ipywidgets import HTML, HBox
 
-from mt_widgets.widgets import TeachingCanvas, stop_animations
+from mt_widgets.widgets import TeachingCanvas
 from mt_widgets.widgets.animation import kernel_loop
 
 from .controls import Choice, enable_after
@@ -54,8 +54,7 @@ class PracticeStep:
     def new_round(self) -> None:
         view = self.view
         seed = self.seeds.spawn(1)[0]
-        if view.episode is not None:
-            stop_animations(view.episode)
+        shown = view.episode
         skill = view.session.protocol.skill(self.step.skill)
         states = skill.query_states(seed=seed)
         self.again_button = Choice().button("Practise again", lambda: view.safely(self.new_round), "")
@@ -69,6 +68,7 @@ class PracticeStep:
             episode.observe(self._drawn, names="state_index")
         view.episode = episode
         view.body.children = [self.text, self.left, HBox([self.done_button, self.again_button]), episode]
+        view.retire_replaced(shown)
 
     def _drawn(self, change) -> None:
         if change["new"] >= len(change["owner"].query_states) and change["owner"] is self.view.episode:

@@ -1,0 +1,41 @@
+"""A view leaving the page for good closes every widget it owns, and nothing it does not own:
+a study of twelve episodes kept about 1,760 widgets open in the kernel and the browser."""
+
+from ipycanvas import Canvas
+from ipywidgets import HTML, VBox, Widget
+
+from mt_widgets import SKILLS
+from mt_widgets.widgets import EpisodeWidget, retire
+from mt_widgets.widgets.tree import widget_tree
+
+
+def is_open(widget: Widget) -> bool:
+    return widget.comm is not None
+
+
+def test_the_tree_holds_layouts_styles_and_parts_kept_off_the_page_but_not_the_canvas_manager():
+    episode = EpisodeWidget(SKILLS["uarm-point"], seed=1)
+    owned = {id(w) for w in widget_tree(episode)}
+    shown = {id(w) for w in widget_tree(episode, shown_only=True)}
+    # The TeachingCanvas box whose pieces moved to the stage: owned, not shown.
+    assert id(episode.teaching) in owned and id(episode.teaching) not in shown
+    assert id(episode.layout) in shown and id(episode.next_button.style) in shown
+    canvas = episode.teaching.view.canvas
+    layers = getattr(canvas, "_canvases", [canvas])
+    assert all(id(layer) in shown for layer in layers)
+    # ipycanvas' one canvas manager stands behind every canvas of the page: nobody's to close.
+    manager = Canvas()._canvas_manager
+    assert id(manager) not in owned
+
+
+def test_retire_closes_what_the_view_owns_and_keeps_what_the_page_shows_and_the_canvas_manager():
+    episode = EpisodeWidget(SKILLS["uarm-point"], seed=1)
+    moved = HTML("the page's own")
+    episode.next_actions.children = [moved]
+    page = VBox([moved])          # the page moved this widget out before the close
+    retire(episode, keep=page)    # no kernel here: closes at once
+    assert not is_open(episode) and not is_open(episode.teaching) and not is_open(episode.layout)
+    assert not is_open(episode.teaching.view.canvas) and not is_open(episode.next_button.style)
+    assert is_open(moved) and is_open(page)
+    assert is_open(Canvas()._canvas_manager)
+    Canvas()   # a new canvas still opens (its manager is open)
