@@ -194,8 +194,8 @@ def stop_animations(widget) -> None:
 
 
 def retire(widget, keep=None) -> None:
-    """Takes a widget tree off the page for good: stops its animations, and closes every widget it
-    owns (``tree.widget_tree``: layouts, styles and off-page parts included) once the browser has
+    """Takes a widget tree off the page for good: stops its animations now, and closes every widget
+    it owns (``tree.widget_tree``: layouts, styles and off-page parts included) once the browser has
     played what was already sent (closing earlier would leave queued commands pointing at a closed
     canvas, which stops ipycanvas' drawing for the whole page).
 
@@ -204,13 +204,14 @@ def retire(widget, keep=None) -> None:
         keep: the page that stays, or None: a widget it shows when the close comes (a part the page
             moved into its new view) stays open.
     """
-    nodes = list(widget_tree(widget))
-    for node in nodes:
+    for node in _canvases(widget):
         stop_animation(node)
 
     def close():
+        # Walked here, not when the view leaves: the walk costs tens of milliseconds that the page's
+        # answer to the click that replaced the view should not wait for.
         kept = {id(node) for node in widget_tree(keep, shown_only=True)} if keep is not None else set()
-        for node in nodes:
+        for node in list(widget_tree(widget)):
             if id(node) not in kept:
                 node.close()
 

@@ -27,11 +27,21 @@ def _own_trait_values(widget: Widget):
     """The widget's trait values (children, layout, style, layers) but a trait's class-wide default:
     one object every instance shares (ipycanvas' canvas manager, a widget of its own behind every
     canvas of the page) is nobody's to close."""
-    traits = widget.traits()
+    defaults = _class_defaults(type(widget))
     for name, value in getattr(widget, "_trait_values", {}).items():
-        trait = traits.get(name)
-        if trait is None or value is not trait.default_value:
+        if value is not defaults.get(name, _NONE):
             yield value
+
+
+_NONE = object()
+_DEFAULTS: dict[type, dict] = {}
+
+
+def _class_defaults(cls: type) -> dict:
+    """Each trait's class-wide default value, once per class (``traits()`` is slow)."""
+    if cls not in _DEFAULTS:
+        _DEFAULTS[cls] = {name: trait.default_value for name, trait in cls.class_traits().items()}
+    return _DEFAULTS[cls]
 
 
 def widget_tree(widget: Widget, shown_only: bool = False) -> Iterator[Widget]:
