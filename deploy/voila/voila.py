@@ -79,13 +79,17 @@ c.VoilaKernelManager.kernel_pools_config = {
     "study_sim.ipynb": {"pool_size": 1},
     "study_online.ipynb": {"pool_size": 1},
 }
-# Refill the pool right after a visitor takes the spare (Voila waits 1 s by default). A refill
-# (a kernel starting, importing numpy, numba and ipycanvas, running the page) competes with the
-# visitor's page for the 2 cores; delaying it by 5 s was priced with benchmarks/bench_kiosk.py
-# (--server "refill after 5 s=--VoilaKernelManager.fill_delay=5") on the shared machine and came
-# out faster at load average 10 (p50 2.8 s against 4.0 s) and slower at 25 (8.9 s against 5.1 s):
-# no clear gain, so the spare stays ready as soon as possible for the next visitor.
-c.VoilaKernelManager.fill_delay = 0.0
+# Refill the pool 3 s after a visitor takes the spare, once the visitor's page is interactive. A
+# refill (a kernel starting, importing numpy, numba and ipycanvas, running the page) takes about
+# 2.5 s of CPU; started at once (fill_delay = 0) it competed with the visitor's own page, server
+# and browser for the 2 cores during the very seconds the page becomes interactive.
+# benchmarks/bench_kiosk.py, one run, 8 warm visits each, load average 3.1-3.5 from the benchmark
+# itself: refill at once p50 2.52 s / p95 2.96 s, after 3 s p50 1.91 s / p95 2.37 s, stock Voila
+# 4.44 s (the ratio to stock goes from 0.57 to 0.43); a warm visit's p95 stays under the 3 s. The
+# price: a second visitor within 3 s of the first waits for the delay and the spare's start (about
+# 3 s more than now, like a page without preheating); a kiosk's visitors come one at a time.
+# (An earlier 5 s delay, priced at load average 10 and 25 on a shared machine, was inconclusive.)
+c.VoilaKernelManager.fill_delay = 3.0
 
 # --- Only the extensions a page uses ----------------------------------------------------------
 # Voila loads every JupyterLab extension installed beside it before it starts the widget
