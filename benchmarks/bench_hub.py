@@ -110,7 +110,10 @@ def main() -> None:
     if os.geteuid() != 0:
         parser.error("the class hub makes a system user per student: run as root")
     sys.path[:0] = [str(ROOT / "tests"), str(ROOT)]
-    from tests.course.hub_support import EPISODE_CODE, ClassHub, warm_numba_template
+    from tests.course.hub_support import EPISODE_CODE, ClassHub, remove_leftovers, warm_numba_template
+
+    if remove_leftovers():  # an earlier run that was killed left its accounts
+        print("removed the accounts a killed earlier run left", flush=True)
 
     bench_started = time.perf_counter()
     students = [f"mtt-bench-{n:02d}" for n in range(args.students)]

@@ -339,12 +339,7 @@ class ClassHub:
 
     def processes(self, name: str) -> list[psutil.Process]:
         """The processes of ``name``'s system user (their server and kernels)."""
-        uid = pwd.getpwnam(name).pw_uid
-        found = []
-        for process in psutil.process_iter(["uids"]):
-            if process.info["uids"] and process.info["uids"].real == uid:
-                found.append(process)
-        return found
+        return _processes_of({pwd.getpwnam(name).pw_uid})
 
     def memory(self, name: str) -> int:
         """Resident bytes of ``name``'s server and its kernels."""
@@ -366,32 +361,84 @@ class ClassHub:
             except subprocess.TimeoutExpired:
                 os.killpg(self.process.pid, signal.SIGKILL)
                 self.process.wait(5)
-        logins = [*self.students, *self.admins]
-        for login in logins:
-            try:
-                for process in self.processes(login):
-                    process.kill()
-            except KeyError:
-                continue
-        for controller in ("memory", "cpu"):
-            base = Path("/sys/fs/cgroup", controller, _own_cgroup(controller).lstrip("/"), self.cgroup)
-            for group in sorted(base.glob("*"), reverse=True) if base.is_dir() else []:
-                if group.is_dir():
-                    _rmdir_when_empty(group)
-            if base.is_dir():
-                _rmdir_when_empty(base)
-        for login in logins:
-            try:
-                if pwd.getpwnam(login).pw_gecos == "mt-widgets class hub":
-                    subprocess.run(["userdel", login], capture_output=True, timeout=60)
-            except KeyError:
-                continue
-        subprocess.run(["groupdel", TEST_INSTRUCTORS], capture_output=True, timeout=60)
+        _remove_hub_accounts([*self.students, *self.admins], [self.cgroup])
         self._log_file.close()
         self.kept_log = Path(tempfile.gettempdir()) / f"{self.root.name}-jupyterhub.log"
         shutil.copy(self.log, self.kept_log)
         shutil.rmtree(self.root, ignore_errors=True)
         shutil.rmtree(self.runtime, ignore_errors=True)
+
+
+#: The GECOS field the class hub's config gives the accounts it makes (deploy/jupyterhub/class_hub.py).
+HUB_ACCOUNT = "mt-widgets class hub"
+
+
+def _processes_of(uids: set[int]) -> list[psutil.Process]:
+    found = []
+    for process in psutil.process_iter(["uids"]):
+        if process.info["uids"] and process.info["uids"].real in uids:
+            found.append(process)
+    return found
+
+
+def _remove_hub_accounts(logins, cgroups) -> None:
+    """Kills every process of ``logins``, removes ``cgroups`` and then the accounts.
+
+    userdel refuses an account while a process of it runs, so the killed processes are waited
+    for; a refusal is an error, not something to ignore (an account left behind stops the next
+    run's fixture).
+    """
+    accounts = {}
+    for login in logins:
+        try:
+            accounts[login] = pwd.getpwnam(login)
+        except KeyError:
+            continue
+    uids = {account.pw_uid for account in accounts.values()}
+    for _ in range(50):
+        alive = _processes_of(uids)
+        if not alive:
+            break
+        for process in alive:
+            try:
+                process.kill()
+            except psutil.NoSuchProcess:
+                pass
+        psutil.wait_procs(alive, timeout=5)
+    else:
+        raise RuntimeError(f"processes of the test accounts would not end: {_processes_of(uids)}")
+    for cgroup in cgroups:
+        for controller in ("memory", "cpu"):
+            base = Path("/sys/fs/cgroup", controller, _own_cgroup(controller).lstrip("/"), cgroup)
+            for group in sorted(base.glob("*"), reverse=True) if base.is_dir() else []:
+                if group.is_dir():
+                    _rmdir_when_empty(group)
+            if base.is_dir():
+                _rmdir_when_empty(base)
+    for login, account in accounts.items():
+        if account.pw_gecos != HUB_ACCOUNT:
+            continue  # not made by the hub: not ours to remove
+        done = subprocess.run(["userdel", login], capture_output=True, text=True, timeout=60)
+        if done.returncode not in (0, 6):  # 6: the account is already gone
+            raise RuntimeError(f"userdel {login} failed ({done.returncode}): {done.stderr.strip()}")
+    subprocess.run(["groupdel", TEST_INSTRUCTORS], capture_output=True, timeout=60)
+
+
+def remove_leftovers() -> list[str]:
+    """Removes what an earlier run that was killed (a CI timeout, a lost machine) could not: the
+    hub's ``mtt-`` accounts, their processes, the test hubs' cgroups and folders under /tmp.
+    Returns the logins it removed. Only names with the test prefix are touched."""
+    logins = sorted(user.pw_name for user in pwd.getpwall()
+                    if user.pw_name.startswith(TEST_PREFIX) and user.pw_gecos == HUB_ACCOUNT)
+    cgroups = set()
+    for controller in ("memory", "cpu"):
+        base = Path("/sys/fs/cgroup", controller, _own_cgroup(controller).lstrip("/"))
+        cgroups.update(group.name for group in base.glob(f"{TEST_PREFIX}hub-*") if group.is_dir())
+    _remove_hub_accounts(logins, sorted(cgroups))
+    for folder in Path("/tmp").glob(f"{TEST_PREFIX}hub-*"):
+        if folder.is_dir():
+            shutil.rmtree(folder, ignore_errors=True)
+    return logins
 
 
 def _own_cgroup(controller: str) -> str:

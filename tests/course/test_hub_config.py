@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 from types import SimpleNamespace
 
+import psutil
 import pytest
 import yaml
 from jupyterhub.spawner import LocalProcessSpawner
@@ -242,3 +243,40 @@ def test_students_servers_leave_out_the_package_that_costs_seconds_at_every_star
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "False"
+
+
+def test_what_a_killed_run_left_is_removed_and_nothing_else():
+    """A CI run killed mid-way leaves the hub's accounts, their processes, a cgroup and a folder;
+    the next run's sweep (hub_support.remove_leftovers) removes them, and only them."""
+    from .hub_support import HUB_ACCOUNT, _own_cgroup, remove_leftovers
+
+    left, stranger = "mtt-left-a", "mtt-left-b"
+    subprocess.run(["useradd", "--no-create-home", "--comment", HUB_ACCOUNT, left], check=True, timeout=60)
+    subprocess.run(["useradd", "--no-create-home", "--comment", "someone else", stranger], check=True, timeout=60)
+    name = f"mtt-hub-{secrets.token_hex(3)}"
+    group = Path("/sys/fs/cgroup/memory", _own_cgroup("memory").lstrip("/"), name, "student")
+    folder = Path("/tmp", name)
+    try:
+        group.mkdir(parents=True)
+        folder.mkdir()
+        uid = pwd.getpwnam(left).pw_uid
+        # The left user's process, still running in the left cgroup, as a student's kernel would be.
+        sleeper = subprocess.Popen(["sleep", "600"], user=uid, group=pwd.getpwnam(left).pw_gid)
+        (group / "cgroup.procs").write_text(str(sleeper.pid))
+        assert str(sleeper.pid) in (group / "cgroup.procs").read_text().split()
+        removed = remove_leftovers()
+        assert left in removed and stranger not in removed
+        # Killed and waited for, so userdel could go on (the sweep reaped it: no exit status is left).
+        assert sleeper.poll() is not None and not psutil.pid_exists(sleeper.pid)
+        logins = {user.pw_name for user in pwd.getpwall()}
+        assert left not in logins
+        assert stranger in logins  # the test prefix alone is not enough: only the hub's own accounts go
+        assert not group.parent.exists()
+        assert not folder.exists()
+    finally:
+        for login in (left, stranger):
+            subprocess.run(["userdel", login], capture_output=True, timeout=60)
+        shutil.rmtree(folder, ignore_errors=True)
+        for path in (group, group.parent):
+            if path.exists():
+                path.rmdir()
