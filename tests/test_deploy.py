@@ -6,6 +6,9 @@ from pathlib import Path
 
 from traitlets.config.loader import PyFileConfigLoader
 
+# Imported before the config is loaded: the config puts deploy/voila (holding a voila.py) on sys.path.
+from voila.app import Voila
+
 REPO = Path(__file__).resolve().parents[1]
 DEPLOY = REPO / "deploy" / "voila"
 
@@ -28,6 +31,10 @@ def test_shipped_configuration_culls_idle_unconnected_kernels_and_preheats_only_
     assert "@jupyter/nbgrader" in denied and "@jupyter-notebook/lab-extension" in denied
     assert not {"@jupyter-widgets/jupyterlab-manager", "ipycanvas", "@voila-dashboards/widgets-manager8"} & set(denied)
     assert config.VoilaConfiguration.preheat_kernel is True
+    # The server's own logger at INFO (its debug calls cost CPU on every relayed widget message),
+    # under the name Voila's application logs with.
+    assert Voila().log.name in config.Voila.logging_config["loggers"]
+    assert config.Voila.logging_config["loggers"][Voila().log.name]["level"] == "INFO"
     # Kernels over IPC sockets (no ports to collide on when the pools start kernels together), in a
     # connection folder short enough for a socket's path (at most 107 bytes).
     assert config.KernelManager.transport == "ipc"

@@ -144,7 +144,7 @@ def hub(tmp_path_factory):
     # logins clash with existing users, so they go first, and the run says so.
     left = remove_leftovers()
     if left:
-        warnings.warn(f"removed {len(left)} test accounts an earlier, killed run left: {left[:3]}...")
+        warnings.warn(f"removed {len(left)} test accounts an earlier, killed run left: {left[:3]}...", stacklevel=2)
     assert _test_accounts() == [], "test accounts that are not the hub's own use the test prefix"
     class_hub = ClassHub([*STUDENTS, GUESSED, RUNAWAY, LEAVER], [INSTRUCTOR], numba_template=template,
                          mem_limit="800M")
