@@ -43,7 +43,7 @@ def _watched(manager_class, session: Session):
 
 
 def _frames(session: Session, msg_type: str, content: dict, parent_type: str | None) -> list[bytes]:
-    parent = session.msg("execute_request" if parent_type is None else parent_type, {}) if parent_type else {}
+    parent = session.msg(parent_type, {}) if parent_type else {}
     message = session.msg(msg_type, content, parent=parent)
     return [b"kernel.abc.iopub", *session.serialize(message)]
 

@@ -20,8 +20,10 @@ the server's CPU per message (py-spy on a skill click, which relays about 180 wi
 This watcher reads only the header's and the parent header's JSON and the content of status
 messages, and keeps the same rules (what counts as activity, the execution state). The
 signature protects nothing here: the stream comes from the server's own kernel over a socket
-in Voila's private (0700) connection folder, and a forged message could only move an idle
-clock; the websocket that relays the messages to the page is unchanged.
+in Voila's private (0700) connection folder, which only the server's own user can reach, and
+what a message there can change is bookkeeping (the idle clock, the execution state the culler
+reads); the websocket that relays the messages to the page is unchanged. It assumes the
+session's default JSON packer (the kiosk's config sets no other).
 """
 
 from __future__ import annotations
@@ -59,7 +61,6 @@ class KioskKernelManager(AsyncMappingKernelManager):
         kernel.reason = ""
         kernel.last_activity = utcnow()
         kernel._activity_stream = kernel.connect_iopub()
-        untracked = frozenset(self.untracked_message_types)
 
         def record_activity(msg_list):
             # [identities..., <IDS|MSG>, signature, header, parent_header, metadata, content, buffers...]
@@ -72,8 +73,8 @@ class KioskKernelManager(AsyncMappingKernelManager):
                 self.log.warning("kernel %s sent an IOPub message that is not a Jupyter message", kernel_id)
                 return
             msg_type, parent_type = header.get("msg_type"), parent.get("msg_type")
-            tracked_parent = parent_type not in untracked
-            if msg_type not in untracked or tracked_parent or kernel.execution_state == "busy":
+            tracked_parent = self.track_message_type(parent_type)
+            if self.track_message_type(msg_type) or tracked_parent or kernel.execution_state == "busy":
                 self.last_kernel_activity = kernel.last_activity = utcnow()
             if msg_type == "status":
                 execution_state = json.loads(frames[start + 3])["execution_state"]

@@ -110,9 +110,10 @@ def test_twenty_visits_keep_memory_bounded_and_each_page_is_interactive_within_3
     # The kiosk's own browser: its HTTP cache on and nothing intercepted (LOCAL_ONLY_ARGS keeps it on
     # 127.0.0.1). Playwright's request interception loses some of the shutdown beacons a closing
     # page sends (2 of 10 visits against 0 of 10 without it, measured), which this test counts.
-    kiosk_browser = browser.browser_type.launch(executable_path=CHROMIUM, args=[*CHROMIUM_ARGS, *LOCAL_ONLY_ARGS])
-    context = kiosk_context(kiosk_browser, cache=True)
+    kiosk_browser = context = None
     try:
+        kiosk_browser = browser.browser_type.launch(executable_path=CHROMIUM, args=[*CHROMIUM_ARGS, *LOCAL_ONLY_ARGS])
+        context = kiosk_context(kiosk_browser, cache=True)
         wait_until_quiet(server)
         server_mb, spare_mb, kernels = memory_mb(server)
         assert kernels == 1, "one preheated spare before anyone visits"
@@ -188,6 +189,8 @@ def test_twenty_visits_keep_memory_bounded_and_each_page_is_interactive_within_3
         print(server.log.read_text()[-6000:])          # pytest shows it with the failure
         raise
     finally:
-        context.close()
-        kiosk_browser.close()
+        if context is not None:
+            context.close()
+        if kiosk_browser is not None:
+            kiosk_browser.close()
         server.stop()

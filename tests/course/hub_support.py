@@ -10,6 +10,7 @@ their cgroups. Nothing here retries: a lost kernel is a failure.
 
 from __future__ import annotations
 
+import fcntl
 import grp
 import json
 import os
@@ -92,6 +93,9 @@ class ClassHub:
         for login in (*students, *admins):
             if not login.startswith(TEST_PREFIX):
                 raise ValueError(f"test logins start with {TEST_PREFIX!r} (so cleanup finds them), got {login!r}")
+        # Held while this hub lives: remove_leftovers sweeps nothing while any test hub runs.
+        self._lock = open(HUB_LOCK, "a")  # noqa: SIM115 (closed by stop)
+        fcntl.flock(self._lock, fcntl.LOCK_SH)
         # Students must be able to enter the hub's folders: /tmp, then this 0711 folder.
         self.root = Path(tempfile.mkdtemp(prefix=f"{TEST_PREFIX}hub-", dir="/tmp"))
         os.chmod(self.root, 0o711)
@@ -361,22 +365,63 @@ class ClassHub:
             except subprocess.TimeoutExpired:
                 os.killpg(self.process.pid, signal.SIGKILL)
                 self.process.wait(5)
-        _remove_hub_accounts([*self.students, *self.admins], [self.cgroup])
-        self._log_file.close()
-        self.kept_log = Path(tempfile.gettempdir()) / f"{self.root.name}-jupyterhub.log"
-        shutil.copy(self.log, self.kept_log)
-        shutil.rmtree(self.root, ignore_errors=True)
-        shutil.rmtree(self.runtime, ignore_errors=True)
+        try:
+            _remove_hub_accounts([*self.students, *self.admins], [self.cgroup])
+        finally:
+            # The log is kept and the folders go even when an account would not go (that error
+            # is raised after this, and the log says why).
+            self._log_file.close()
+            self.kept_log = Path(tempfile.gettempdir()) / f"{self.root.name}-jupyterhub.log"
+            shutil.copy(self.log, self.kept_log)
+            shutil.rmtree(self.root, ignore_errors=True)
+            shutil.rmtree(self.runtime, ignore_errors=True)
+            self._lock.close()
 
 
-#: The GECOS field the class hub's config gives the accounts it makes (deploy/jupyterhub/class_hub.py).
+#: The GECOS field the class hub's config gives the accounts it makes (``class_hub.MARKER`` in
+#: deploy/jupyterhub/class_hub.py; tests/course/test_hub_config.py checks they agree).
 HUB_ACCOUNT = "mt-widgets class hub"
+#: Every live ClassHub holds this file locked (shared); remove_leftovers needs it exclusively.
+HUB_LOCK = Path("/tmp", f"{TEST_PREFIX}hub.lock")
 
 
 def _processes_of(uids: set[int]) -> list[psutil.Process]:
     found = []
     for process in psutil.process_iter(["uids"]):
         if process.info["uids"] and process.info["uids"].real in uids:
+            found.append(process)
+    return found
+
+
+def _end_processes(find) -> None:
+    """Kills what ``find()`` lists until it lists nothing, waiting for each (at most 50 rounds)."""
+    for _ in range(50):
+        alive = find()
+        if not alive:
+            return
+        for process in alive:
+            try:
+                process.kill()
+            except psutil.NoSuchProcess:
+                pass
+        psutil.wait_procs(alive, timeout=5)
+    left = find()
+    if left:
+        raise RuntimeError(f"these processes would not end: {left}")
+
+
+def _hub_processes() -> list[psutil.Process]:
+    """Processes of test hubs (JupyterHub, its proxy) found by their working folder or environment."""
+    found = []
+    for process in psutil.process_iter(["pid"]):
+        if process.pid == os.getpid():
+            continue
+        try:
+            cwd = process.cwd()
+            cgroup = process.environ().get("MT_HUB_CGROUP", "")
+        except (psutil.NoSuchProcess, psutil.AccessDenied, psutil.ZombieProcess):
+            continue
+        if cwd.startswith(f"/tmp/{TEST_PREFIX}hub-") or cgroup.startswith(f"{TEST_PREFIX}hub-"):
             found.append(process)
     return found
 
@@ -391,22 +436,12 @@ def _remove_hub_accounts(logins, cgroups) -> None:
     accounts = {}
     for login in logins:
         try:
-            accounts[login] = pwd.getpwnam(login)
+            account = pwd.getpwnam(login)
         except KeyError:
             continue
-    uids = {account.pw_uid for account in accounts.values()}
-    for _ in range(50):
-        alive = _processes_of(uids)
-        if not alive:
-            break
-        for process in alive:
-            try:
-                process.kill()
-            except psutil.NoSuchProcess:
-                pass
-        psutil.wait_procs(alive, timeout=5)
-    else:
-        raise RuntimeError(f"processes of the test accounts would not end: {_processes_of(uids)}")
+        if account.pw_gecos == HUB_ACCOUNT:  # not made by the hub: not ours to touch
+            accounts[login] = account
+    _end_processes(lambda: _processes_of({account.pw_uid for account in accounts.values()}))
     for cgroup in cgroups:
         for controller in ("memory", "cpu"):
             base = Path("/sys/fs/cgroup", controller, _own_cgroup(controller).lstrip("/"), cgroup)
@@ -415,9 +450,7 @@ def _remove_hub_accounts(logins, cgroups) -> None:
                     _rmdir_when_empty(group)
             if base.is_dir():
                 _rmdir_when_empty(base)
-    for login, account in accounts.items():
-        if account.pw_gecos != HUB_ACCOUNT:
-            continue  # not made by the hub: not ours to remove
+    for login in accounts:
         done = subprocess.run(["userdel", login], capture_output=True, text=True, timeout=60)
         if done.returncode not in (0, 6):  # 6: the account is already gone
             raise RuntimeError(f"userdel {login} failed ({done.returncode}): {done.stderr.strip()}")
@@ -425,19 +458,27 @@ def _remove_hub_accounts(logins, cgroups) -> None:
 
 
 def remove_leftovers() -> list[str]:
-    """Removes what an earlier run that was killed (a CI timeout, a lost machine) could not: the
-    hub's ``mtt-`` accounts, their processes, the test hubs' cgroups and folders under /tmp.
-    Returns the logins it removed. Only names with the test prefix are touched."""
-    logins = sorted(user.pw_name for user in pwd.getpwall()
-                    if user.pw_name.startswith(TEST_PREFIX) and user.pw_gecos == HUB_ACCOUNT)
-    cgroups = set()
-    for controller in ("memory", "cpu"):
-        base = Path("/sys/fs/cgroup", controller, _own_cgroup(controller).lstrip("/"))
-        cgroups.update(group.name for group in base.glob(f"{TEST_PREFIX}hub-*") if group.is_dir())
-    _remove_hub_accounts(logins, sorted(cgroups))
-    for folder in Path("/tmp").glob(f"{TEST_PREFIX}hub-*"):
-        if folder.is_dir():
-            shutil.rmtree(folder, ignore_errors=True)
+    """Removes what an earlier run that was killed (a CI timeout, a lost machine) could not: its
+    hub and proxy, the hub's ``mtt-`` accounts and their processes, the test hubs' cgroups and
+    folders under /tmp. Returns the logins it removed. Only the hub's own accounts (the test
+    prefix and the hub's GECOS mark) are touched; while any test hub is alive (it holds
+    ``HUB_LOCK``) nothing is, and this raises."""
+    with open(HUB_LOCK, "a") as lock:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise RuntimeError("another test hub is running on this machine: nothing was removed") from None
+        _end_processes(_hub_processes)
+        logins = sorted(user.pw_name for user in pwd.getpwall()
+                        if user.pw_name.startswith(TEST_PREFIX) and user.pw_gecos == HUB_ACCOUNT)
+        cgroups = set()
+        for controller in ("memory", "cpu"):
+            base = Path("/sys/fs/cgroup", controller, _own_cgroup(controller).lstrip("/"))
+            cgroups.update(group.name for group in base.glob(f"{TEST_PREFIX}hub-*") if group.is_dir())
+        _remove_hub_accounts(logins, sorted(cgroups))
+        for folder in Path("/tmp").glob(f"{TEST_PREFIX}hub-*"):
+            if folder.is_dir():
+                shutil.rmtree(folder, ignore_errors=True)
     return logins
 
 

@@ -245,35 +245,55 @@ def test_students_servers_leave_out_the_package_that_costs_seconds_at_every_star
     assert result.stdout.strip() == "False"
 
 
+@pytest.mark.skipif(not Path("/sys/fs/cgroup/memory/cgroup.procs").exists(),
+                    reason="the class hub's limits use cgroup v1's memory controller")
 def test_what_a_killed_run_left_is_removed_and_nothing_else():
-    """A CI run killed mid-way leaves the hub's accounts, their processes, a cgroup and a folder;
-    the next run's sweep (hub_support.remove_leftovers) removes them, and only them."""
-    from .hub_support import HUB_ACCOUNT, _own_cgroup, remove_leftovers
+    """A CI run killed mid-way leaves its hub (a root process in the hub's folder), the hub's
+    accounts with their processes, a cgroup and a folder; the next run's sweep
+    (hub_support.remove_leftovers) removes them, and only them, and nothing while a hub lives."""
+    import fcntl
 
+    from .hub_support import HUB_ACCOUNT, HUB_LOCK, _own_cgroup, remove_leftovers
+
+    assert HUB_ACCOUNT == class_hub.MARKER
     left, stranger = "mtt-left-a", "mtt-left-b"
     subprocess.run(["useradd", "--no-create-home", "--comment", HUB_ACCOUNT, left], check=True, timeout=60)
     subprocess.run(["useradd", "--no-create-home", "--comment", "someone else", stranger], check=True, timeout=60)
     name = f"mtt-hub-{secrets.token_hex(3)}"
     group = Path("/sys/fs/cgroup/memory", _own_cgroup("memory").lstrip("/"), name, "student")
     folder = Path("/tmp", name)
+    sleepers = []
     try:
         group.mkdir(parents=True)
         folder.mkdir()
-        uid = pwd.getpwnam(left).pw_uid
-        # The left user's process, still running in the left cgroup, as a student's kernel would be.
-        sleeper = subprocess.Popen(["sleep", "600"], user=uid, group=pwd.getpwnam(left).pw_gid)
-        (group / "cgroup.procs").write_text(str(sleeper.pid))
-        assert str(sleeper.pid) in (group / "cgroup.procs").read_text().split()
+        account = pwd.getpwnam(left)
+        # The left user's process, still running in the left cgroup, as a student's kernel would be;
+        # and the killed run's hub, a root process working in the hub's folder.
+        student = subprocess.Popen(["sleep", "600"], user=account.pw_uid, group=account.pw_gid)
+        hub = subprocess.Popen(["sleep", "600"], cwd=folder)
+        sleepers += [student, hub]
+        (group / "cgroup.procs").write_text(str(student.pid))
+        assert str(student.pid) in (group / "cgroup.procs").read_text().split()
+        # While a hub lives (it holds the lock), nothing is swept.
+        with open(HUB_LOCK, "a") as lock:
+            fcntl.flock(lock, fcntl.LOCK_SH)
+            with pytest.raises(RuntimeError, match="another test hub is running"):
+                remove_leftovers()
+        assert student.poll() is None and hub.poll() is None and folder.exists()
         removed = remove_leftovers()
         assert left in removed and stranger not in removed
-        # Killed and waited for, so userdel could go on (the sweep reaped it: no exit status is left).
-        assert sleeper.poll() is not None and not psutil.pid_exists(sleeper.pid)
+        # Killed and waited for, so userdel could go on (the sweep reaped them: no exit status is left).
+        for sleeper in (student, hub):
+            assert sleeper.poll() is not None and not psutil.pid_exists(sleeper.pid)
         logins = {user.pw_name for user in pwd.getpwall()}
         assert left not in logins
         assert stranger in logins  # the test prefix alone is not enough: only the hub's own accounts go
         assert not group.parent.exists()
         assert not folder.exists()
     finally:
+        for sleeper in sleepers:
+            sleeper.kill()
+            sleeper.wait()
         for login in (left, stranger):
             subprocess.run(["userdel", login], capture_output=True, timeout=60)
         shutil.rmtree(folder, ignore_errors=True)
