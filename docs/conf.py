@@ -5,7 +5,8 @@ At each build this file writes what is generated from the code and the data (nev
 
 - the API reference's package pages, docs/api/<package>.md, from every package's ``__all__``
   (docs/_ext/api_names.py); autosummary then writes one page per name into docs/api/generated/;
-- the tutorials, copied from tutorials/ into docs/tutorials/ (Sphinx reads only files under docs/);
+- the tutorials and the apps' notebooks, copied from tutorials/ and notebooks/ into docs/ (Sphinx
+  reads only files under docs/);
 - the benchmark figures, docs/benchmarks/_figures/*.png, plotted from docs/benchmarks/*.json;
 - the list of the user guide's pages, docs/guide/*.md, whichever exist (docs/guide.md).
 """
@@ -43,12 +44,16 @@ extensions = [
 myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 
-# The tutorials are rendered as they are committed, without outputs, unless MT_WIDGETS_DOCS_EXECUTE
-# is set (see docs/tutorials.md for the measured cost of executing them at every build).
+# The tutorials and the apps' notebooks are executed at every build, shortened by the test suite's
+# one switch (their `parameters` cells, tests/notebook_parameters.py), so the site shows the outputs
+# of today's code; a notebook that fails fails the build. About 100 s of the build (docs/tutorials.md);
+# MT_WIDGETS_DOCS_EXECUTE=0 renders them as committed, without outputs, for a quick draft.
 import os  # noqa: E402
 
-nb_execution_mode = "force" if os.environ.get("MT_WIDGETS_DOCS_EXECUTE") == "1" else "off"
+EXECUTE = os.environ.get("MT_WIDGETS_DOCS_EXECUTE", "1") != "0"
+nb_execution_mode = "force" if EXECUTE else "off"
 nb_execution_timeout = 600
+nb_execution_cache_path = str(DOCS / "_build" / ".jupyter_cache")
 nb_execution_raise_on_error = True
 nb_merge_streams = True
 
@@ -114,15 +119,56 @@ def _write_api_pages() -> None:
         (folder / f"{package}.md").write_text("\n".join(lines))
 
 
-def _copy_tutorials() -> None:
-    """tutorials/*.ipynb into docs/tutorials/, where Sphinx reads them (the committed notebooks)."""
-    target = DOCS / "tutorials"
-    shutil.rmtree(target, ignore_errors=True)
-    target.mkdir()
-    for path in sorted((ROOT / "tutorials").glob("*.ipynb")):
-        shutil.copy2(path, target / path.name)
-    for path in sorted((ROOT / "tutorials").glob("*.toml")):   # the capstone's protocol
-        shutil.copy2(path, target / path.name)
+def _copy_notebooks() -> None:
+    """tutorials/ and notebooks/ (the apps' notebooks, which the start-here tutorial links) into
+    docs/tutorials/ and docs/notebooks/, where Sphinx reads them: the committed notebooks, and the
+    files next to them that they read (the capstone's and the online pilot's protocols)."""
+    for folder in ("tutorials", "notebooks"):
+        target = DOCS / folder
+        shutil.rmtree(target, ignore_errors=True)
+        target.mkdir()
+        for path in sorted((ROOT / folder).glob("*.ipynb")) + sorted((ROOT / folder).glob("*.toml")):
+            shutil.copy2(path, target / path.name)
+            if path.suffix == ".ipynb":
+                _titled(target / path.name, f"{folder}/{path.name}")
+            if EXECUTE and path.suffix == ".ipynb":
+                _shorten(path, target / path.name)
+
+
+def _titled(copy: Path, name: str) -> None:
+    """An app's notebook (a page served by Voila) starts with code, not a heading: the copy gets its
+    file's name as its title, as Sphinx needs one for the contents."""
+    import json
+
+    content = json.loads(copy.read_text())
+    first = next((cell for cell in content["cells"] if cell["cell_type"] == "markdown"), None)
+    if first is not None and "".join(first["source"]).lstrip().startswith("# "):
+        return
+    content["cells"].insert(0, {"cell_type": "markdown", "metadata": {}, "source": [f"# `{name}`"]})
+    copy.write_text(json.dumps(content, indent=1))
+
+
+def _shorten(source: Path, copy: Path) -> None:
+    """The test run's one switch (tests/notebook_parameters.py) on a copy to execute: its cell tagged
+    ``parameters`` gets the test run's values (fewer simulated studies, the simulated arm at 50x,
+    a synthetic novice in the capstone, scratch folders instead of ~/mt-widgets-lessons)."""
+    import json
+
+    from tests.notebook_parameters import NOTEBOOK_PARAMETERS, TAG, Scratch, injected_source, scratch_root
+
+    notebook = source.relative_to(ROOT).as_posix()
+    values = NOTEBOOK_PARAMETERS.get(notebook)
+    if values is None:
+        return
+    root = scratch_root(ROOT) / "docs"
+    for value in values.values():
+        if isinstance(value, Scratch):
+            shutil.rmtree(root / value.name, ignore_errors=True)
+            (root / value.name).mkdir(parents=True)
+    content = json.loads(copy.read_text())
+    [cell] = [cell for cell in content["cells"] if TAG in cell.get("metadata", {}).get("tags", [])]
+    cell["source"] = injected_source("".join(cell["source"]), values, root, notebook)
+    copy.write_text(json.dumps(content, indent=1))
 
 
 def _guide_pages(app, docname, source) -> None:
@@ -178,7 +224,7 @@ def _constant_docs(app, what, name, obj, options, lines) -> None:
 
 
 _write_api_pages()
-_copy_tutorials()
+_copy_notebooks()
 benchmark_figures.plot_all(DOCS / "benchmarks", DOCS / "benchmarks" / "_generated")
 
 

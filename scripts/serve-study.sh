@@ -11,7 +11,7 @@
 # is made up and printed here. Logs go to $MT_WIDGETS_STUDY_LOGS, else ~/mt-widgets-studies/<protocol>;
 # the online page's protocol is $MT_WIDGETS_STUDY_PROTOCOL (a file with an [online] table; default:
 # the pilot, notebooks/study_online_pilot.toml). Open http://localhost:8866/ . Extra arguments go
-# to Voila, e.g. --port=8000. Serving on the internet: README, "Serving the online study".
+# to Voila, e.g. --port=8000. Serving on the internet: docs/user/deploy.md, "Serving the online study on the internet".
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 source "$REPO/scripts/setup.sh"

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from _pytest.mark.expression import Expression
 
-from tiers import HUB_TESTS, LINT_TESTS, MARKS, TIERS, tier_expression, tier_paths
+from tiers import DOCS_TESTS, HUB_TESTS, LINT_TESTS, MARKS, TIERS, tier_expression, tier_paths
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -30,7 +30,7 @@ def test_the_cheap_tiers_run_first():
 
 
 def test_the_files_the_marks_name_exist_and_the_marks_are_declared():
-    for path in LINT_TESTS + HUB_TESTS:
+    for path in LINT_TESTS + HUB_TESTS + DOCS_TESTS:
         assert (ROOT / path).is_file(), f"tests/tiers.py names {path}, which does not exist"
     declared = {line.split(":")[0].strip().strip('"') for line in
                 (ROOT / "pyproject.toml").read_text().split("markers = [", 1)[1].split("]", 1)[0].splitlines()
@@ -60,4 +60,5 @@ def test_the_script_lists_the_tiers_for_run_tests():
     assert [tuple(line.split("\t")) for line in listed.splitlines()] == [
         (name, expression, *tier_paths(name)) for name, expression in TIERS]
     assert tier_paths("lint") == LINT_TESTS and tier_paths("hub") == HUB_TESTS and tier_paths("fast") == ()
+    assert tier_paths("docs") == DOCS_TESTS
     assert "tests/tiers.py" in (ROOT / "scripts" / "run-tests.sh").read_text()

@@ -7,7 +7,8 @@ A tier is a pytest marker expression over five marks, set by tests/conftest.py (
   ``browser*``, or carries ``@pytest.mark.browser``);
 - ``notebook``: a notebook cell run by nbval;
 - ``hub``: a test that starts a JupyterHub or loads its config as root (tests/course/test_hub.py, test_hub_config.py);
-- ``slow``: a test that takes seconds, marked ``@pytest.mark.slow`` where it is written.
+- ``slow``: a test that takes seconds, marked ``@pytest.mark.slow`` where it is written;
+- ``docs``: tests/docs/test_docs_build.py, which builds the documentation site with Sphinx.
 
 Every test belongs to exactly one tier (tests/test_fast_tier.py checks it over every combination
 of marks). The cheap tiers come first, so a lint error or a broken core stops the run in a minute
@@ -21,20 +22,24 @@ This module imports nothing from pytest: the scripts read it before any test run
 from __future__ import annotations
 
 #: The marks tests/conftest.py sets; a tier selects by these only.
-MARKS = ("lint", "browser", "notebook", "hub", "slow")
+MARKS = ("lint", "browser", "notebook", "hub", "slow", "docs")
 
 #: The files whose tests are ``lint``, and ``hub``, as paths from the repository's root.
 LINT_TESTS = ("tests/test_lint.py",)
 # test_hub_config.py makes system users and needs the students' Python of scripts/install-hub.sh,
 # which run-tests.sh prepares only after the cheap tiers.
 HUB_TESTS = ("tests/course/test_hub.py", "tests/course/test_hub_config.py")
+# The documentation site's build (./scripts/build-docs.sh, about a minute): a tier of its own, after
+# the cheap ones and before the browser, which it does not need.
+DOCS_TESTS = ("tests/docs/test_docs_build.py",)
 
 #: (name, marker expression), in the order they run. ``fast`` is what scripts/test-fast.sh runs
 #: after ``lint``: the edit loop's tiers.
 TIERS = (
     ("lint", "lint"),
-    ("fast", "not lint and not browser and not notebook and not hub and not slow"),
-    ("slow", "slow and not lint and not browser and not notebook and not hub"),
+    ("fast", "not lint and not browser and not notebook and not hub and not slow and not docs"),
+    ("slow", "slow and not lint and not browser and not notebook and not hub and not docs"),
+    ("docs", "docs and not lint and not browser and not notebook and not hub"),
     ("browser", "browser and not lint and not notebook and not hub"),
     ("notebook", "notebook and not lint and not hub"),
     ("hub", "hub and not lint"),
@@ -50,10 +55,10 @@ def tier_expression(name: str) -> str:
 
 
 def tier_paths(name: str) -> tuple[str, ...]:
-    """Where the tier ``name``'s tests are, when its mark is given by files (``lint``, ``hub``): the
+    """Where the tier ``name``'s tests are, when its mark is given by files (``lint``, ``hub``, ``docs``): the
     run collects only those (seconds instead of the whole suite's minute); () for the whole suite."""
     tier_expression(name)
-    return {"lint": LINT_TESTS, "hub": HUB_TESTS}.get(name, ())
+    return {"lint": LINT_TESTS, "hub": HUB_TESTS, "docs": DOCS_TESTS}.get(name, ())
 
 
 if __name__ == "__main__":

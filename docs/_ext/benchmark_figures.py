@@ -35,7 +35,8 @@ def tables(results: dict) -> dict[str, str]:
                           f"{row['ratio']:.1f}x (target {row['target_ratio']}x)"])
     for row in core["other"]:
         core_rows.append([row["what"], row["measured"], row.get("target"), None])
-    targets = [[row["what"], row["measured"], row["target"], f"{row['ratio']:.2f}"] for row in results["targets"]["rows"]]
+    targets = [[row["what"], row["measured"], row["target"], f"{row['ratio']:.2f}"]
+               for row in results["targets"]["rows"]]
     kiosk = results["kiosk"]
     memory = kiosk["memory_after_11_visits_mb"]
     first = kiosk["runs"][6]
@@ -45,7 +46,8 @@ def tables(results: dict) -> dict[str, str]:
           f"{memory['stock']:,} MB ({memory['stock_kernels']} kernels)", f"{memory['shipped'] / memory['stock']:.2f}",
           f"{memory['shipped_no_preheat']} MB"],
          ["time to interactive, warm, p50 / p95", f"{first['shipped_p50']:.2f} s / {first['shipped_p95']:.2f} s",
-          f"{first['stock_p50']:.2f} s / {first['stock_p95']:.2f} s", f"{first['shipped_p50'] / first['stock_p50']:.2f}",
+          f"{first['stock_p50']:.2f} s / {first['stock_p95']:.2f} s",
+          f"{first['shipped_p50'] / first['stock_p50']:.2f}",
           f"{first['shipped_no_preheat_p50']:.2f} s / {first['shipped_no_preheat_p95']:.2f} s"]])
     kiosk_runs = _table(["date", "run", "shipped p50", "shipped p95", "stock p50", "stock p95", "ratio (p50)"],
                         [[run["date"], run["label"], _seconds(run["shipped_p50"]), _seconds(run.get("shipped_p95")),
@@ -73,9 +75,10 @@ def tables(results: dict) -> dict[str, str]:
     before = hub["before"]
     target = hub["targets"]
     hub_before = _table(["what (thirty students)", "before (issue, idle)", "target (idle)"],
-                        [["spawn, all started together", before["spawn"], f"thirty within {target['spawn_all_ready_s']} s"],
-                         ["first episode, fresh kernel, imports included", f"three episodes: {before['first_episode_s']} s",
-                          f"{target['first_episode_s']} s"],
+                        [["spawn, all started together", before["spawn"],
+                          f"thirty within {target['spawn_all_ready_s']} s"],
+                         ["first episode, fresh kernel, imports included",
+                          f"three episodes: {before['first_episode_s']} s", f"{target['first_episode_s']} s"],
                          ["feedback, human pace (an arrow every 3-8 s)", "not measured",
                           f"p95 <= {target['feedback_p95_ms']} ms"],
                          ["feedback, all at once", before["feedback_all_at_once"], "reported"],
