@@ -7,7 +7,8 @@ for the UR5). ``tests/robot_models/test_urdf.py`` regenerates that module from t
 example-robot-data ships and checks it is identical, so the shipped numbers never drift from
 the file and are never typed by hand.
 
-Regenerate with ``python -m mt_widgets.robot_models.urdf ur5 > mt_widgets/core/ur5_description.py``.
+Regenerate with ``python -m mt_widgets.robot_models.urdf ur5 --write`` (the module is generated
+first, then written: importing this package imports ``core``, which imports the old module).
 """
 
 from __future__ import annotations
@@ -102,9 +103,10 @@ def read_serial_chain(urdf_text: str, tip: str) -> dict:
                              f"are supported on the chain")
     on_path = {roots[0]} | {joint["child"] for joint in path}
     branches = []
-    frontier = list(on_path)
+    # Breadth first from the root, in the URDF's order: the same file always gives the same list.
+    frontier = [roots[0]] + [joint["child"] for joint in path]
     while frontier:
-        parent = frontier.pop()
+        parent = frontier.pop(0)
         for joint in joints.values():
             if joint["parent"] == parent and joint["child"] not in on_path and joint not in branches:
                 if joint["type"] != "fixed":
@@ -172,5 +174,14 @@ def generate(robot: str) -> str:
     return description_module(chain, f"example-robot-data {version}: {EXAMPLE_ROBOT_DATA[robot][0]}")
 
 
+#: Where each robot's description module lives in the source tree.
+DESCRIPTION_MODULES = {"ur5": Path(__file__).resolve().parents[1] / "core" / "ur5_description.py"}
+
+
 if __name__ == "__main__":
-    sys.stdout.write(generate(sys.argv[1] if len(sys.argv) > 1 else "ur5"))
+    name = next((arg for arg in sys.argv[1:] if not arg.startswith("--")), "ur5")
+    source = generate(name)
+    if "--write" in sys.argv[1:]:
+        DESCRIPTION_MODULES[name].write_text(source, encoding="utf-8")
+    else:
+        sys.stdout.write(source)

@@ -1,13 +1,16 @@
-"""The UR5 chain built from its URDF's numbers against pinocchio loading the same URDF, to 1e-9."""
+"""The UR5 chain built from its URDF's numbers against pinocchio loading the same URDF, to 1e-9:
+kinematics, the mass matrix, bias forces, gravity, forward dynamics and whole reproductions."""
 
 import numpy as np
 import pytest
 
+from mt_widgets import SKILLS
 from mt_widgets.core import ur5_description
 from mt_widgets.core.serial_chain import SerialChain
 
 pin = pytest.importorskip("pinocchio")
 urdf = pytest.importorskip("mt_widgets.robot_models.urdf")
+pinocchio_reference = pytest.importorskip("mt_widgets.robot_models.pinocchio_reference")
 
 TOLERANCE = 1e-9
 
@@ -104,3 +107,15 @@ def test_bad_configurations_are_refused_by_name(chain):
         chain.mass_matrix(np.zeros(5))
     with pytest.raises(ValueError, match="qd: expected finite"):
         chain.nonlinear_effects(np.zeros(6), [0, 0, np.nan, 0, 0, 0])
+
+
+@pytest.mark.parametrize("key", ["ur5-reach", "ur5-place", "ur5-conveyor"])
+def test_a_reproduction_matches_pinocchios_aba_stepped_the_same_way(key):
+    skill = SKILLS[key]
+    # Not the skill itself, whose reproduction settles: a policy off the target keeps the arm moving.
+    theta = skill.theta + 0.1 * np.random.default_rng(1).standard_normal(skill.theta.shape)
+    ours = skill.reproduce(theta)
+    assert not ours.diverged
+    reference = pinocchio_reference.PinocchioUR5(skill.plant).rollout(theta, skill.start, 10.0)
+    assert np.abs(ours.states - reference).max() < TOLERANCE
+    assert np.abs(ours.states[:, 6:12]).max() > 0.1          # it moved
