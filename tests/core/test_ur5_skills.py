@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from mt_widgets import SKILLS, RidgeLearner, TeachingEpisode, optimal_actions, teaching_risk
+from mt_widgets.core import FunctionFeatures
 from mt_widgets.core.features import ToolFeatures
 from mt_widgets.core.query_states import condition_number
 from mt_widgets.core.ur5_plant import UR5Plant
@@ -195,3 +196,22 @@ def test_bad_input_is_refused_with_the_argument_the_expectation_and_what_came():
         skill.plant.state_at((0.5, 0.0, 0.2), phase=0.1)
     with pytest.raises(ValueError, match="position: expected a point the tool can reach"):
         skill.plant.state_at((3.0, 0.0, 0.2))
+
+
+def test_the_compiled_rollout_equals_the_generic_rollout_of_a_users_feature_map():
+    skill = SKILLS["ur5-conveyor"]
+    plant = skill.plant
+    # The same features, as a user would write them: the generic RK4 loop of ContinuousPlant runs.
+    mine = FunctionFeatures(plant, lambda x: np.concatenate([plant.end_effector(x)[0], x[:, -1:], np.ones((len(x), 1))],
+                                                            axis=1), names=("r1", "r2", "r3", "s", "1"))
+    thetas = np.stack([skill.theta, skill.theta + 0.2])
+    compiled = plant.rollout(thetas, skill.feature_map, skill.start, 0.3)
+    generic = plant.rollout(thetas, mine, skill.start, 0.3)
+    np.testing.assert_allclose(generic.states, compiled.states, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(generic.actions, compiled.actions, rtol=0, atol=1e-12)
+    # and the generic loop stops at the table too, through the plant's safety check
+    down = np.zeros((1, 3, 5))
+    down[0, 2, 4] = -0.3
+    stopped = plant.rollout(down, mine, plant.state_at((0.5, 0.1, 0.07), phase=0.0), 0.3)
+    assert stopped.diverged[0] and np.all(np.isfinite(stopped.states))
+    assert np.all(plant.safety(stopped[0].states) == "")
