@@ -279,6 +279,9 @@ class UR5Plant(ContinuousPlant):
             return super().rollout(thetas, feature_map, start, duration, record_every)
         thetas, start, n_steps = _check_rollout(self, thetas, feature_map, start, duration, self.control_rate)
         record_every = as_count("record_every", record_every if record_every is not None else 1)
+        # Writable copies: numba compiles one version per array flag, and a skill's Theta and start
+        # are read-only while a learnt Theta is not; one version serves both.
+        thetas, start = np.array(thetas, order="C"), np.array(start, order="C")
         dt = 1.0 / self.control_rate
         batch, n_samples = thetas.shape[0], n_steps // record_every + 1
         states = np.empty((batch, n_samples, self.state_dim))
@@ -290,7 +293,7 @@ class UR5Plant(ContinuousPlant):
                               chain.effort_limit, self.velocity_gain, self.damping, self.speed_tolerance,
                               self.table_height, self.first_table_point, self.collision_pairs, self.link_radius,
                               self.conveyor.speed if self.conveyor is not None else 0.0, self.conveyor is not None,
-                              np.ascontiguousarray(thetas), np.ascontiguousarray(start), dt, n_steps, record_every,
+                              thetas, start, dt, n_steps, record_every,
                               states, positions, velocities, actions, lengths, stop_step, stop_code)
         stopped = stop_step >= 0
         diverged_at = np.where(stopped, stop_step * dt, np.nan)
