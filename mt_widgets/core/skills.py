@@ -17,7 +17,7 @@ from .arm_plant import ArmPlant
 from .drawing import PlantDrawing, PoseSketch, TargetShape
 from .features import ConveyorFeatures, EndEffectorFeatures, FeatureMap, PositionFeatures, ToolFeatures
 from .query_states import sample_query_states
-from .targets import LineTarget, PointTarget, Target
+from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
 from .uarm_plant import UArmPlant
 from .ur5_plant import Conveyor, UR5Plant
 from .validation import UnknownKeyError, as_bool, as_count, as_float_array, as_positive
@@ -236,13 +236,16 @@ def _ur5_skills() -> dict[str, Skill]:
     # (tests/core/test_ur5_skills.py measures them), as for the paper's skills.
     skills = [
         Skill("ur5-reach", "Reach the part on the table", table, ToolFeatures(table), reach, home,
+              SpacePointTarget(UR5_PART),
               description="Move the tool to the part waiting on the table at (0.55, -0.10, 0.10) m: "
                           "velocity = 0.8 (part - tool).", max_condition=50.0),
         Skill("ur5-place", "Place the part at the fixture", table, ToolFeatures(table), place, above_part,
+              SpacePointTarget(UR5_FIXTURE),
               description="Carry the part across to the fixture at (0.40, 0.35, 0.12) m, lowering it more slowly "
                           "than it moves across.", max_condition=50.0),
         Skill("ur5-conveyor", "Follow the part on the conveyor", line, ConveyorFeatures(line), follow,
               np.concatenate([home, [0.0]]),
+              ConveyorTarget(UR5_CONVEYOR.origin, UR5_CONVEYOR.direction, UR5_CONVEYOR.phase_range),
               description="Catch up with the part riding the conveyor (5 cm/s along y) and move with it.",
               max_condition=70.0),
     ]

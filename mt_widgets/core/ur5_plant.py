@@ -21,6 +21,7 @@ from numba import njit
 
 from . import chain_dynamics as dyn
 from . import chain_rollout, ur5_description
+from .drawing import SPACE_VIEWS, PoseSketch, SpaceDrawing, ViewProjection
 from .features import ConveyorFeatures, ToolFeatures
 from .plants import ContinuousPlant, _check_rollout
 from .serial_chain import SerialChain
@@ -34,6 +35,9 @@ UR5_HOME = (0.0, -np.pi / 2, np.pi / 2, -np.pi / 2, -np.pi / 2, 0.0)
 
 #: Where the tool is taught, in the base frame (m): in front of the arm, above the table.
 UR5_TEACHING_BOX = Cuboid((0.30, 0.65), (-0.25, 0.45), (0.05, 0.45))
+
+#: What every view of the UR5 frames (m): the arm at home and all it does over the teaching box.
+UR5_SCENE = Cuboid((-0.25, 0.90), (-0.50, 0.70), (0.0, 0.85))
 
 
 @dataclass(frozen=True)
@@ -158,6 +162,36 @@ class UR5Plant(ContinuousPlant):
         n = self.n_joints
         q, qd = states[..., :n], states[..., n:2 * n]
         return self.chain.forward_kinematics(q), self.chain.tool_velocity(q, qd)
+
+    def drawing(self) -> SpaceDrawing:
+        """Three views (top, side, perspective) of the scene: the table top, the conveyor's strip if any.
+
+        Arrows of 0.5 m per m/s: the skills' 0.1-0.4 m/s tool velocities read as 5-20 cm arrows
+        beside a 0.9 m arm; the tool's velocity likewise.
+        """
+        (x0, x1), (y0, y1) = UR5_SCENE.xlim, UR5_SCENE.ylim
+        z = self.table_height
+        surfaces = [np.array([[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z], [x0, y0, z]])]
+        if self.conveyor is not None:
+            # The strip the part's grasp point travels along over the phases taught and 0.5 m on.
+            origin, direction = np.asarray(self.conveyor.origin), np.asarray(self.conveyor.direction)
+            across = np.cross(direction, [0.0, 0.0, 1.0])
+            across = 0.06 * across / (np.linalg.norm(across) or 1.0)
+            low, high = self.conveyor.phase_range
+            a, b = origin + (low - 0.1) * direction, origin + (high + 0.5) * direction
+            surfaces.append(np.array([a - across, b - across, b + across, a + across, a - across]))
+        centre = tuple(float(v) for v in (UR5_SCENE.low + UR5_SCENE.high) / 2.0)
+        views = tuple(ViewProjection(name, centre=centre) for name in SPACE_VIEWS)
+        return SpaceDrawing(bounds=UR5_SCENE, units=self.units, action_units=self.action_units, views=views,
+                            base=(0.0, 0.0, self.table_height), surfaces=tuple(surfaces),
+                            link_radius=self.link_radius, action_length=0.5, velocity_length=0.5)
+
+    def sketch(self, states) -> PoseSketch:
+        """The chain (..., 8, 3) m (base, joint origins, tool) and the tool's velocity (..., 3) m/s."""
+        states = self.check_states("states", states)
+        n = self.n_joints
+        q, qd = states[..., :n], states[..., n:2 * n]
+        return PoseSketch(self.chain.frame_origins(q), self.chain.tool_velocity(q, qd))
 
     def conveyor_phase(self, states) -> np.ndarray:
         """The conveyor's phase s (m) of states (..., state_dim) -> (...)."""
