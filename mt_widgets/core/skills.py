@@ -219,11 +219,12 @@ def _ur5_skills() -> dict[str, Skill]:
     home = np.concatenate([table.home, np.zeros(table.n_joints)])
     part, fixture = np.array(UR5_PART), np.array(UR5_FIXTURE)
     # reach: v = 0.8 (part - r), the tool closes 55% of the gap each second, from the home pose.
-    reach = np.hstack([-0.8 * np.eye(3), 0.8 * part[:, None]])
+    # (+ 0.0 turns the -0.0 entries of -k I into 0.0, so Theta prints as it reads.)
+    reach = np.hstack([-0.8 * np.eye(3), 0.8 * part[:, None]]) + 0.0
     # place: from above the part (as if just picked), across to the fixture and down onto it;
     # the vertical gain is half the horizontal one, so the tool crosses high and settles last.
     gains = np.diag([1.0, 1.0, 0.5])
-    place = np.hstack([-gains, (gains @ fixture)[:, None]])
+    place = np.hstack([-gains, (gains @ fixture)[:, None]]) + 0.0
     # The pose the inverse kinematics (UR5Plant.state_at) gives for the tool 15 cm above the part,
     # rounded to 1e-4 rad (the tool within 0.1 mm of it; tests/core/test_ur5_skills.py checks).
     # Written out rather than solved here: solving would compile numba kernels on import.
@@ -231,7 +232,7 @@ def _ur5_skills() -> dict[str, Skill]:
     # conveyor: v = 1.5 (o + s d - r) + speed d: pulled onto the moving part, plus the belt's own
     # velocity as feed-forward, so the tool rides with the part without lagging behind it.
     direction, origin, speed = np.array(UR5_CONVEYOR.direction), np.array(UR5_CONVEYOR.origin), UR5_CONVEYOR.speed
-    follow = np.hstack([-1.5 * np.eye(3), 1.5 * direction[:, None], (1.5 * origin + speed * direction)[:, None]])
+    follow = np.hstack([-1.5 * np.eye(3), 1.5 * direction[:, None], (1.5 * origin + speed * direction)[:, None]]) + 0.0
     # Thresholds: about the median condition number of S random query-state candidates
     # (tests/core/test_ur5_skills.py measures them), as for the paper's skills.
     skills = [
