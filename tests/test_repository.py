@@ -62,7 +62,7 @@ def test_binder_requirements_agree_with_pyproject():
 
 
 #: The distribution that provides an import name, where the two differ.
-_DISTRIBUTION = {"serial": "pyserial", "IPython": "ipython", "PIL": "pillow"}
+_DISTRIBUTION = {"serial": "pyserial", "IPython": "ipython", "PIL": "pillow", "pinocchio": "pin"}
 
 
 def _third_party_imports(folder: Path) -> set[str]:
@@ -89,9 +89,13 @@ def test_the_dependencies_are_what_the_core_imports_and_the_extras_cover_the_res
         "pyproject.toml's dependencies must be exactly what mt_widgets/core imports; the rest go in extras")
     everything = _third_party_imports(REPO / "mt_widgets")
     installed = _distributions(project["dependencies"] + _extra(project, "lab"))
-    # IPython and traitlets come with ipywidgets (the widgets extra), which requires both.
+    # IPython and traitlets come with ipywidgets (the widgets extra), which requires both. pin
+    # (pinocchio) is the reference the UR5 is checked against: mt_widgets/robot_models/pinocchio_reference.py,
+    # for the tests and the benchmark only, so it is in the test and bench extras.
     missing = everything - installed
-    assert missing <= {"ipython", "traitlets"}, f"imported but in no extra of lab: {missing}"
+    assert missing <= {"ipython", "traitlets", "pin"}, f"imported but in no extra of lab: {missing}"
+    assert {"pin", "example-robot-data"} <= _distributions(_extra(project, "test")) & _distributions(
+        _extra(project, "bench"))
 
 
 def test_ci_runs_the_readme_test_command():
