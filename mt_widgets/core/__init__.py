@@ -9,7 +9,9 @@ from .arm_plant import ArmPlant
 from .drawing import PlantDrawing, PoseSketch, TargetShape
 from .episode import Demonstration, DemonstrationAnalysis, EpisodeResult, EpisodeStateError, TeachingEpisode
 from .features import EndEffectorFeatures, FeatureMap, FunctionFeatures, PositionFeatures
-from .learner import DEFAULT_LAMBDA, RidgeLearner
+from .kernel_learners import GaussianProcessLearner, KernelRidgeLearner, SingularFitError
+from .learner import DEFAULT_LAMBDA, Learner, RidgeLearner
+from .learner_teaching import LEARNERS, LearnerTeaching, make_learner, policy_risk, teach
 from .machine_teaching import (
     ActionDifference,
     TeachingAnalysis,
@@ -20,6 +22,7 @@ from .machine_teaching import (
     ridge_operator,
     teaching_risk,
 )
+from .network_learner import NeuralNetworkLearner
 from .plants import ContinuousPlant, KinematicPlant, Plant
 from .query_states import SeedSchedule, condition_number, sample_query_states
 from .skills import SKILLS, Skill, SkillRegistry
@@ -39,3 +42,5 @@ __all__ = [
     "UnderdeterminedTeachingWarning", "action_difference", "analyse_demonstrations", "condition_number",
     "optimal_actions", "ridge_operator", "sample_query_states", "teaching_risk",
 ]
+__all__ += ["GaussianProcessLearner", "KernelRidgeLearner", "LEARNERS", "Learner", "LearnerTeaching",
+            "NeuralNetworkLearner", "SingularFitError", "make_learner", "policy_risk", "teach"]
