@@ -16,7 +16,9 @@ from .features import (
     PositionFeatures,
     ToolFeatures,
 )
-from .learner import DEFAULT_LAMBDA, RidgeLearner
+from .kernel_learners import GaussianProcessLearner, KernelRidgeLearner, SingularFitError
+from .learner import DEFAULT_LAMBDA, Learner, RidgeLearner
+from .learner_teaching import LEARNERS, LearnerTeaching, make_learner, policy_risk, teach
 from .machine_teaching import (
     ActionDifference,
     TeachingAnalysis,
@@ -27,6 +29,7 @@ from .machine_teaching import (
     ridge_operator,
     teaching_risk,
 )
+from .network_learner import NeuralNetworkLearner
 from .plants import ContinuousPlant, KinematicPlant, Plant
 from .query_states import SeedSchedule, condition_number, sample_query_states
 from .serial_chain import SerialChain
@@ -50,3 +53,5 @@ __all__ = [
     "Conveyor", "ConveyorFeatures", "ConveyorTarget", "Cuboid", "SerialChain", "SpaceDrawing", "SpacePointTarget",
     "ToolFeatures", "UR5Plant", "ViewProjection",
 ]
+__all__ += ["GaussianProcessLearner", "KernelRidgeLearner", "LEARNERS", "Learner", "LearnerTeaching",
+            "NeuralNetworkLearner", "SingularFitError", "make_learner", "policy_risk", "teach"]

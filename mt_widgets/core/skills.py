@@ -8,7 +8,7 @@ its reproduction runs from; then passes it to a widget or a session directly, or
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -37,6 +37,11 @@ class Skill:
         target: a ``Target`` (``PointTarget``, ``LineTarget`` or a user's own), or None.
         description: one or two sentences for a student.
         max_condition: the query-state sampler's condition-number threshold for this skill.
+        policy: the target policy as a function states (N, state_dim) -> actions (N, R), for a
+            skill whose target is not linear in its features (a curved path, a path around an
+            obstacle; ``nonlinear_skills``). Then ``theta`` is the best linear policy on the
+            features (what the paper's ridge learner can at best learn) and ``target_actions``
+            are the policy's. None (the paper's skills): the target is ``theta @ phi(x)``.
     """
 
     key: str
@@ -48,6 +53,7 @@ class Skill:
     target: Target | None = None
     description: str = ""
     max_condition: float = 20.0
+    policy: Callable[[np.ndarray], np.ndarray] | None = None
 
     def __post_init__(self):
         theta = as_float_array("theta", self.theta, ndim=2, shape=(self.plant.action_dim, self.feature_map.dim))
@@ -63,6 +69,8 @@ class Skill:
         if self.target is not None and not isinstance(self.target, Target):
             raise TypeError(f"target: expected a Target (PointTarget, LineTarget or a subclass) or None, "
                             f"got {type(self.target).__name__}")
+        if self.policy is not None and not callable(self.policy):
+            raise TypeError(f"policy: expected a function states -> actions or None, got {type(self.policy).__name__}")
         if not isinstance(self.key, str) or not self.key:
             raise ValueError(f"key: expected a non-empty text, got {self.key!r}")
 
@@ -142,8 +150,18 @@ class Skill:
         return self.feature_map(states)
 
     def target_actions(self, states) -> np.ndarray:
-        """The skill's own actions theta @ phi(x) at states (N, state_dim) -> (N, R)."""
-        return self.features(states) @ self.theta.T
+        """The skill's own actions at states (N, state_dim) -> (N, R): theta @ phi(x), or the
+        target policy's for a skill given one."""
+        if self.policy is None:
+            return self.features(states) @ self.theta.T
+        states = as_float_array("states", states, ndim=2, shape=(None, self.state_dim))
+        return as_float_array("actions returned by policy", self.policy(states), ndim=2,
+                              shape=(len(states), self.plant.action_dim))
+
+    @property
+    def linear(self) -> bool:
+        """Whether the target is linear in the features (``theta`` is the whole skill)."""
+        return self.policy is None
 
     def query_states(self, seed=None, n: int | None = None) -> np.ndarray:
         """n (default S, the fewest given states that meet the rank condition) well-conditioned query states, seeded."""
