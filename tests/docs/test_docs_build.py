@@ -67,6 +67,15 @@ def test_every_tutorial_is_rendered_with_its_text(build):
         assert title.split()[0] in text, f"{notebook.name}: its title {title!r} is not on its page"
 
 
+def test_the_tutorials_are_rendered_with_their_executed_outputs(build):
+    # The build executes them (docs/conf.py): printed numbers and figures come out of today's code.
+    with_outputs = [page.stem for page in (HTML / "tutorials").glob("*.html") if "cell_output" in page.read_text()]
+    assert len(with_outputs) >= 14, sorted(with_outputs)
+    ridge = (HTML / "tutorials" / "02_ridge_regression.html").read_text()
+    assert re.search(r'<img [^>]*src="\.\./_images/[0-9a-f]{64}\.png"', ridge), "tutorial 02's figure is not shown"
+    assert "cell_output" in (HTML / "notebooks" / "analysis.html").read_text()
+
+
 def test_the_benchmarks_page_draws_every_figure_from_the_data(build):
     page = (HTML / "benchmarks.html").read_text()
     results = json.loads((ROOT / "docs" / "benchmarks" / "results.json").read_text())
