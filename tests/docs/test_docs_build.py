@@ -48,9 +48,13 @@ def test_every_public_name_has_an_api_page(build):
         page = HTML / "api" / "generated" / f"{name.documented_as}.html"
         assert page.is_file(), f"{name.full_name}: no API page {page.relative_to(ROOT)}"
         assert f'id="{name.documented_as}"' in page.read_text(), f"{page.name} does not document {name.documented_as}"
+        # docs/conf.py escapes a literal followed by a letter (````Phase``s``); a stray escape
+        # would show as a backslash inside the literal.
+        assert '<span class="pre">\\</span>' not in page.read_text(), f"{page.name} shows an escape's backslash"
         package_page = (HTML / "api" / f"{name.package}.html").read_text()
         assert f"generated/{name.documented_as}.html" in package_page, \
             f"api/{name.package}.html does not link {name.full_name}'s page"
+        assert '<span class="pre">\\</span>' not in package_page, f"api/{name.package}.html shows a backslash"
 
 
 def test_every_tutorial_is_rendered_with_its_text(build):
