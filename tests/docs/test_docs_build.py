@@ -57,6 +57,12 @@ def test_every_public_name_has_an_api_page(build):
         assert '<span class="pre">\\</span>' not in package_page, f"api/{name.package}.html shows a backslash"
 
 
+def test_the_api_index_links_every_package(build):
+    index = (HTML / "api" / "index.html").read_text()
+    for package in api_names.packages():
+        assert f'href="{package}.html"' in index, f"api/index.html does not link {package}"
+
+
 def test_every_tutorial_is_rendered_with_its_text(build):
     tutorials = sorted((ROOT / "tutorials").glob("*.ipynb"))
     assert len(tutorials) >= 15
