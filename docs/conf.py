@@ -189,7 +189,13 @@ def _plural_literals(app, what, name, obj, options, lines) -> None:
     before a space or punctuation, so an escaped space (nothing in the output) goes between."""
     import re
 
-    lines[:] = [re.sub(r"``([^`]+)``(?=[A-Za-z0-9])", r"``\1``\\ ", line) for line in lines]
+    def escape(line: str) -> str:
+        # Literals paired from the left, as reStructuredText reads them; only one followed by a
+        # letter or digit gets the escaped space.
+        return re.sub(r"``[^`]+``(?=([A-Za-z0-9])?)",
+                      lambda match: match.group(0) + ("\\ " if match.group(1) else ""), line)
+
+    lines[:] = [escape(line) for line in lines]
 
 
 def _constant_docs(app, what, name, obj, options, lines) -> None:

@@ -51,6 +51,9 @@ def public_names() -> list[PublicName]:
     names = []
     for package in packages():
         module = importlib.import_module(package)
+        if not hasattr(module, "__all__"):
+            raise RuntimeError(f"{package} has no __all__: the API reference documents the names a package lists "
+                               f"there, so every package of mt_widgets lists its public names")
         for name in module.__all__:
             value = getattr(module, name)
             documented_as = next((full for obj, full in claimed

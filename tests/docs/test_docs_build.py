@@ -48,9 +48,19 @@ def test_every_public_name_has_an_api_page(build):
         page = HTML / "api" / "generated" / f"{name.documented_as}.html"
         assert page.is_file(), f"{name.full_name}: no API page {page.relative_to(ROOT)}"
         assert f'id="{name.documented_as}"' in page.read_text(), f"{page.name} does not document {name.documented_as}"
+        # docs/conf.py escapes a literal followed by a letter (````Phase``s``); a stray escape
+        # would show as a backslash inside the literal.
+        assert '<span class="pre">\\</span>' not in page.read_text(), f"{page.name} shows an escape's backslash"
         package_page = (HTML / "api" / f"{name.package}.html").read_text()
         assert f"generated/{name.documented_as}.html" in package_page, \
             f"api/{name.package}.html does not link {name.full_name}'s page"
+        assert '<span class="pre">\\</span>' not in package_page, f"api/{name.package}.html shows a backslash"
+
+
+def test_the_api_index_links_every_package(build):
+    index = (HTML / "api" / "index.html").read_text()
+    for package in api_names.packages():
+        assert f'href="{package}.html"' in index, f"api/index.html does not link {package}"
 
 
 def test_every_tutorial_is_rendered_with_its_text(build):
@@ -65,6 +75,15 @@ def test_every_tutorial_is_rendered_with_its_text(build):
         title = re.sub(r"[`*$\\]", "", heading[2:]).strip()
         text = re.sub(r"<[^>]+>", "", page.read_text())
         assert title.split()[0] in text, f"{notebook.name}: its title {title!r} is not on its page"
+
+
+def test_the_tutorials_are_rendered_with_their_executed_outputs(build):
+    # The build executes them (docs/conf.py): printed numbers and figures come out of today's code.
+    with_outputs = [page.stem for page in (HTML / "tutorials").glob("*.html") if "cell_output" in page.read_text()]
+    assert len(with_outputs) >= 14, sorted(with_outputs)
+    ridge = (HTML / "tutorials" / "02_ridge_regression.html").read_text()
+    assert re.search(r'<img [^>]*src="\.\./_images/[0-9a-f]{64}\.png"', ridge), "tutorial 02's figure is not shown"
+    assert "cell_output" in (HTML / "notebooks" / "analysis.html").read_text()
 
 
 def test_the_benchmarks_page_draws_every_figure_from_the_data(build):
