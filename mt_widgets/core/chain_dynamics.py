@@ -270,6 +270,25 @@ def crba(local_R, placement_p, axis, mass, com, inertia, cm, ch, cJ, out_M):
 
 
 @njit(cache=True, error_model="numpy")
+def gravity_from_composites(world_R, axis, ch, gravity, out_g):
+    """g(q) from the composite first moments ``ch`` that ``crba`` leaves (no second pass over the chain).
+
+    The weight of everything beyond joint i acts at its centre of mass: its moment about the
+    joint's origin is h_i x g_i (h_i the composite's first moment, g_i gravity in body i's frame),
+    and holding it still takes the torque -a_i . (h_i x g_i).
+    """
+    for i in range(axis.shape[0]):
+        R = world_R[i]
+        g0 = R[0, 0] * gravity[0] + R[1, 0] * gravity[1] + R[2, 0] * gravity[2]
+        g1 = R[0, 1] * gravity[0] + R[1, 1] * gravity[1] + R[2, 1] * gravity[2]
+        g2 = R[0, 2] * gravity[0] + R[1, 2] * gravity[1] + R[2, 2] * gravity[2]
+        n0 = ch[i, 1] * g2 - ch[i, 2] * g1
+        n1 = ch[i, 2] * g0 - ch[i, 0] * g2
+        n2 = ch[i, 0] * g1 - ch[i, 1] * g0
+        out_g[i] = -(axis[i, 0] * n0 + axis[i, 1] * n1 + axis[i, 2] * n2)
+
+
+@njit(cache=True, error_model="numpy")
 def cholesky_solve(M, b, L, out_x):
     """Solves M x = b for a symmetric positive-definite M (n, n) by Cholesky; L (n, n) is scratch.
 

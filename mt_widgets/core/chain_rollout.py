@@ -215,11 +215,11 @@ def rollout(placement_R, placement_p, axis, mass, com, inertia, tool_p, gravity,
                 sample += 1
             if k == n_steps:
                 break
-            # The controller, once per step. local_R holds x's rotations (from the safety check of
-            # the step before), and RK4's first stage is at x too: its M and rotations are reused.
+            # The controller, once per step. local_R and world_R hold x's rotations (from the safety
+            # check of the step before), and RK4's first stage is at x too: its M and rotations are
+            # reused, and g(q) comes from the composites the mass matrix leaves.
             dyn.crba(local_R, placement_p, axis, mass, com, inertia, cm, ch, cJ, M)
-            dyn.rnea(local_R, placement_p, axis, mass, com, inertia, gravity, zeros, zeros, True, w, v, aw, al, fn,
-                     fl, g_torque)
+            dyn.gravity_from_composites(world_R, axis, ch, gravity, g_torque)
             resolved_rate_torque(J, u, x[n:2 * n], M, g_torque, velocity_limit, effort_limit, gain, damping, tau)
             dyn.rnea(local_R, placement_p, axis, mass, com, inertia, gravity, x[n:2 * n], zeros, True, w, v, aw, al,
                      fn, fl, bias)
