@@ -30,7 +30,7 @@ STOP_REASONS = ("", "diverged", "joint limit", "joint speed limit", "table", "se
 DIVERGED, JOINT_LIMIT, JOINT_SPEED, TABLE, SELF_COLLISION = 1, 2, 3, 4, 5
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def segment_distance(p0, p1, q0, q1):
     """The smallest distance between the segments p0-p1 and q0-q1 (3-D), by clamped closest points."""
     d1x, d1y, d1z = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
@@ -66,7 +66,7 @@ def segment_distance(p0, p1, q0, q1):
     return math.sqrt(dx * dx + dy * dy + dz * dz)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def chain_points(world_p, tool, out):
     """The chain's points (n + 2, 3): the base origin, each joint's origin, the tool point."""
     n = world_p.shape[0]
@@ -77,7 +77,7 @@ def chain_points(world_p, tool, out):
         out[n + 1, k] = tool[k]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def safety_code(q, qd, points, lower, upper, velocity_limit, speed_tolerance, table_height, first_table_point,
                 pairs, radius):
     """0 when the state is safe, else the first reason it is not (a code of ``STOP_REASONS``)."""
@@ -101,7 +101,7 @@ def safety_code(q, qd, points, lower, upper, velocity_limit, speed_tolerance, ta
     return 0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def resolved_rate_torque(J, velocity, q_dot, mass_matrix, gravity_torque, velocity_limit, effort_limit, gain,
                          damping, out_tau):
     """The controller's held torque for a tool velocity (see the module's docstring)."""
@@ -139,7 +139,7 @@ def resolved_rate_torque(J, velocity, q_dot, mass_matrix, gravity_torque, veloci
         out_tau[i] = min(max(acc, -effort_limit[i]), effort_limit[i])
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _acceleration(placement_R, placement_p, axis, mass, com, inertia, gravity, q, qd, tau, local_R, w, v, aw, al,
                   fn, fl, cm, ch, cJ, M, L, zeros, bias, rhs, out):
     dyn.local_rotations(placement_R, axis, q, local_R)
