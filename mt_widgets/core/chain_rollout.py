@@ -19,9 +19,10 @@ that are not neighbours closer than their capsules allow.
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from . import chain_dynamics as dyn
 
@@ -30,7 +31,7 @@ STOP_REASONS = ("", "diverged", "joint limit", "joint speed limit", "table", "se
 DIVERGED, JOINT_LIMIT, JOINT_SPEED, TABLE, SELF_COLLISION = 1, 2, 3, 4, 5
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def segment_distance(p0, p1, q0, q1):
     """The smallest distance between the segments p0-p1 and q0-q1 (3-D), by clamped closest points."""
     d1x, d1y, d1z = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
@@ -66,7 +67,7 @@ def segment_distance(p0, p1, q0, q1):
     return math.sqrt(dx * dx + dy * dy + dz * dz)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def chain_points(world_p, tool, out):
     """The chain's points (n + 2, 3): the base origin, each joint's origin, the tool point."""
     n = world_p.shape[0]
@@ -77,7 +78,7 @@ def chain_points(world_p, tool, out):
         out[n + 1, k] = tool[k]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def safety_code(q, qd, points, lower, upper, velocity_limit, speed_tolerance, table_height, first_table_point,
                 pairs, radius):
     """0 when the state is safe, else the first reason it is not (a code of ``STOP_REASONS``)."""
@@ -101,7 +102,7 @@ def safety_code(q, qd, points, lower, upper, velocity_limit, speed_tolerance, ta
     return 0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def resolved_rate_torque(J, velocity, q_dot, mass_matrix, gravity_torque, velocity_limit, effort_limit, gain,
                          damping, out_tau):
     """The controller's held torque for a tool velocity (see the module's docstring)."""
@@ -139,7 +140,7 @@ def resolved_rate_torque(J, velocity, q_dot, mass_matrix, gravity_torque, veloci
         out_tau[i] = min(max(acc, -effort_limit[i]), effort_limit[i])
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _acceleration(placement_R, placement_p, axis, mass, com, inertia, gravity, q, qd, tau, local_R, w, v, aw, al,
                   fn, fl, cm, ch, cJ, M, L, zeros, bias, rhs, out):
     dyn.local_rotations(placement_R, axis, q, local_R)
@@ -151,11 +152,121 @@ def _acceleration(placement_R, placement_p, axis, mass, com, inertia, gravity, q
 
 
 @njit(cache=True, error_model="numpy")
-def rollout(placement_R, placement_p, axis, mass, com, inertia, tool_p, gravity,
-            lower, upper, velocity_limit, effort_limit, gain, damping,
-            speed_tolerance, table_height, first_table_point, pairs, radius, conveyor_speed, with_phase,
-            thetas, start, dt, n_steps, record_every,
-            out_states, out_positions, out_velocities, out_actions, lengths, stop_step, stop_code):
+def _rollout_one(
+        b, placement_R, placement_p, axis, mass, com, inertia, tool_p, gravity,
+        lower, upper, velocity_limit, effort_limit, gain, damping,
+        speed_tolerance, table_height, first_table_point, pairs, radius, conveyor_speed, with_phase,
+        thetas, start, dt, n_steps, record_every,
+        out_states, out_positions, out_velocities, out_actions, lengths, stop_step, stop_code):
+    """Rollout b of the batch (see ``rollout``); its scratch is its own, so rollouts may run in parallel."""
+    n = axis.shape[0]
+    dim = out_states.shape[2]
+    n_samples = out_states.shape[1]
+    local_R, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    w, v, aw, al, fn, fl = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)),
+                            np.empty((n, 3)), np.empty((n, 3)))
+    cm, ch, cJ, M, L = np.empty(n), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, n)), np.zeros((n, n))
+    zeros, bias, rhs, g_torque = np.zeros(n), np.empty(n), np.empty(n), np.empty(n)
+    tool, J, points = np.empty(3), np.empty((3, n)), np.empty((n + 2, 3))
+    tau, u = np.empty(n), np.empty(3)
+    x, stage, k1, k2, k3, k4 = (np.empty(dim), np.empty(dim), np.empty(dim), np.empty(dim), np.empty(dim),
+                                np.empty(dim))
+    acc = np.empty(n)
+    theta = thetas[b]
+    for i in range(dim):
+        x[i] = start[i]
+    sample = 0
+    stop_step[b] = -1
+    stop_code[b] = 0
+    dyn.local_rotations(placement_R, axis, x[:n], local_R)
+    dyn.world_frames(local_R, placement_p, world_R, world_p)
+    dyn.tool_point(world_R, world_p, tool_p, tool)
+    for k in range(n_steps + 1):
+        dyn.tool_jacobian(world_R, world_p, axis, tool, J)
+        for r in range(3):
+            s_feature = x[dim - 1] if with_phase else 0.0
+            if with_phase:
+                u[r] = theta[r, 0] * tool[0] + theta[r, 1] * tool[1] + theta[r, 2] * tool[2] \
+                    + theta[r, 3] * s_feature + theta[r, 4]
+            else:
+                u[r] = theta[r, 0] * tool[0] + theta[r, 1] * tool[1] + theta[r, 2] * tool[2] + theta[r, 3]
+        if k % record_every == 0 and sample < n_samples:
+            for i in range(dim):
+                out_states[b, sample, i] = x[i]
+            for r in range(3):
+                out_positions[b, sample, r] = tool[r]
+                speed = 0.0
+                for i in range(n):
+                    speed += J[r, i] * x[n + i]
+                out_velocities[b, sample, r] = speed
+                out_actions[b, sample, r] = u[r]
+            sample += 1
+        if k == n_steps:
+            break
+        # The controller, once per step. local_R and world_R hold x's rotations (from the safety
+        # check of the step before), and RK4's first stage is at x too: its M and rotations are
+        # reused, and g(q) comes from the composites the mass matrix leaves.
+        dyn.crba(local_R, placement_p, axis, mass, com, inertia, cm, ch, cJ, M)
+        dyn.gravity_from_composites(world_R, axis, ch, gravity, g_torque)
+        resolved_rate_torque(J, u, x[n:2 * n], M, g_torque, velocity_limit, effort_limit, gain, damping, tau)
+        dyn.rnea(local_R, placement_p, axis, mass, com, inertia, gravity, x[n:2 * n], zeros, True, w, v, aw, al,
+                 fn, fl, bias)
+        for i in range(n):
+            rhs[i] = tau[i] - bias[i]
+        ok = dyn.cholesky_solve(M, rhs, L, acc)
+        for i in range(n):
+            k1[i] = x[n + i]
+            k1[n + i] = acc[i]
+        if with_phase:
+            k1[dim - 1] = conveyor_speed
+        for which in range(1, 4):
+            h = dt if which == 3 else 0.5 * dt
+            prev = k1 if which == 1 else (k2 if which == 2 else k3)
+            out = k2 if which == 1 else (k3 if which == 2 else k4)
+            for i in range(dim):
+                stage[i] = x[i] + h * prev[i]
+            ok = ok and _acceleration(placement_R, placement_p, axis, mass, com, inertia, gravity, stage[:n],
+                                      stage[n:2 * n], tau, local_R, w, v, aw, al, fn, fl, cm, ch, cJ, M, L, zeros,
+                                      bias, rhs, acc)
+            for i in range(n):
+                out[i] = stage[n + i]
+                out[n + i] = acc[i]
+            if with_phase:
+                out[dim - 1] = conveyor_speed
+        for i in range(dim):
+            stage[i] = x[i] + dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+        code = 0 if ok else DIVERGED
+        if code == 0:
+            dyn.local_rotations(placement_R, axis, stage[:n], local_R)
+            dyn.world_frames(local_R, placement_p, world_R, world_p)
+            dyn.tool_point(world_R, world_p, tool_p, tool)
+            chain_points(world_p, tool, points)
+            code = safety_code(stage[:n], stage[n:2 * n], points, lower, upper, velocity_limit, speed_tolerance,
+                               table_height, first_table_point, pairs, radius)
+        if code != 0:
+            stop_step[b] = k + 1
+            stop_code[b] = code
+            break
+        for i in range(dim):
+            x[i] = stage[i]
+    lengths[b] = sample
+    # Freeze a stopped rollout at its last valid sample so the batch arrays stay finite.
+    for s in range(sample, n_samples):
+        for i in range(dim):
+            out_states[b, s, i] = out_states[b, sample - 1, i]
+        for r in range(3):
+            out_positions[b, s, r] = out_positions[b, sample - 1, r]
+            out_velocities[b, s, r] = 0.0
+            out_actions[b, s, r] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def rollout_serial(
+        placement_R, placement_p, axis, mass, com, inertia, tool_p, gravity,
+        lower, upper, velocity_limit, effort_limit, gain, damping,
+        speed_tolerance, table_height, first_table_point, pairs, radius, conveyor_speed, with_phase,
+        thetas, start, dt, n_steps, record_every,
+        out_states, out_positions, out_velocities, out_actions, lengths, stop_step, stop_code):
     """Rolls out B tool-velocity policies from one start, one after another, into preallocated outputs.
 
     Args:
@@ -170,103 +281,42 @@ def rollout(placement_R, placement_p, axis, mass, com, inertia, tool_p, gravity,
         out_states (B, T, D), out_positions, out_velocities, out_actions (B, T, 3) with
             T = n_steps // record_every + 1; lengths, stop_step, stop_code: (B,) ints.
     """
-    n = axis.shape[0]
-    dim = out_states.shape[2]
-    n_samples = out_states.shape[1]
-    local_R, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
-    w, v, aw, al, fn, fl = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)),
-                            np.empty((n, 3)), np.empty((n, 3)))
-    cm, ch, cJ, M, L = np.empty(n), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, n)), np.zeros((n, n))
-    zeros, bias, rhs, g_torque = np.zeros(n), np.empty(n), np.empty(n), np.empty(n)
-    tool, J, points = np.empty(3), np.empty((3, n)), np.empty((n + 2, 3))
-    tau, u = np.empty(n), np.empty(3)
-    x, stage, k1, k2, k3, k4 = (np.empty(dim), np.empty(dim), np.empty(dim), np.empty(dim), np.empty(dim),
-                                np.empty(dim))
-    acc = np.empty(n)
     for b in range(thetas.shape[0]):
-        theta = thetas[b]
-        for i in range(dim):
-            x[i] = start[i]
-        sample = 0
-        stop_step[b] = -1
-        stop_code[b] = 0
-        dyn.local_rotations(placement_R, axis, x[:n], local_R)
-        dyn.world_frames(local_R, placement_p, world_R, world_p)
-        dyn.tool_point(world_R, world_p, tool_p, tool)
-        for k in range(n_steps + 1):
-            dyn.tool_jacobian(world_R, world_p, axis, tool, J)
-            for r in range(3):
-                s_feature = x[dim - 1] if with_phase else 0.0
-                if with_phase:
-                    u[r] = theta[r, 0] * tool[0] + theta[r, 1] * tool[1] + theta[r, 2] * tool[2] \
-                        + theta[r, 3] * s_feature + theta[r, 4]
-                else:
-                    u[r] = theta[r, 0] * tool[0] + theta[r, 1] * tool[1] + theta[r, 2] * tool[2] + theta[r, 3]
-            if k % record_every == 0 and sample < n_samples:
-                for i in range(dim):
-                    out_states[b, sample, i] = x[i]
-                for r in range(3):
-                    out_positions[b, sample, r] = tool[r]
-                    speed = 0.0
-                    for i in range(n):
-                        speed += J[r, i] * x[n + i]
-                    out_velocities[b, sample, r] = speed
-                    out_actions[b, sample, r] = u[r]
-                sample += 1
-            if k == n_steps:
-                break
-            # The controller, once per step. local_R holds x's rotations (from the safety check of
-            # the step before), and RK4's first stage is at x too: its M and rotations are reused.
-            dyn.crba(local_R, placement_p, axis, mass, com, inertia, cm, ch, cJ, M)
-            dyn.rnea(local_R, placement_p, axis, mass, com, inertia, gravity, zeros, zeros, True, w, v, aw, al, fn,
-                     fl, g_torque)
-            resolved_rate_torque(J, u, x[n:2 * n], M, g_torque, velocity_limit, effort_limit, gain, damping, tau)
-            dyn.rnea(local_R, placement_p, axis, mass, com, inertia, gravity, x[n:2 * n], zeros, True, w, v, aw, al,
-                     fn, fl, bias)
-            for i in range(n):
-                rhs[i] = tau[i] - bias[i]
-            ok = dyn.cholesky_solve(M, rhs, L, acc)
-            for i in range(n):
-                k1[i] = x[n + i]
-                k1[n + i] = acc[i]
-            if with_phase:
-                k1[dim - 1] = conveyor_speed
-            for which in range(1, 4):
-                h = dt if which == 3 else 0.5 * dt
-                prev = k1 if which == 1 else (k2 if which == 2 else k3)
-                out = k2 if which == 1 else (k3 if which == 2 else k4)
-                for i in range(dim):
-                    stage[i] = x[i] + h * prev[i]
-                ok = ok and _acceleration(placement_R, placement_p, axis, mass, com, inertia, gravity, stage[:n],
-                                          stage[n:2 * n], tau, local_R, w, v, aw, al, fn, fl, cm, ch, cJ, M, L, zeros,
-                                          bias, rhs, acc)
-                for i in range(n):
-                    out[i] = stage[n + i]
-                    out[n + i] = acc[i]
-                if with_phase:
-                    out[dim - 1] = conveyor_speed
-            for i in range(dim):
-                stage[i] = x[i] + dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
-            code = 0 if ok else DIVERGED
-            if code == 0:
-                dyn.local_rotations(placement_R, axis, stage[:n], local_R)
-                dyn.world_frames(local_R, placement_p, world_R, world_p)
-                dyn.tool_point(world_R, world_p, tool_p, tool)
-                chain_points(world_p, tool, points)
-                code = safety_code(stage[:n], stage[n:2 * n], points, lower, upper, velocity_limit, speed_tolerance,
-                                   table_height, first_table_point, pairs, radius)
-            if code != 0:
-                stop_step[b] = k + 1
-                stop_code[b] = code
-                break
-            for i in range(dim):
-                x[i] = stage[i]
-        lengths[b] = sample
-        # Freeze a stopped rollout at its last valid sample so the batch arrays stay finite.
-        for s in range(sample, n_samples):
-            for i in range(dim):
-                out_states[b, s, i] = out_states[b, sample - 1, i]
-            for r in range(3):
-                out_positions[b, s, r] = out_positions[b, sample - 1, r]
-                out_velocities[b, s, r] = 0.0
-                out_actions[b, s, r] = 0.0
+        _rollout_one(b, placement_R, placement_p, axis, mass, com, inertia, tool_p, gravity, lower, upper,
+                     velocity_limit, effort_limit, gain, damping, speed_tolerance, table_height, first_table_point,
+                     pairs, radius, conveyor_speed, with_phase, thetas, start, dt, n_steps, record_every, out_states,
+                     out_positions, out_velocities, out_actions, lengths, stop_step, stop_code)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def rollout_parallel(
+        placement_R, placement_p, axis, mass, com, inertia, tool_p, gravity,
+        lower, upper, velocity_limit, effort_limit, gain, damping,
+        speed_tolerance, table_height, first_table_point, pairs, radius, conveyor_speed, with_phase,
+        thetas, start, dt, n_steps, record_every,
+        out_states, out_positions, out_velocities, out_actions, lengths, stop_step, stop_code):
+    """``rollout_serial`` with the batch spread over all cores; each rollout's arithmetic is identical."""
+    for b in prange(thetas.shape[0]):
+        _rollout_one(b, placement_R, placement_p, axis, mass, com, inertia, tool_p, gravity, lower, upper,
+                     velocity_limit, effort_limit, gain, damping, speed_tolerance, table_height, first_table_point,
+                     pairs, radius, conveyor_speed, with_phase, thetas, start, dt, n_steps, record_every, out_states,
+                     out_positions, out_velocities, out_actions, lengths, stop_step, stop_code)
+
+
+#: Batches at least this large are spread over cores; below it threads cost more than they save.
+PARALLEL_FROM = 4
+_PARALLEL_LAUNCH = threading.Lock()
+
+
+def rollout(*arguments):
+    """Runs ``rollout_serial`` or, for a batch of ``PARALLEL_FROM`` or more, ``rollout_parallel``.
+
+    The arguments are ``rollout_serial``'s; thetas is the 22nd.
+    """
+    if arguments[21].shape[0] >= PARALLEL_FROM:
+        # Where numba falls back to its workqueue threading layer, two Python threads launching
+        # parallel kernels at once abort the process (as for the planar arm): one launch at a time.
+        with _PARALLEL_LAUNCH:
+            rollout_parallel(*arguments)
+    else:
+        rollout_serial(*arguments)

@@ -26,7 +26,7 @@ from .features import ConveyorFeatures, ToolFeatures
 from .plants import ContinuousPlant, _check_rollout
 from .serial_chain import SerialChain
 from .trajectory import TrajectoryBatch
-from .validation import as_count, as_float_array, as_positive
+from .validation import as_count, as_finite, as_float_array, as_positive
 from .workspace import Cuboid
 
 #: The UR5's home pose (rad): upper arm up, forearm level, tool pointing down at about
@@ -113,7 +113,7 @@ class UR5Plant(ContinuousPlant):
         self.chain = ur5_chain()
         self.conveyor = conveyor
         self.teaching_box = teaching_box
-        self.table_height = float(as_float_array("table_height", table_height, ndim=0))
+        self.table_height = as_finite("table_height", table_height)
         self.link_radius = as_positive("link_radius", link_radius)
         self.velocity_gain = as_positive("velocity_gain", velocity_gain)
         self.damping = as_positive("damping", damping)

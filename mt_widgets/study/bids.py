@@ -128,6 +128,10 @@ def _beh_sidecar(protocol) -> dict:
         "reproduction_diverged": {"Description": "Whether the robot's reproduction of the learnt skill left the "
                                                  "plant's bounds.", "Levels": {"1": "diverged", "0": "stayed"}},
     }
+    # An arm in space (the UR5) acts in 3-D: its third action component gets columns of its own.
+    for i in range(2, max(s.plant.action_dim for s in skills)):
+        columns[f"action_{i + 1}"] = {"Description": f"Component {i + 1} of the demonstrated action.", "Units": action}
+        columns[f"optimal_{i + 1}"] = {"Description": f"Component {i + 1} of the optimal action.", "Units": action}
     return {"TaskName": protocol.name, "TaskDescription": protocol.title,
             "Instructions": protocol.texts["instructions"].strip(), "PositionUnits": unit, **columns}
 
@@ -281,10 +285,14 @@ def _write_participant(out: Path, label: str, task: str, events: list[dict], sid
                "teaching_error": done.get("teaching_error"), "rho1": done.get("rho1"), "rho2": done.get("rho2"),
                "reproduction_diverged": done["reproduction"]["diverged"] if done else None}
         row.update({f"state_{i + 1}": value for i, value in enumerate(event["state"])})
+        row.update({f"{name}_{i + 1}": event[name][i] for name in ("action", "optimal")
+                    for i in range(2, len(event["action"]))})
         rows.append(row)
     state_columns = sorted({k for row in rows for k in row if k.startswith("state_")}, key=lambda k: int(k[6:]))
+    more_actions = max((len(event["action"]) for event in events if event["type"] == "demonstration"), default=2)
+    extra = [f"{name}_{i + 1}" for name in ("action", "optimal") for i in range(2, more_actions)]
     columns = ["onset", "phase", "phase_index", "episode", "trial", "skill", "guidance_shown", "guidance_modality",
-               *state_columns, "action_1", "action_2", "optimal_1", "optimal_2", "time_to_first_input",
+               *state_columns, "action_1", "action_2", "optimal_1", "optimal_2", *extra, "time_to_first_input",
                "drawing_duration", "response_time", "teaching_error", "rho1", "rho2", "reproduction_diverged"]
     folder = out / f"sub-{label}" / (f"ses-{session}" if session else "") / "beh"
     folder.mkdir(parents=True)

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from mt_widgets import SKILLS
+from mt_widgets.core import chain_dynamics as dyn
 from mt_widgets.core import ur5_description
 from mt_widgets.core.serial_chain import SerialChain
 
@@ -119,3 +120,15 @@ def test_a_reproduction_matches_pinocchios_aba_stepped_the_same_way(key):
     reference = pinocchio_reference.PinocchioUR5(skill.plant).rollout(theta, skill.start, 10.0)
     assert np.abs(ours.states - reference).max() < TOLERANCE
     assert np.abs(ours.states[:, 6:12]).max() > 0.1          # it moved
+
+
+def test_gravity_from_the_composite_bodies_equals_the_newton_euler_gravity(chain):
+    n = chain.n_joints
+    local_R, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    cm, ch, cJ, M, out = np.empty(n), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, n)), np.empty(n)
+    for q, *_ in samples(20, seed=3):
+        dyn.local_rotations(chain.placement_R, chain.axis, q, local_R)
+        dyn.world_frames(local_R, chain.placement_p, world_R, world_p)
+        dyn.crba(local_R, chain.placement_p, chain.axis, chain.mass, chain.com, chain.inertia, cm, ch, cJ, M)
+        dyn.gravity_from_composites(world_R, chain.axis, ch, chain.gravity_vector, out)
+        assert np.abs(out - chain.gravity_torque(q)).max() < 1e-12

@@ -93,11 +93,16 @@ def test_the_conveyor_skill_rides_with_the_part():
     np.testing.assert_allclose(trajectory.velocities[-1], [0.0, 0.05, 0.0], atol=2e-3)
 
 
-def test_a_batch_rolls_out_each_theta_as_alone():
+@pytest.mark.parametrize("size", [2, 6])   # 6: over chain_rollout.PARALLEL_FROM, spread over the cores
+def test_a_batch_rolls_out_each_theta_as_alone(size):
     skill = SKILLS["ur5-reach"]
-    thetas = np.stack([skill.theta, 0.5 * skill.theta])
-    batch = skill.reproduce(thetas, duration=1.0)
-    np.testing.assert_array_equal(batch.states[1], skill.reproduce(thetas[1], duration=1.0).states)
+    thetas = np.stack([skill.theta * (1 + 0.2 * k) for k in range(size - 1)] + [_constant([0.0, 0.0, -0.3])])
+    batch = skill.reproduce(thetas, duration=2.0)
+    for k in (1, size - 1):
+        alone = skill.reproduce(thetas[k], duration=2.0)
+        np.testing.assert_array_equal(batch[k].states, alone.states)
+        assert batch[k].stop_reason == alone.stop_reason
+    assert batch.stop_reasons[-1] == "table" and not batch.diverged[:-1].any()
 
 
 # -- safety stops --------------------------------------------------------------------------------
