@@ -9,6 +9,7 @@ from bids_validator import BIDSValidator
 
 from mt_widgets import SKILLS, RidgeLearner, teaching_risk
 from mt_widgets.study import Session, StudyFolder, export_bids, parse_protocol
+from mt_widgets.study.pseudonyms import code_of
 from protocols import phase, protocol_toml
 
 from .scripted import run
@@ -35,7 +36,8 @@ def _rows(path):
 
 def test_the_export_holds_every_component_of_the_3d_actions_as_logged(industrial):
     study, out = industrial
-    rows = _rows(out / "sub-P01" / "beh" / "sub-P01_task-industrial_beh.tsv")
+    label = f"sub-{code_of(study.folder, 'P01')}"   # the export's random code for P01 (its key stays in the study)
+    rows = _rows(out / label / "beh" / f"{label}_task-industrial_beh.tsv")
     assert len(rows) == 4 + 2 * 5   # S = 4 for reach, 5 for the conveyor (two episodes)
     logged = [json.loads(line) for line in (study.folder / "P01.jsonl").read_text().splitlines()]
     demonstrations = [e for e in logged if e["type"] == "demonstration"]
