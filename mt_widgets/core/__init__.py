@@ -23,6 +23,7 @@ from .machine_teaching import (
     teaching_risk,
 )
 from .network_learner import NeuralNetworkLearner
+from .nonlinear_skills import NONLINEAR_SKILLS
 from .plants import ContinuousPlant, KinematicPlant, Plant
 from .query_states import SeedSchedule, condition_number, sample_query_states
 from .skills import SKILLS, Skill, SkillRegistry
@@ -44,3 +45,4 @@ __all__ = [
 ]
 __all__ += ["GaussianProcessLearner", "KernelRidgeLearner", "LEARNERS", "Learner", "LearnerTeaching",
             "NeuralNetworkLearner", "SingularFitError", "make_learner", "policy_risk", "teach"]
+__all__ += ["NONLINEAR_SKILLS"]

@@ -84,7 +84,8 @@ def typical_length_scale(skill, inputs: str = "task") -> float:
 
 def make_learner(name: str, skill=None, **parameters) -> Learner:
     """The learner called ``name`` (one of ``LEARNERS``) with ``parameters``; a kernel learner's
-    ``length_scale`` defaults to ``typical_length_scale(skill)`` when a skill is given."""
+    ``length_scale`` defaults to ``typical_length_scale(skill)`` when a skill is given, its
+    ``linear_weight`` to 1."""
     if name not in LEARNERS:
         raise UnknownKeyError(f"learner: expected one of the available learners ({', '.join(LEARNERS)}), got {name!r}")
     cls = LEARNERS[name]
@@ -94,7 +95,11 @@ def make_learner(name: str, skill=None, **parameters) -> Learner:
         if skill is None:
             raise ValueError(f"length_scale: expected a kernel width for {name!r}, or a skill to take the "
                              f"typical one from, got neither")
-        parameters["length_scale"] = 0.5 * typical_length_scale(skill, parameters.get("inputs", "task"))
+        parameters["length_scale"] = typical_length_scale(skill, parameters.get("inputs", "task"))
+    if cls in (KernelRidgeLearner, GaussianProcessLearner):
+        # By name, a kernel learner is the paper's features' linear kernel plus the RBF: it learns
+        # a linear skill as ridge does and a nonlinear one beyond it (``KernelRidgeLearner``).
+        parameters.setdefault("linear_weight", 1.0)
     try:
         return cls(**parameters)
     except TypeError as error:
