@@ -26,6 +26,7 @@ from .network_learner import NeuralNetworkLearner
 from .nonlinear_skills import NONLINEAR_SKILLS
 from .plants import ContinuousPlant, KinematicPlant, Plant
 from .query_states import SeedSchedule, condition_number, sample_query_states
+from .reward_learner import RewardLearner
 from .skills import SKILLS, Skill, SkillRegistry
 from .targets import LineTarget, PointTarget, Target
 from .trajectory import Trajectory, TrajectoryBatch
@@ -45,4 +46,4 @@ __all__ = [
 ]
 __all__ += ["GaussianProcessLearner", "KernelRidgeLearner", "LEARNERS", "Learner", "LearnerTeaching",
             "NeuralNetworkLearner", "SingularFitError", "make_learner", "policy_risk", "teach"]
-__all__ += ["NONLINEAR_SKILLS"]
+__all__ += ["NONLINEAR_SKILLS", "RewardLearner"]

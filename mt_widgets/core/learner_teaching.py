@@ -36,6 +36,7 @@ import numpy as np
 from .kernel_learners import GaussianProcessLearner, KernelRidgeLearner
 from .learner import DEFAULT_LAMBDA, Learner, RidgeLearner
 from .network_learner import NeuralNetworkLearner
+from .reward_learner import RewardLearner
 from .ridge_kernels import svd_with_rank
 from .validation import UnknownKeyError, as_count, as_float_array
 
@@ -45,6 +46,7 @@ LEARNERS = {
     "kernel-ridge": KernelRidgeLearner,
     "gaussian-process": GaussianProcessLearner,
     "neural-network": NeuralNetworkLearner,
+    "reward": RewardLearner,
 }
 
 #: How many evaluation states measure the policy risk.
@@ -171,15 +173,13 @@ def approximate_teaching(learner: Learner, skill, query_states, eval_states=None
     """Levenberg-Marquardt on the actions against the policy risk (module docstring); approximate.
 
     Args:
-        learner: a learner with ``fit_batch`` and ``predict_batch`` (``NeuralNetworkLearner``).
+        learner: any learner; one with ``fit_batch`` and ``predict_batch`` (``NeuralNetworkLearner``)
+            fits the Jacobian's perturbed demonstrations in one pass.
         skill, query_states, eval_states: as for ``exact_teaching``.
         iterations: Jacobian evaluations at most.
         start: (N, R) the actions to start from (default: the target's at the query states).
     """
     iterations = as_count("iterations", iterations)
-    if not hasattr(learner, "fit_batch"):
-        raise TypeError(f"learner: expected a learner with fit_batch for approximate machine teaching, "
-                        f"got {learner!r}")
     query_states = as_float_array("query_states", query_states, ndim=2, shape=(None, skill.state_dim))
     eval_states = evaluation_states(skill) if eval_states is None else eval_states
     X = learner_inputs(learner, skill, query_states)
@@ -191,7 +191,10 @@ def approximate_teaching(learner: Learner, skill, query_states, eval_states=None
     M = len(Y)
 
     def residuals(batch):   # (B, N, R) -> (B, M * R) scaled so that ||r||^2 = risk^2
-        predicted = learner.predict_batch(learner.fit_batch(X, batch), X_eval)
+        if hasattr(learner, "fit_batch"):   # B fits in one pass (the network)
+            predicted = learner.predict_batch(learner.fit_batch(X, batch), X_eval)
+        else:
+            predicted = np.stack([learner.predict(learner.fit(X, actions), X_eval) for actions in batch])
         return (predicted - Y).reshape(len(batch), -1) / np.sqrt(M)
 
     step = 1e-4 * max(float(np.sqrt(np.mean(target_actions**2))), 1e-12)
@@ -218,3 +221,51 @@ def approximate_teaching(learner: Learner, skill, query_states, eval_states=None
         values = residuals(np.concatenate([U[None], perturbed]))
         current, jacobian = values[0], (values[1:] - values[0]).T / step
     return LearnerTeaching(U, float(np.linalg.norm(current)), target_risk, False, False, accepted)
+
+
+@dataclass(frozen=True)
+class TeachingComparison:
+    """Machine teaching against two baselines over random query sets, one row per set.
+
+    Attributes:
+        mt: (K,) the policy risk MT's demonstration leaves.
+        target: (K,) the risk of the target's own actions at the query states.
+        random: (K,) the risk of random actions (normal, with the target actions' RMS size).
+    """
+
+    mt: np.ndarray
+    target: np.ndarray
+    random: np.ndarray
+
+    @property
+    def target_factor(self) -> float:
+        """The median over sets of target risk / MT risk (> 1: MT leaves less risk)."""
+        return float(np.median(self.target / self.mt))
+
+    @property
+    def random_factor(self) -> float:
+        """The median over sets of random risk / MT risk."""
+        return float(np.median(self.random / self.mt))
+
+
+def compare_with_baselines(learner: Learner, skill, n_sets: int = 100, n_states: int | None = None, seed: int = 0,
+                           **options) -> TeachingComparison:
+    """MT's risk against the target's actions and random actions over ``n_sets`` random query
+    sets of ``n_states`` states (default: the skill's number of features), seeded.
+
+    ``options`` go to ``approximate_teaching`` for a learner that is not a linear smoother.
+    """
+    n_sets = as_count("n_sets", n_sets)
+    rng = np.random.default_rng(seed)
+    eval_states = evaluation_states(skill)
+    rows = []
+    for query_seed in rng.integers(0, 2**32, size=n_sets):
+        query = skill.query_states(seed=int(query_seed), n=n_states)
+        result = teach(learner, skill, query, eval_states, **options)
+        target_actions = skill.target_actions(query)
+        size = float(np.sqrt(np.mean(np.sum(target_actions**2, axis=1))))
+        random_actions = rng.normal(scale=size / np.sqrt(target_actions.shape[1]), size=target_actions.shape)
+        rows.append((result.risk, result.target_risk,
+                     risk_of_actions(learner, skill, query, random_actions, eval_states)))
+    mt, target, random = (np.array(column) for column in zip(*rows))
+    return TeachingComparison(mt, target, random)
