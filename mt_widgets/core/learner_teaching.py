@@ -168,7 +168,7 @@ def exact_teaching(learner: Learner, skill, query_states, eval_states=None) -> L
     return LearnerTeaching(optimal, risk, target_risk, True, risk <= 1e-9 * max(scale, 1e-300))
 
 
-def approximate_teaching(learner: Learner, skill, query_states, eval_states=None, *, iterations: int = 6,
+def approximate_teaching(learner: Learner, skill, query_states, eval_states=None, *, iterations: int = 4,
                          start=None) -> LearnerTeaching:
     """Levenberg-Marquardt on the actions against the policy risk (module docstring); approximate.
 
