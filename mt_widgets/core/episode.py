@@ -106,7 +106,8 @@ _TARGET_ROLLOUTS: weakref.WeakKeyDictionary[Skill, dict[float, object]] = weakre
 
 
 def target_reproduction(skill: Skill, duration: float | None = None):
-    """The target skill's own rollout (``skill.theta`` from ``skill.start``), computed once per skill and duration.
+    """The target skill's own rollout (``skill.theta`` from ``skill.start``, or the skill's target
+    ``policy`` when it has one), computed once per skill and duration.
 
     Views draw it faintly beside a learnt reproduction; it depends on nothing a teacher does,
     so every episode of a skill shares one.
@@ -116,7 +117,9 @@ def target_reproduction(skill: Skill, duration: float | None = None):
     duration = skill.default_duration if duration is None else as_positive("duration", duration)
     rollouts = _TARGET_ROLLOUTS.setdefault(skill, {})
     if duration not in rollouts:
-        rollouts[duration] = skill.reproduce(skill.theta, duration=duration)
+        # A nonlinear skill's target is its policy, not its best linear theta.
+        rollouts[duration] = (skill.reproduce(skill.theta, duration=duration) if skill.policy is None
+                              else skill.reproduce_policy(skill.policy, duration=duration))
     return rollouts[duration]
 
 

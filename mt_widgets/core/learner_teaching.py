@@ -69,10 +69,13 @@ def evaluation_states(skill, n: int = EVALUATION_SIZE, seed: int = 0) -> np.ndar
     n = as_count("n", n)
     rng = np.random.default_rng(seed)
     kept = np.empty((0, skill.state_dim))
-    while len(kept) < n:
+    for _ in range(100):
         states = skill.plant.sample_states(rng, 2 * n)
         kept = np.concatenate([kept, states[skill.plant.is_valid_state(states)]])
-    return kept[:n]
+        if len(kept) >= n:
+            return kept[:n]
+    raise ValueError(f"skill: its plant gave {len(kept)} valid states out of {200 * n} sampled, fewer than the "
+                     f"{n} the evaluation set needs")
 
 
 def typical_length_scale(skill, inputs: str = "task") -> float:

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from mt_widgets.core import SKILLS, Skill
+from mt_widgets.core.episode import target_reproduction
 from mt_widgets.core.learner_teaching import evaluation_states, make_learner, policy_risk, teach
 from mt_widgets.core.nonlinear_skills import NONLINEAR_SKILLS, ArcReach, best_linear_theta
 
@@ -78,3 +79,10 @@ def test_a_policy_must_be_callable_and_give_actions_of_the_plants_shape():
         wrong.target_actions(base.query_states(seed=0))
     arc = ArcReach(base.plant, (23.0, 11.0), 0.25, 0.25)
     assert best_linear_theta(base.plant, base.feature_map, arc).shape == (2, 3)
+
+
+def test_an_episodes_target_rollout_is_the_target_policys_not_its_best_linear_theta():
+    skill = NONLINEAR_SKILLS["uarm-obstacle"]
+    drawn = target_reproduction(skill).positions
+    np.testing.assert_allclose(drawn, skill.reproduce_policy(skill.policy).positions)
+    assert np.abs(drawn - skill.reproduce(skill.theta).positions).max() > 1.0
