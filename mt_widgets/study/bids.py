@@ -112,7 +112,9 @@ def _beh_sidecar(protocol) -> dict:
                                                  "plant's bounds.", "Levels": {"1": "diverged", "0": "stayed"}},
     }
     return {"TaskName": protocol.name, "TaskDescription": protocol.title,
-            "Instructions": protocol.texts["instructions"].strip(), "PositionUnits": unit, **columns}
+            "Instructions": protocol.texts["instructions"].strip(), "PositionUnits": unit,
+            # Which robot learner the demonstrations taught (mt_widgets.core.LEARNERS), and its parameter.
+            "Learner": protocol.learner, "LearnerRidgeLambda": protocol.lam, **columns}
 
 
 def export_bids(study_folder, out_folder) -> Path:

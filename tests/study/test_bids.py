@@ -69,6 +69,7 @@ def test_every_behavioural_column_is_described_with_its_units(dataset):
     sidecar = json.loads(tsv.with_suffix(".json").read_text())
     assert set(rows[0]) <= set(sidecar)
     assert sidecar["action_1"]["Units"] == "cm" and sidecar["drawing_duration"]["Units"] == "s"
+    assert sidecar["Learner"] == protocol.learner == "ridge" and sidecar["LearnerRidgeLambda"] == protocol.lam
     assert {r["guidance_modality"] for r in rows} == {"arrows"}
     assert {r["guidance_shown"] for r in rows if r["phase"] == "B"} == {"1"}
     assert all(r["teaching_error"] != "n/a" for r in rows)
