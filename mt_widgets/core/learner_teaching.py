@@ -194,11 +194,7 @@ def approximate_teaching(learner: Learner, skill, query_states, eval_states=None
     M = len(Y)
 
     def residuals(batch):   # (B, N, R) -> (B, M * R) scaled so that ||r||^2 = risk^2
-        if hasattr(learner, "fit_batch"):   # B fits in one pass (the network)
-            predicted = learner.predict_batch(learner.fit_batch(X, batch), X_eval)
-        else:
-            predicted = np.stack([learner.predict(learner.fit(X, actions), X_eval) for actions in batch])
-        return (predicted - Y).reshape(len(batch), -1) / np.sqrt(M)
+        return (_predict_many(learner, X, batch, X_eval) - Y).reshape(len(batch), -1) / np.sqrt(M)
 
     step = 1e-4 * max(float(np.sqrt(np.mean(target_actions**2))), 1e-12)
     perturbed = U[None] + step * np.eye(N * R).reshape(N * R, N, R)
@@ -224,6 +220,46 @@ def approximate_teaching(learner: Learner, skill, query_states, eval_states=None
         values = residuals(np.concatenate([U[None], perturbed]))
         current, jacobian = values[0], (values[1:] - values[0]).T / step
     return LearnerTeaching(U, float(np.linalg.norm(current)), target_risk, False, False, accepted)
+
+
+def _predict_many(learner: Learner, X, batch, X_eval) -> np.ndarray:
+    """(B, M, R): what ``learner`` learns from each of B action sets (B, N, R) at X, at X_eval."""
+    if hasattr(learner, "fit_batch"):   # B fits in one pass (the network)
+        return learner.predict_batch(learner.fit_batch(X, batch), X_eval)
+    return np.stack([learner.predict(learner.fit(X, actions), X_eval) for actions in batch])
+
+
+def action_sensitivity(learner: Learner, skill, query_states, actions, eval_states=None) -> tuple[float, np.ndarray]:
+    """How much the policy risk can move per unit of action error: (rho1, gains (N,)).
+
+    With J the Jacobian of the learnt policy on the evaluation states (divided by sqrt(M), as the
+    risk is) with respect to the demonstrated actions, ``rho1 = ||J||_2`` and ``gains[n]`` the
+    spectral norm of demonstration n's block, so a demonstration's gap g_n moves the risk by at
+    most ``gains[n] |g_n|``. For a linear smoother J is ``S / sqrt(M)`` (exact, any actions); for
+    another learner it is taken by finite differences at ``actions`` (a linearisation). For ridge
+    on the features this is the paper's ``||A||_2`` weighted by the evaluation set's features.
+    """
+    query_states = as_float_array("query_states", query_states, ndim=2, shape=(None, skill.state_dim))
+    eval_states = evaluation_states(skill) if eval_states is None else eval_states
+    X, X_eval = learner_inputs(learner, skill, query_states), learner_inputs(learner, skill, eval_states)
+    M = len(X_eval)
+    if learner.linear_in_actions:
+        S = learner.smoother(X, X_eval) / np.sqrt(M)
+        return float(np.linalg.norm(S, 2)), np.linalg.norm(S, axis=0)
+    actions = as_float_array("actions", actions, ndim=2, shape=(len(X), None))
+    N, R = actions.shape
+    step = 1e-4 * max(float(np.sqrt(np.mean(actions**2))), 1e-12)
+    batch = np.concatenate([actions[None], actions[None] + step * np.eye(N * R).reshape(N * R, N, R)])
+    predicted = _predict_many(learner, X, batch, X_eval).reshape(len(batch), -1) / np.sqrt(M)
+    J = (predicted[1:] - predicted[0]).T / step                       # (M R, N R)
+    gains = np.array([np.linalg.norm(J[:, n * R:(n + 1) * R], 2) for n in range(N)])
+    return float(np.linalg.norm(J, 2)), gains
+
+
+def learnt_policy(learner: Learner, skill, query_states, actions):
+    """The policy ``learner`` learns from ``actions`` at ``query_states``, as a function states -> actions."""
+    fitted = learner.fit(learner_inputs(learner, skill, query_states), actions)
+    return lambda states: learner.predict(fitted, learner_inputs(learner, skill, states))
 
 
 @dataclass(frozen=True)
