@@ -197,11 +197,19 @@ def approximate_teaching(learner: Learner, skill, query_states, eval_states=None
         return (_predict_many(learner, X, batch, X_eval) - Y).reshape(len(batch), -1) / np.sqrt(M)
 
     step = 1e-4 * max(float(np.sqrt(np.mean(target_actions**2))), 1e-12)
-    perturbed = U[None] + step * np.eye(N * R).reshape(N * R, N, R)
-    values = residuals(np.concatenate([U[None], perturbed]))
-    current, jacobian = values[0], (values[1:] - values[0]).T / step   # (M R,), (M R, N R)
+    nudges = step * np.eye(N * R).reshape(N * R, N, R)
+
+    def with_jacobians(points):   # (T, N, R) -> residuals (T, M R) and Jacobians (T, M R, N R)
+        values = residuals(np.concatenate([np.concatenate([p[None], p[None] + nudges]) for p in points]))
+        values = values.reshape(len(points), 1 + N * R, -1)
+        return values[:, 0], np.transpose(values[:, 1:] - values[:, :1], (0, 2, 1)) / step
+
+    (current,), (jacobian,) = with_jacobians(U[None])
     target_risk = float(np.linalg.norm(current)) if start is None else float(
         np.linalg.norm(residuals(target_actions[None])[0]))
+    # A learner that trains a batch in one pass gets the trial points' Jacobians with them (one
+    # pass an iteration); another fits them one by one, so only the accepted point's is taken.
+    batched = hasattr(learner, "fit_batch")
     damping, accepted = 1e-3, 0
     for _ in range(iterations):
         gram = jacobian.T @ jacobian
@@ -209,16 +217,17 @@ def approximate_teaching(learner: Learner, skill, query_states, eval_states=None
         trial_steps = [np.linalg.solve(gram + d * np.diag(np.diag(gram) + 1e-12), -gradient)
                        for d in (damping, 10 * damping, 100 * damping)]
         trials = np.stack([U + s.reshape(N, R) for s in trial_steps])
-        trial_values = residuals(trials)
+        trial_values, trial_jacobians = with_jacobians(trials) if batched else (residuals(trials), None)
         norms = np.linalg.norm(trial_values, axis=1)
         best = int(np.argmin(norms))
         if norms[best] >= np.linalg.norm(current):
             damping *= 1000.0
             continue
         U, damping, accepted = trials[best], damping * (10.0**best) / 3.0, accepted + 1
-        perturbed = U[None] + step * np.eye(N * R).reshape(N * R, N, R)
-        values = residuals(np.concatenate([U[None], perturbed]))
-        current, jacobian = values[0], (values[1:] - values[0]).T / step
+        if batched:
+            current, jacobian = trial_values[best], trial_jacobians[best]
+        else:
+            (current,), (jacobian,) = with_jacobians(U[None])
     return LearnerTeaching(U, float(np.linalg.norm(current)), target_risk, False, False, accepted)
 
 
