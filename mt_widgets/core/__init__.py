@@ -30,8 +30,10 @@ from .machine_teaching import (
     teaching_risk,
 )
 from .network_learner import NeuralNetworkLearner
+from .nonlinear_skills import NONLINEAR_SKILLS
 from .plants import ContinuousPlant, KinematicPlant, Plant
 from .query_states import SeedSchedule, condition_number, sample_query_states
+from .reward_learner import RewardLearner
 from .serial_chain import SerialChain
 from .skills import SKILLS, Skill, SkillRegistry
 from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
@@ -55,3 +57,4 @@ __all__ = [
 ]
 __all__ += ["GaussianProcessLearner", "KernelRidgeLearner", "LEARNERS", "Learner", "LearnerTeaching",
             "NeuralNetworkLearner", "SingularFitError", "make_learner", "policy_risk", "teach"]
+__all__ += ["NONLINEAR_SKILLS", "RewardLearner"]

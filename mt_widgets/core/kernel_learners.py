@@ -42,9 +42,17 @@ class _RBFSmoother(Learner):
 
     linear_in_actions = True
 
-    def __init__(self, length_scale: float, inputs: str):
+    def __init__(self, length_scale: float, inputs: str, linear_weight: float = 0.0):
         self.length_scale = as_positive("length_scale", length_scale)
         self.inputs = _check_inputs(inputs)
+        self.linear_weight = as_positive("linear_weight", linear_weight, allow_zero=True)
+
+    def _kernel(self, A, B) -> np.ndarray:
+        """The RBF, plus ``linear_weight (1 + a.b)`` when asked: the linear part on task-space inputs
+        is the paper's features (position, velocity, a bias), so the learner is ridge plus a
+        nonlinear correction, and learns a linear skill as ridge does."""
+        gram = rbf_kernel(A, B, self.length_scale)
+        return gram + self.linear_weight * (1.0 + A @ B.T) if self.linear_weight else gram
 
     def _gram(self, A, B) -> np.ndarray:
         raise NotImplementedError
@@ -87,19 +95,21 @@ class KernelRidgeLearner(_RBFSmoother):
         length_scale: the kernel width l (> 0), in the units of the inputs (m, cm, rad).
         lam: the regularisation (> 0).
         inputs: "task" (end-effector position and velocity, the default), "state" or "features".
+        linear_weight: c >= 0 adds ``c (1 + x.x')`` to the kernel (a linear part; 0: the RBF alone).
     """
 
     name = "kernel-ridge"
 
-    def __init__(self, length_scale: float, lam: float = 1e-3, inputs: str = "task"):
-        super().__init__(length_scale, inputs)
+    def __init__(self, length_scale: float, lam: float = 1e-3, inputs: str = "task", linear_weight: float = 0.0):
+        super().__init__(length_scale, inputs, linear_weight)
         self.lam = as_positive("lam", lam)
 
     def __repr__(self) -> str:
-        return f"KernelRidgeLearner(length_scale={self.length_scale:.4g}, lam={self.lam:.4g}, inputs={self.inputs!r})"
+        return (f"KernelRidgeLearner(length_scale={self.length_scale:.4g}, lam={self.lam:.4g}, inputs={self.inputs!r}, "
+                f"linear_weight={self.linear_weight:.4g})")
 
     def _gram(self, A, B):
-        return rbf_kernel(A, B, self.length_scale)
+        return self._kernel(A, B)
 
     def _regulariser(self):
         return self.lam
@@ -114,23 +124,24 @@ class GaussianProcessLearner(_RBFSmoother):
         noise_variance: n2 (> 0), the variance of a demonstrated action's noise.
         signal_variance: s2 (> 0), the prior variance of an action.
         inputs: "task" (the default), "state" or "features".
+        linear_weight: c >= 0 adds ``c (1 + x.x')`` to the covariance (a linear prior trend).
     """
 
     name = "gaussian-process"
 
     def __init__(self, length_scale: float, noise_variance: float = 1e-4, signal_variance: float = 1.0,
-                 inputs: str = "task"):
-        super().__init__(length_scale, inputs)
+                 inputs: str = "task", linear_weight: float = 0.0):
+        super().__init__(length_scale, inputs, linear_weight)
         self.noise_variance = as_positive("noise_variance", noise_variance)
         self.signal_variance = as_positive("signal_variance", signal_variance)
 
     def __repr__(self) -> str:
         return (f"GaussianProcessLearner(length_scale={self.length_scale:.4g}, "
                 f"noise_variance={self.noise_variance:.4g}, signal_variance={self.signal_variance:.4g}, "
-                f"inputs={self.inputs!r})")
+                f"inputs={self.inputs!r}, linear_weight={self.linear_weight:.4g})")
 
     def _gram(self, A, B):
-        return self.signal_variance * rbf_kernel(A, B, self.length_scale)
+        return self.signal_variance * self._kernel(A, B)
 
     def _regulariser(self):
         return self.noise_variance

@@ -35,7 +35,7 @@ class NeuralNetworkLearner(Learner):
     name = "neural-network"
     linear_in_actions = False
 
-    def __init__(self, hidden: int = 16, steps: int = 300, learning_rate: float = 0.05, weight_decay: float = 1e-3,
+    def __init__(self, hidden: int = 16, steps: int = 150, learning_rate: float = 0.05, weight_decay: float = 1e-3,
                  seed: int = 0, inputs: str = "task"):
         self.hidden = as_count("hidden", hidden)
         self.steps = as_count("steps", steps)

@@ -15,7 +15,7 @@ import numpy as np
 
 from .arm_plant import ArmPlant
 from .drawing import PlantDrawing, PoseSketch, TargetShape
-from .features import ConveyorFeatures, EndEffectorFeatures, FeatureMap, PositionFeatures, ToolFeatures
+from .features import ConveyorFeatures, EndEffectorFeatures, FeatureMap, FunctionFeatures, PositionFeatures, ToolFeatures
 from .query_states import sample_query_states
 from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
 from .uarm_plant import UArmPlant
@@ -185,6 +185,17 @@ class Skill:
         batch = self.plant.rollout(theta.reshape((-1,) + self.theta.shape), self.feature_map, self.start,
                                    duration, record_every)
         return batch[0] if theta.ndim == 2 else batch
+
+    def reproduce_policy(self, policy, duration: float | None = None, record_every: int | None = None):
+        """Rolls out any policy, a function states (B, state_dim) -> actions (B, R), from the skill's start
+        (a nonlinear target, or what a nonlinear learner learnt); a ``Trajectory``."""
+        if not callable(policy):
+            raise TypeError(f"policy: expected a function states -> actions, got {type(policy).__name__}")
+        names = tuple(f"u{i + 1}" for i in range(self.plant.action_dim))
+        # The policy as a feature map with Theta = I: the plant's generic rollout runs it unchanged.
+        as_features = FunctionFeatures(self.plant, policy, names)
+        duration = self.default_duration if duration is None else duration
+        return self.plant.rollout(np.eye(len(names))[None], as_features, self.start, duration, record_every)[0]
 
 
 def _paper_skills() -> dict[str, Skill]:

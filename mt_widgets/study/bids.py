@@ -133,7 +133,9 @@ def _beh_sidecar(protocol) -> dict:
         columns[f"action_{i + 1}"] = {"Description": f"Component {i + 1} of the demonstrated action.", "Units": action}
         columns[f"optimal_{i + 1}"] = {"Description": f"Component {i + 1} of the optimal action.", "Units": action}
     return {"TaskName": protocol.name, "TaskDescription": protocol.title,
-            "Instructions": protocol.texts["instructions"].strip(), "PositionUnits": unit, **columns}
+            "Instructions": protocol.texts["instructions"].strip(), "PositionUnits": unit,
+            # Which robot learner the demonstrations taught (mt_widgets.core.LEARNERS), and its parameter.
+            "Learner": protocol.learner, "LearnerRidgeLambda": protocol.lam, **columns}
 
 
 def export_bids(study_folder, out_folder) -> Path:

@@ -154,7 +154,7 @@ def test_a_singular_fit_says_so_instead_of_returning_nan():
 
 def test_an_unknown_learner_name_lists_the_available_ones():
     with pytest.raises(KeyError, match="expected one of the available learners \\(ridge, kernel-ridge, "
-                                       "gaussian-process, neural-network"):
+                                       "gaussian-process, neural-network, reward\\)"):
         make_learner("svm")
     with pytest.raises(ValueError, match="length_scale"):
         make_learner("kernel-ridge")
@@ -169,4 +169,4 @@ def test_teach_picks_exact_or_approximate_by_the_learner():
     approximate = teach(NeuralNetworkLearner(steps=150), skill, query, iterations=2)
     assert not approximate.exact and not approximate.representable
     assert approximate.risk <= approximate.target_risk
-    assert set(LEARNERS) == {"ridge", "kernel-ridge", "gaussian-process", "neural-network"}
+    assert set(LEARNERS) == {"ridge", "kernel-ridge", "gaussian-process", "neural-network", "reward"}

@@ -76,6 +76,7 @@ def test_every_behavioural_column_is_described_with_its_units(dataset):
     onsets = [float(r["onset"]) for r in rows]   # seconds from the session's start, in order
     assert 0 < onsets[0] and onsets == sorted(onsets) and sidecar["onset"]["Units"] == "s"
     assert sidecar["action_1"]["Units"] == "cm" and sidecar["drawing_duration"]["Units"] == "s"
+    assert sidecar["Learner"] == protocol.learner == "ridge" and sidecar["LearnerRidgeLambda"] == protocol.lam
     assert {r["guidance_modality"] for r in rows} == {"arrows"}
     assert {r["guidance_shown"] for r in rows if r["phase"] == "B"} == {"1"}
     assert all(r["teaching_error"] != "n/a" for r in rows)
