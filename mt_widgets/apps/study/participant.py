@@ -23,6 +23,7 @@ import numpy as np
 from ipywidgets import HTML, Button, HBox, Layout, VBox
 
 from mt_widgets.study import Session
+from mt_widgets.study.log import ContinuedElsewhereError
 from mt_widgets.widgets import EpisodeWidget, retire
 
 from .controls import Choice
@@ -158,6 +159,15 @@ class ParticipantView(VBox):
         # A stopped page offers nothing that would do nothing: no Withdraw, no step button.
         self.withdraw_box.layout.display = "none"
         self.withdraw_box.children = []
+        if isinstance(error, ContinuedElsewhereError):
+            # The same participant's page opened again (a second tab, another device): that page
+            # goes on from the log; this one must only say so (online there is no experimenter).
+            self.body.children = [HTML(
+                "<div role='alert' class='mt-continued-elsewhere' style='font-size:1.2em;max-width:760px'>"
+                "<b>This study is open in another tab or window.</b><br>It goes on there, from where you were: "
+                "please continue in that tab and close this one. Everything you did so far is saved; nothing "
+                "from this tab was recorded after the other one opened.</div>")]
+            return
         self.body.children = [HTML(
             f"<div role='alert' style='color:#b00020;font-size:1.2em;max-width:760px'><b>Please call the "
             f"experimenter.</b><br><small>For the experimenter: the study stopped here; everything recorded so far "
