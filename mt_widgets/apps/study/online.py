@@ -84,7 +84,8 @@ class OnlineStudyPage(VBox):
             arrival = self.online.participant_from_url(parse_query(query))
         except ParticipantIdError as error:
             # The participant's words say what is wrong; the parameter's name comes first.
-            self.children = [_message(str(error).split(": ", 1)[-1])]
+            words = str(error).split(": ", 1)[-1]
+            self.children = [_message(words[:1].upper() + words[1:])]
             return
         study = StudyFolder.create(log_folder, protocol)
         try:
