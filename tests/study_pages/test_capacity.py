@@ -12,7 +12,7 @@ from blinding_support import participant_texts
 from mt_widgets.apps.study import OnlineStudyPage
 from mt_widgets.apps.study.capacity import Capacity, available_mib
 
-from .test_pages import PILOT, act, prolific
+from .support import PILOT, act, prolific
 
 
 def _text(page) -> str:

@@ -7,7 +7,7 @@ from blinding_support import participant_texts
 from mt_widgets.apps.study import OnlineStudyPage
 from mt_widgets.study import StudyFolder, erase_participant, read_events
 
-from .test_pages import PILOT, act, buttons_in, prolific
+from .support import PILOT, act, buttons_in, prolific
 
 
 def _text(page) -> str:
