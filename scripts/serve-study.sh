@@ -10,8 +10,11 @@
 # The experimenter's panel opens with $MT_WIDGETS_EXPERIMENTER_CODE; when it is not set, a code
 # is made up and printed here. Logs go to $MT_WIDGETS_STUDY_LOGS, else ~/mt-widgets-studies/<protocol>;
 # the online page's protocol is $MT_WIDGETS_STUDY_PROTOCOL (a file with an [online] table; default:
-# the pilot, notebooks/study_online_pilot.toml). Open http://localhost:8866/ . Extra arguments go
-# to Voila, e.g. --port=8000. Serving on the internet: docs/user/deploy.md, "Serving the online study on the internet".
+# the pilot, notebooks/study_online_pilot.toml). At capacity a new arrival gets a page saying the study is
+# busy and when to come back: $MT_WIDGETS_STUDY_MAX_PARTICIPANTS (taking part at once) and
+# $MT_WIDGETS_STUDY_MIN_FREE_MIB (memory kept free); unset, no limit (mt_widgets/apps/study/capacity.py).
+# Open http://localhost:8866/ . Extra arguments go to Voila, e.g. --port=8000.
+# Serving on the internet: docs/user/deploy.md, "Serving the online study on the internet".
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 source "$REPO/scripts/setup.sh"

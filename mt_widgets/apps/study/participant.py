@@ -23,6 +23,7 @@ import numpy as np
 from ipywidgets import HTML, Button, HBox, Layout, VBox
 
 from mt_widgets.study import Session
+from mt_widgets.study.log import ContinuedElsewhereError
 from mt_widgets.widgets import EpisodeWidget, retire
 
 from .controls import Choice
@@ -78,6 +79,11 @@ class ParticipantView(VBox):
         self.withdraw_button.on_click(self._withdraw_pressed)
         self.withdraw_box = VBox([self.withdraw_button])
         self.children = [self.heading, self.body, self.withdraw_box]
+        # Whatever leaves the body or the withdraw box leaves the page for good (a screen's text
+        # and buttons, a form, a phase's instructions beside its episode): closed, or a one-hour
+        # protocol would leave a few widgets open per screen (tests/study/test_long_session.py).
+        self.body.observe(self._retire_left, names="children")
+        self.withdraw_box.observe(self._retire_left, names="children")
 
     def begin(self, session: Session) -> None:
         self.session = session
@@ -105,6 +111,13 @@ class ParticipantView(VBox):
         """
         if episode is not None and episode is not self.episode:
             retire(episode, keep=self)
+
+    def _retire_left(self, change) -> None:
+        staying = {id(child) for child in change["new"]}
+        for child in change["old"]:
+            # The Withdraw button comes back after "No, continue the study": never closed.
+            if id(child) not in staying and child is not self.withdraw_button:
+                retire(child, keep=self)
 
     def safely(self, action, reraise: bool = False) -> None:
         """Runs a participant action; any error stops the participant flow (``stop_for_experimenter``).
@@ -146,6 +159,15 @@ class ParticipantView(VBox):
         # A stopped page offers nothing that would do nothing: no Withdraw, no step button.
         self.withdraw_box.layout.display = "none"
         self.withdraw_box.children = []
+        if isinstance(error, ContinuedElsewhereError):
+            # The same participant's page opened again (a second tab, another device): that page
+            # goes on from the log; this one must only say so (online there is no experimenter).
+            self.body.children = [HTML(
+                "<div role='alert' class='mt-continued-elsewhere' style='font-size:1.2em;max-width:760px'>"
+                "<b>This study is open in another tab or window.</b><br>It goes on there, from where you were: "
+                "please continue in that tab and close this one. Everything you did so far is saved; nothing "
+                "from this tab was recorded after the other one opened.</div>")]
+            return
         self.body.children = [HTML(
             f"<div role='alert' style='color:#b00020;font-size:1.2em;max-width:760px'><b>Please call the "
             f"experimenter.</b><br><small>For the experimenter: the study stopped here; everything recorded so far "
@@ -192,7 +214,8 @@ class ParticipantView(VBox):
 
     def _show_screen(self, step) -> None:
         protocol = self.session.protocol
-        self.heading.value = (f"<h3 style='margin:4px 0'>Part {step.phase_index + 1} of {len(protocol.phases)}</h3>"
+        self.heading.value = (f"<h3 style='margin:4px 0'>Part {step.phase_index + 1} of "
+                              f"{len(self.session.plan.phases)}</h3>"
                               if step.kind == "phase_intro" else "")
         labels = dict(_SCREEN_BUTTONS, instructions="Start the practice" if protocol.practice.duration_s > 0
                       else "Start")
