@@ -285,6 +285,8 @@ class SpaceTeachingCanvas(VBox):
         self.pending_action = None
         self._input_started, self._method, self._redraws = None, "code", 0
         self._state_shown_at = time.monotonic()
+        for entry in self.entries:  # empty fields: "Set arrow" never re-applies the previous state's numbers
+            entry.value = 0.0
         if self.episode.complete and self.play_on_complete:
             self.play()
         else:
@@ -336,6 +338,11 @@ class SpaceTeachingCanvas(VBox):
         self.animation = play_frames(self, "robot", len(at), setup, draw_frame, final, fps=REPRODUCTION_FPS)
         self._update_words()
         return self.animation
+
+    @property
+    def finger_radius(self) -> float:
+        """Canvas pixels around the hand where a finger starts a drag (larger than the mouse's)."""
+        return 1.5 * max(self.grab_radius, FINGER_RADIUS_CSS_PX)
 
     # -- the ``view`` play_frames draws on ------------------------------------------------------------
     def layer(self, name: str):
@@ -466,15 +473,16 @@ class SpaceTeachingCanvas(VBox):
             for joint in pixels[1:-1]:
                 canvas.fill_circle(float(joint[0]), float(joint[1]), 3.5)
             start = pixels[-1]
-            user_tip = None if user is None else panel.pixels(tool + self.action_length * np.asarray(user))
-            optimal_tip = None if optimal is None else panel.pixels(tool + self.action_length * optimal)
-            draw_arrow_pair(canvas, start, user_tip, optimal_tip, theme.user_arrow, theme.optimal_arrow)
-            canvas.global_alpha = 1.0
             canvas.fill_style = theme.end_effector
             canvas.stroke_style = theme.end_effector_outline
             canvas.line_width = 1.5
             canvas.fill_circle(float(start[0]), float(start[1]), 6.0)
             canvas.stroke_circle(float(start[0]), float(start[1]), 6.0)
+            # Arrows over the hand: a short action's arrow would otherwise hide under it.
+            user_tip = None if user is None else panel.pixels(tool + self.action_length * np.asarray(user))
+            optimal_tip = None if optimal is None else panel.pixels(tool + self.action_length * optimal)
+            draw_arrow_pair(canvas, start, user_tip, optimal_tip, theme.user_arrow, theme.optimal_arrow)
+            canvas.global_alpha = 1.0
         if index is None:
             return
         # The active component, beside the keyboard's focus: which way the arrow keys move the tip.
@@ -509,7 +517,7 @@ class SpaceTeachingCanvas(VBox):
         self.readout.value = f"<small>{text}</small>"
         zones = ()
         if self.current_state is not None and not self.showing_guidance:
-            finger = max(self.grab_radius, FINGER_RADIUS_CSS_PX)
+            finger = self.finger_radius
             zones = tuple((float(p[0]), float(p[1]), self.grab_radius, finger)
                           for p in (self.tool_pixel("top"), self.tool_pixel("side")))
             # A drag anywhere in the 3-D panel turns it: the whole panel is a grab zone for a finger.
@@ -632,7 +640,7 @@ class SpaceTeachingCanvas(VBox):
     def _on_touch_start(self, points) -> None:
         if len(points) == 1 and self._drag is None:
             self._last_touch = points[0]
-            self._press(*points[0], max(self.grab_radius, FINGER_RADIUS_CSS_PX) * 1.5)
+            self._press(*points[0], self.finger_radius)
         elif len(points) > 1:
             self._end_touch()
 

@@ -108,6 +108,8 @@ def test_typed_numbers_set_the_arrow_and_bad_numbers_are_refused(widget):
     np.testing.assert_allclose(widget.pending_action, [0.1, -0.2, 0.05])  # unchanged
     widget.confirm_button.click()
     assert widget.episode.demonstrations[0].method == "numeric"
+    widget.next_button.click()
+    assert [entry.value for entry in widget.entries] == [0.0, 0.0, 0.0]  # the next state starts empty
 
 
 @pytest.mark.parametrize("bad", [[0.1, 0.2], [0.1, float("inf"), 0.0], [True, 0.0, 0.0], "abc", [1, 2, 3, 4]])
