@@ -137,3 +137,22 @@ def test_a_finger_draws_a_3d_demonstration_on_a_phone(browser, voila_server, art
         page.screenshot(path=artifacts("phone-guidance"))
     finally:
         context.close()
+
+
+def test_the_reproduction_plays_in_all_three_views_and_ends_on_the_last_frame(browser, voila_server, page, artifacts):
+    widget = reference()
+    for action in widget.episode.optimal_actions:
+        widget.set_action(action)
+        widget.confirm()
+        widget.advance()
+    trajectory = widget.episode.reproduction
+    final_tool = widget.skill.plant.sketch(trajectory.states[-1:]).chain[0, -1]
+    open_page(page, voila_server, reference())
+    page.get_by_role("button", name="test: finish with optimal").click()
+    wait_for_status(page, "s.demos.length == 4 && !s.guidance", timeout=30_000)
+    # Where the tool ends, in each view: the final frame (yellow hand) over the tool's path (sky-blue).
+    for view in ("top", "side", "perspective"):
+        wait_for_color(page, ROBOT, *widget.panel(view).pixels(final_tool), OKABE["yellow"],
+                       timeout=1000 * (float(trajectory.times[-1]) + 30.0))
+    assert page.get_by_text("replays what it learnt").count() >= 1
+    page.screenshot(path=artifacts("played"))
