@@ -15,7 +15,14 @@ import numpy as np
 
 from .arm_plant import ArmPlant
 from .drawing import PlantDrawing, PoseSketch, TargetShape
-from .features import ConveyorFeatures, EndEffectorFeatures, FeatureMap, FunctionFeatures, PositionFeatures, ToolFeatures
+from .features import (
+    ConveyorFeatures,
+    EndEffectorFeatures,
+    FeatureMap,
+    FunctionFeatures,
+    PositionFeatures,
+    ToolFeatures,
+)
 from .query_states import sample_query_states
 from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
 from .uarm_plant import UArmPlant
