@@ -38,9 +38,7 @@ RENDER = "/voila/render/study_online.ipynb"
 sys.path.insert(0, str(ROOT / "deploy" / "nginx"))
 from render_config import render  # noqa: E402
 
-pytestmark = [pytest.mark.slow,
-              pytest.mark.skipif(not os.path.exists(NGINX), reason="needs Debian's nginx (scripts/run-tests.sh "
-                                                                  "installs it)")]
+pytestmark = pytest.mark.slow
 
 N_PARTICIPANTS = 30
 ROUNDS = 8          # actions per participant: through consent, the forms and the practice, into teaching
@@ -127,6 +125,9 @@ class Participant:
 
 @pytest.fixture
 def cluster(tmp_path):
+    if not os.path.exists(NGINX):
+        pytest.fail("this test needs Debian's nginx (/usr/sbin/nginx): scripts/run-tests.sh installs it, or "
+                    "apt-get install nginx")
     folder = tmp_path / "study"
     servers = [StudyServer(f"s{i}", free_port(), folder, tmp_path / f"s{i}.out") for i in range(3)]
     # nginx's worker runs as nobody when the test runs as root: its prefix must be reachable by it,
