@@ -19,6 +19,7 @@ import argparse
 import json
 import secrets
 import sys
+import traceback
 from http.server import BaseHTTPRequestHandler, HTTPServer
 from pathlib import Path
 from urllib.parse import urlsplit
@@ -77,7 +78,13 @@ def serve(port: int, name: str, protocol: str, folder: str) -> None:
             page = kernels.get(parts[2])
             if page is None:  # as Voila's websocket to a kernel this server does not have
                 return self.reply(404, {"error": "no such kernel"})
-            act(page.view)
+            try:
+                act(page.view)
+            except Exception as error:  # noqa: BLE001
+                # A kernel logs an exception raised by a widget's message handler and lives on; the
+                # page shows what its view made of it (a stale page: "open in another tab").
+                traceback.print_exc()
+                return self.reply(200, {**describe(page), "error": f"{type(error).__name__}: {error}"})
             self.reply(200, describe(page))
 
         def do_DELETE(self):  # noqa: N802
