@@ -21,6 +21,7 @@ def test_every_server_is_an_upstream_that_nginx_never_marks_failed_and_the_prefi
     for directive in ("pid", "error_log", "access_log", "client_body_temp_path", "proxy_temp_path"):
         assert f"{directive} {tmp_path}/" in text, directive
     assert "SameSite=Lax; Secure" in text
+    assert "access_log" in text and "mt_no_query;" in text and "$request " not in text and "$args" not in text
     plain = render(["127.0.0.1:9001"], "8080", tmp_path, secure_cookie=False)
     assert "SameSite=Lax\";" in plain and "Secure" not in plain
 

@@ -146,7 +146,7 @@ def cluster(tmp_path):
         for server in servers:
             server.wait()
         wait_for(f"http://127.0.0.1:{listen}/health", nginx)
-        yield servers, f"http://127.0.0.1:{listen}", folder
+        yield servers, f"http://127.0.0.1:{listen}", folder, prefix
     finally:
         for server in servers:
             if server.process is not None and server.process.poll() is None:
@@ -158,7 +158,7 @@ def cluster(tmp_path):
 
 
 def test_thirty_participants_on_three_servers_one_sequence_one_dataset_a_server_killed_and_back(cluster):
-    servers, base, folder = cluster
+    servers, base, folder, nginx_prefix = cluster
     by_name = {s.name: s for s in servers}
     people = [Participant(f"5f0a1b2c3d4e5f6a7b8c{i:04d}", base) for i in range(N_PARTICIPANTS)]
     for person in people:
@@ -241,6 +241,9 @@ def test_thirty_participants_on_three_servers_one_sequence_one_dataset_a_server_
         assert sum(e["type"] == "session_started" for e in events) == 1
         resumes = sum(e["type"] == "session_resumed" for e in events)
         assert resumes >= (person.server == victim.name), (person.pid, resumes)
+    # nginx's access log names no one (the IDs ride in the query string, which it does not log).
+    logged = (nginx_prefix / "access.log").read_text()
+    assert logged.count(RENDER) >= N_PARTICIPANTS and not any(p.pid in logged for p in people)
     # Coming back with their link, on their own server, each is sent on with their completion code again.
     for person in people:
         status, body, _ = person.request("DELETE", f"{base}/api/kernels/{person.kernel}")
