@@ -16,8 +16,7 @@ from mt_widgets.study import LogError, Session, StudyFolder, UnknownParticipantE
 from mt_widgets.study.erasure import erased_record
 from mt_widgets.study.pseudonyms import KEY_FILE, code_of, read_key
 
-from .scripted import run
-from .test_online import online_protocol
+from .scripted import online_protocol, run
 
 # Prolific-like identities: 24 hexadecimal characters each, as the pool hands them out.
 PEOPLE = {

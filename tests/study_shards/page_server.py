@@ -5,7 +5,7 @@ kernel of its own, built by notebooks/study_online.ipynb as ``OnlineStudyPage(pr
 query)``, and the page's buttons reach it over the kernel's websocket. This server does the same
 with the same object, without the kernels and the browser (so thirty participants fit in a test
 of the slow tier): a page's render URL builds the page and answers with a kernel id; a kernel's
-URL acts on that page (``act`` of tests/study_pages/test_pages.py: what the buttons do);
+URL acts on that page (``act`` of tests/study_pages/support.py: what the buttons do);
 deleting a kernel ends its page, as Voila's shutdown of a page's kernel does on unload. Like
 Voila's, its kernels die with the server: a participant whose server was restarted reloads their
 page, and the page resumes them from the study folder.
@@ -28,7 +28,7 @@ sys.path[:0] = [str(Path(__file__).resolve().parents[1]), str(Path(__file__).res
 
 from blinding_support import participant_texts  # noqa: E402
 from mt_widgets.apps.study import OnlineStudyPage  # noqa: E402
-from study_pages.test_pages import act  # noqa: E402
+from study_pages.support import act  # noqa: E402
 
 RENDER = "/voila/render/study_online.ipynb"
 
