@@ -24,6 +24,17 @@ prepare_browser_and_hub() {
         "${sudo[@]}" apt-get install -y -qq chromium >/dev/null
     fi
     /usr/bin/chromium --version
+    # The several-servers test (tests/study_shards, slow tier) runs Debian's nginx as a user, under its own prefix.
+    if [ ! -x /usr/sbin/nginx ]; then
+        echo "== installing Debian's nginx for the several-servers test"
+        if [ "$(id -u)" = 0 ]; then sudo=(); elif sudo -n true 2>/dev/null; then sudo=(sudo -n); else
+            echo "The several-servers test needs /usr/sbin/nginx (Debian package 'nginx'); install it and run this again." >&2
+            exit 1
+        fi
+        export DEBIAN_FRONTEND=noninteractive
+        "${sudo[@]}" apt-get update -qq
+        "${sudo[@]}" apt-get install -y -qq nginx >/dev/null
+    fi
 
     # The class-hub tests need configurable-http-proxy (npm); installed into .npm/ when missing.
     PATH="$("$REPO/scripts/install-hub.sh"):$PATH"
