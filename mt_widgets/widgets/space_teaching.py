@@ -170,8 +170,8 @@ class SpaceTeachingCanvas(VBox):
         size = 2 * panel_size
         self.canvas = MultiCanvas(2, width=size, height=size, layout=Layout(width="100%", max_width=f"{size}px",
                                                                          height="auto"))
-        self.scene, self.robot = self.canvas[0], self.canvas[1]
-        self._layers = {"scene": self.scene, "robot": self.robot}
+        self.scene, self.plant_layer = self.canvas[0], self.canvas[1]
+        self._layers = {"scene": self.scene, "robot": self.plant_layer}
         self._paints = {}
         self._panels = self._make_panels()
         top = self.canvas._canvases[-1]  # events come from the top layer
@@ -391,7 +391,7 @@ class SpaceTeachingCanvas(VBox):
 
     def _redraw_robot(self) -> None:
         if self.animation is not None:
-            stop_animation(self.robot)
+            stop_animation(self.plant_layer)
             self.animation = None
         self._paints["robot"] = self._paint_robot
         self._repaint_now("robot")

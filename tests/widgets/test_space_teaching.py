@@ -65,10 +65,10 @@ def test_guidance_draws_the_user_and_the_dashed_optimal_arrow_in_all_three_views
     recorder.clear()
     widget.set_action([0.1, 0.0, 0.0])
     # Before the confirmation only the user's (solid) arrow is drawn.
-    assert not [args for name, args in recorder.on(widget.robot) if name == "setLineDash" and args[0]]
+    assert not [args for name, args in recorder.on(widget.plant_layer) if name == "setLineDash" and args[0]]
     recorder.clear()
     widget.confirm()
-    commands = recorder.on(widget.robot)
+    commands = recorder.on(widget.plant_layer)
     dashed = [args for name, args in commands if name == "setLineDash" and args[0]]
     # The same dashed arrow (its white outline, then its shaft) in each of the three views.
     assert len(dashed) == 6 and all(d == [list(widget.theme.optimal_arrow.dash)] for d in dashed), dashed
@@ -176,7 +176,7 @@ def test_a_whole_episode_ends_in_the_reproduction_played_in_one_batch_with_sleep
         widget.set_action(action)
         widget.confirm()
     assert widget.episode.complete and widget.animation is not None and widget.animation.done
-    commands = recorder.on(widget.robot)
+    commands = recorder.on(widget.plant_layer)
     sleeps = [args for name, args in commands if name == "sleep"]
     assert len(sleeps) == widget.animation.n_frames - 1
     assert sleeps[0][0] == pytest.approx(20.0)  # 50 fps
