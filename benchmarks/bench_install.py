@@ -7,7 +7,8 @@ install tier does (tests/install/test_shapes.py, whose helpers this uses), and m
 - size: the venv's site-packages, without pip and setuptools (what the shape itself brings);
 - install: the seconds ``pip install`` took (with pip's cache as it is: warm on a second run);
 - import: the median of 5 fresh interpreters running the shape's import (after one warm-up run, which
-  also fills numba's cache), and the first science call for the core.
+  also fills numba's cache), and the first science call for the core: wall-clock seconds, and the CPU
+  seconds (user + system) of the interpreter, which a busy machine inflates far less than the wall clock.
 
 No target: the figures are what docs/guide/install.md reports, for users choosing a shape.
 """
@@ -15,6 +16,8 @@ No target: the figures are what docs/guide/install.md reports, for users choosin
 from __future__ import annotations
 
 import argparse
+import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -51,14 +54,18 @@ def site_packages_mb(venv: Path) -> float:
     return total / 1e6
 
 
-def import_seconds(python: Path, code: str, cwd: Path, runs: int = 5) -> float:
+def import_seconds(python: Path, code: str, cwd: Path, runs: int = 5) -> tuple[float, float]:
+    """(wall, CPU) seconds of a fresh interpreter running ``code``, medians of ``runs``."""
     subprocess.run([python, "-c", code], check=True, cwd=cwd, env=CLEAN_ENV, timeout=600)
-    times = []
+    wall, cpu = [], []
     for _ in range(runs):
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
         start = time.perf_counter()
         subprocess.run([python, "-c", code], check=True, cwd=cwd, env=CLEAN_ENV, timeout=600)
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
+        wall.append(time.perf_counter() - start)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu.append(after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
+    return statistics.median(wall), statistics.median(cpu)
 
 
 def main() -> None:
@@ -73,17 +80,18 @@ def main() -> None:
             start = time.perf_counter()
             _, wheel = build_distributions(scratch / "dist")
             print(f"build sdist + wheel: {time.perf_counter() - start:.1f} s")
-        print(f"Python {sys.version.split()[0]}; {'shape':<9} {'size MB':>8} {'install s':>10} {'import s':>9}")
+        print(f"Python {sys.version.split()[0]}, load average {os.getloadavg()[0]:.1f}")
+        print(f"{'shape':<9} {'size MB':>8} {'install s':>10} {'import s':>9} {'import CPU s':>13}")
         for shape in args.shapes:
             start = time.perf_counter()
             python = make_shape(wheel, shape, scratch / shape)
             installed = time.perf_counter() - start
             (scratch / "work").mkdir(exist_ok=True)
-            imported = import_seconds(python, IMPORTS[shape], scratch / "work")
-            line = f"{shape:<9} {site_packages_mb(scratch / shape):8.0f} {installed:10.1f} {imported:9.2f}"
+            wall, cpu = import_seconds(python, IMPORTS[shape], scratch / "work")
+            line = f"{shape:<9} {site_packages_mb(scratch / shape):8.0f} {installed:10.1f} {wall:9.2f} {cpu:13.2f}"
             if shape == "core":
-                science = import_seconds(python, SCIENCE, scratch / "work")
-                line += f"   (import + first fit and optimal actions: {science:.2f} s)"
+                wall, cpu = import_seconds(python, SCIENCE, scratch / "work")
+                line += f"   (import + first fit and optimal actions: {wall:.2f} s, CPU {cpu:.2f} s)"
             print(line, flush=True)
 
 

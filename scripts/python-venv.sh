@@ -13,7 +13,11 @@ if ! [[ "$version" =~ ^3\.[0-9]+$ ]]; then
 fi
 VENV="$REPO/.venv-py${version/./}"
 find_python() {
-    if command -v "python$version" >/dev/null; then command -v "python$version"; return; fi
+    # A pyenv shim of another version is on PATH but fails: the name must also run.
+    if command -v "python$version" >/dev/null && "python$version" -c "" 2>/dev/null; then
+        command -v "python$version"
+        return
+    fi
     local root
     root="$(pyenv root 2>/dev/null || echo "$HOME/.pyenv")"
     local found
@@ -31,7 +35,7 @@ stamp="$VENV/.mt-widgets-installed"
 wanted="$(sha256sum "$REPO/pyproject.toml" | cut -d' ' -f1)"
 if [ "$(cat "$stamp" 2>/dev/null || true)" != "$wanted" ]; then
     echo "== installing mt-widgets[lab,test,course,hub] into $VENV" >&2
-    "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -e "$REPO[lab,test,course,hub]" >&2
+    "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --no-compile -e "$REPO[lab,test,course,hub]" >&2
     echo "$wanted" > "$stamp"
 fi
 echo "$VENV"
