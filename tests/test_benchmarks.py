@@ -19,9 +19,11 @@ EXPECTED = {
     "bench_ur5.py": ["agreement of 10 s reproductions", "pinocchio ABA stepped from Python",
                      "MuJoCo stepped from Python", "feedback: fit + optimal actions"],
     "bench_widgets.py": ["feedback latency", "animation message", "Chromium playback", "pointer-to-arrow latency"],
+    "bench_install.py": ["build sdist + wheel", "size MB", "import + first fit and optimal actions"],
 }
 # Shorter runs where a full one takes minutes (the figures are reported, never asserted).
-ARGS = {"bench_kiosk.py": ["--loads", "2", "--no-study"], "bench_online.py": ["--participants", "2", "--think", "1"]}
+ARGS = {"bench_kiosk.py": ["--loads", "2", "--no-study"], "bench_online.py": ["--participants", "2", "--think", "1"],
+        "bench_install.py": ["--shapes", "core"]}
 
 
 @pytest.mark.slow
