@@ -6,6 +6,7 @@ The science lives in ``mt_widgets.core`` (no Jupyter dependency); the widgets in
 statistics, power, figures and the comparison with the paper in ``mt_widgets.analysis``; a
 class's progress files and checks in ``mt_widgets.classroom``; the uArm Swift Pro connector in
 ``mt_widgets.hardware``; the pages and kiosks built from them in ``mt_widgets.apps``.
+The ``mt-widgets`` command (the lab, the demo, a study, a class's checks) is ``mt_widgets.cli``.
 """
 
 from importlib.metadata import PackageNotFoundError, version
