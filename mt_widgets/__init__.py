@@ -7,6 +7,7 @@ URDFs (files read outside the science) in ``mt_widgets.robot_models``; the widge
 statistics, power, figures and the comparison with the paper in ``mt_widgets.analysis``; a
 class's progress files and checks in ``mt_widgets.classroom``; the uArm Swift Pro connector in
 ``mt_widgets.hardware``; the pages and kiosks built from them in ``mt_widgets.apps``.
+The ``mt-widgets`` command (the lab, the demo, a study, a class's checks) is ``mt_widgets.cli``.
 """
 
 from importlib.metadata import PackageNotFoundError, version
