@@ -24,7 +24,7 @@ from ipywidgets import HTML, Button, HBox, Layout, VBox
 
 from mt_widgets.study import Session
 from mt_widgets.study.log import ContinuedElsewhereError
-from mt_widgets.widgets import EpisodeWidget, retire
+from mt_widgets.widgets import EpisodeWidget, TeachingCanvas, retire
 
 from .controls import Choice
 from .episode_step import EpisodeStep, build_episode
@@ -115,8 +115,12 @@ class ParticipantView(VBox):
     def _retire_left(self, change) -> None:
         staying = {id(child) for child in change["new"]}
         for child in change["old"]:
-            # The Withdraw button comes back after "No, continue the study": never closed.
-            if id(child) not in staying and child is not self.withdraw_button:
+            # The Withdraw button comes back after "No, continue the study": never closed. A
+            # canvas view (an episode, a practice round) is retired by ``retire_replaced`` once
+            # its replacement is drawn: closing a canvas while the browser still has commands
+            # for it queued stops ipycanvas' drawing for the whole page.
+            if id(child) not in staying and child is not self.withdraw_button \
+                    and not isinstance(child, (EpisodeWidget, TeachingCanvas)):
                 retire(child, keep=self)
 
     def safely(self, action, reraise: bool = False) -> None:
