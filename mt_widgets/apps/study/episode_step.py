@@ -48,7 +48,7 @@ class EpisodeStep:
         plan = view.session.plan
         view.heading.value = (f"<h3 style='margin:4px 0'>Part {step.phase_index + 1} of {len(plan.phases)}, "
                               f"round {step.episode} of {step.n_episodes}</h3>")
-        instructions = HTML(view.text(plan.phase(step.phase).instructions, step.skill))
+        self.instructions = instructions = HTML(view.text(plan.phase(step.phase).instructions, step.skill))
         # The session's episode: one TeachingEpisode (one SVD, one rollout) per study episode,
         # which the widget demonstrates into and the session then records.
         self.widget = view.prepare_episode(build_episode(

@@ -79,11 +79,6 @@ class ParticipantView(VBox):
         self.withdraw_button.on_click(self._withdraw_pressed)
         self.withdraw_box = VBox([self.withdraw_button])
         self.children = [self.heading, self.body, self.withdraw_box]
-        # Whatever leaves the body or the withdraw box leaves the page for good (a screen's text
-        # and buttons, a form, a phase's instructions beside its episode): closed, or a one-hour
-        # protocol would leave a few widgets open per screen (tests/study/test_long_session.py).
-        self.body.observe(self._retire_left, names="children")
-        self.withdraw_box.observe(self._retire_left, names="children")
 
     def begin(self, session: Session) -> None:
         self.session = session
@@ -111,13 +106,6 @@ class ParticipantView(VBox):
         """
         if episode is not None and episode is not self.episode:
             retire(episode, keep=self)
-
-    def _retire_left(self, change) -> None:
-        staying = {id(child) for child in change["new"]}
-        for child in change["old"]:
-            # The Withdraw button comes back after "No, continue the study": never closed.
-            if id(child) not in staying and child is not self.withdraw_button:
-                retire(child, keep=self)
 
     def safely(self, action, reraise: bool = False) -> None:
         """Runs a participant action; any error stops the participant flow (``stop_for_experimenter``).
@@ -203,7 +191,12 @@ class ParticipantView(VBox):
         elif in_episode:
             key = (step.phase_index, step.episode)
             if self._episode_step is None or self._episode_step.key != key:
+                left = self._episode_step
                 self._episode_step = EpisodeStep(self, step)
+                if left is not None:
+                    # Its phase's instructions (a widget of their own beside the episode) leave
+                    # with it: kept open, three widgets stayed per episode.
+                    retire(left.instructions, keep=self)
             if self.session.current_step().kind == "reproduction":
                 self._episode_step.show_reproduction_controls()
         self.retire_replaced(shown)
