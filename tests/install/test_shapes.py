@@ -82,3 +82,31 @@ def test_each_shape_installs_from_the_wheel_and_runs_its_smoke_test(distribution
                             timeout=900, env=CLEAN_ENV)
     assert result.returncode == 0, f"{shape}:\n{result.stdout}\n{result.stderr[-4000:]}"
     assert result.stdout.startswith(f"{shape}:"), result.stdout
+    if shape == "lab":
+        check_the_command(python.parent, tmp_path)
+
+
+def check_the_command(bin_dir: Path, tmp_path: Path) -> None:
+    """``mt-widgets`` after ``pip install "mt-widgets[lab]"``, in an empty folder with no clone in sight:
+    its help, and the tutorials and notebooks copied from the wheel's mt_widgets/_data (one copy of each
+    notebook lives in the repository; setup.py ships them into the wheel)."""
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    env = {"PATH": f"{bin_dir}:/usr/bin:/bin", "HOME": str(tmp_path)}  # no PYTHONPATH: not this clone
+
+    def run(*argv):
+        return subprocess.run([bin_dir / "mt-widgets", *argv], cwd=empty, env=env, capture_output=True, text=True,
+                              check=True, timeout=300).stdout
+
+    assert "lab" in run("--help") and "study" in run("--help")
+    assert run("lab", "--help").startswith("usage: mt-widgets lab")
+    where = subprocess.run([bin_dir / "python", "-c", "import mt_widgets.cli.shipped as s; "
+                            "print(s.shipped_folder('tutorials'))"], cwd=empty, env=env, capture_output=True,
+                           text=True, check=True, timeout=300).stdout.strip()
+    assert where.startswith(str(bin_dir.parent)) and where.endswith("mt_widgets/_data/tutorials"), where
+    run("lab", "class", "--copy-only")
+    copied = sorted(p.name for p in (empty / "class" / "tutorials").iterdir())
+    assert copied == sorted(p.name for p in (ROOT / "tutorials").iterdir() if p.suffix in (".ipynb", ".toml"))
+    demo = (empty / "class" / "notebooks" / "demo.ipynb").read_bytes()
+    assert demo == (ROOT / "notebooks" / "demo.ipynb").read_bytes()
+    assert sorted(p.name for p in empty.iterdir()) == ["class"]
