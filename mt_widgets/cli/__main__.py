@@ -2,4 +2,6 @@
 
 from .main import main
 
-raise SystemExit(main())
+# Only when run: the documentation's API walk imports every module of the package.
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -54,15 +54,17 @@ def _numbers(text: str | None, count: int, default: str) -> tuple[float, ...]:
 def read_serial_chain(urdf_text: str, tip: str) -> dict:
     """The chain from the URDF's root link to the frame ``tip``, as plain data.
 
-    Returns a dict with
-      ``robot``: the URDF's robot name;
-      ``joints``: the joints on the path root -> tip, in order, plus every fixed joint hanging
+    Returns a dict with:
+
+    - ``robot``: the URDF's robot name;
+    - ``joints``: the joints on the path root -> tip, in order, plus every fixed joint hanging
       off a link of that path (their links' inertias ride with the body they are welded to),
       each a dict of name, type, parent, child, xyz, rpy, axis and (movable joints) the
       limits lower, upper, velocity, effort;
-      ``inertials``: per link with an ``<inertial>``: mass, xyz, rpy and the inertia
+    - ``inertials``: per link with an ``<inertial>``: mass, xyz, rpy and the inertia
       (ixx, ixy, ixz, iyy, iyz, izz) about the centre of mass in the inertial frame;
-      ``tip``: the tip frame's name.
+    - ``tip``: the tip frame's name.
+
     Raises ValueError when the path holds a joint that is neither revolute nor fixed, or a
     movable joint branches off it (not a serial chain).
     """
