@@ -13,6 +13,7 @@ from mt_widgets.classroom import ProgressRecorder
 from mt_widgets.cli import main
 from mt_widgets.cli.shipped import copy_notebooks, shipped_folder
 from mt_widgets.study import Session
+from mt_widgets.study.pseudonyms import code_of
 from mt_widgets.study.study_folder import StudyFolder
 from tests.study.scripted import STEPS, run_to_end, run_to_end_one, steps_protocol
 
@@ -98,7 +99,9 @@ def test_study_withdraw_then_export_leaves_the_participant_out(study, tmp_path, 
     assert main(["study", "export", str(study.folder), str(out)]) == 0
     assert f"wrote {out}" in capsys.readouterr().out
     subjects = sorted(p.name for p in out.glob("sub-*"))
-    assert subjects == ["sub-P01", "sub-P03"]
+    # The export labels participants by random codes (their key stays in the study folder): P02 has none.
+    assert subjects == sorted(f"sub-{code_of(study.folder, pid)}" for pid in ("P01", "P03"))
+    assert code_of(study.folder, "P02") is None
     assert json.loads((out / "dataset_description.json").read_text())["Name"]
 
 
