@@ -8,6 +8,11 @@ from pathlib import Path
 
 import pytest
 
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: the same parser as the tomli package (the test extra has it there)
+    import tomli as tomllib
+
 import mt_widgets
 from mt_widgets.classroom import ProgressRecorder
 from mt_widgets.cli import main
@@ -58,7 +63,6 @@ def test_a_wrong_argument_is_named_and_exits_2(argv, said, capsys):
 
 
 def test_the_console_script_is_declared_and_runs():
-    import tomllib
     project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
     assert project["scripts"] == {"mt-widgets": "mt_widgets.cli:main"}
     done = subprocess.run([sys.executable, "-m", "mt_widgets.cli", "study", "status", str(REPO / "no-such-study")],
