@@ -22,8 +22,8 @@ are "n/a".
 
 The dataset names no one (it is made to be published):
 
-- a participant is ``sub-<code>``, a random code from the study's key (``mt_widgets.study.
-  pseudonyms``: drawn at the first export, reused by every later one, kept in the study folder
+- a participant is ``sub-<code>``, a random code from the study's key
+  (``mt_widgets.study.pseudonyms``: drawn at the first export, reused by every later one, kept in the study folder
   with mode 0600 and never copied into the dataset); nothing of the participant ID (online, the
   Prolific ID) is in a name or a file;
 - the identifying URL parameters recorded at enrolment (Prolific's STUDY_ID and SESSION_ID)
