@@ -8,7 +8,7 @@ widget built here without a kernel.
 import numpy as np
 import pytest
 
-from .helpers import OKABE, to_page, touch_context, touch_drag, wait_for_color, wait_for_status
+from .helpers import OKABE, drag, to_page, touch_context, touch_drag, wait_for_color, wait_for_status
 
 pytestmark = pytest.mark.browser
 
@@ -43,17 +43,6 @@ def wait_pending(page, expected, tolerance):
     return wait_for_status(page, f"s.pending !== null && {checks}")
 
 
-def mouse_drag(page, start_px, end_px, steps=5):
-    start = to_page(page, ROBOT, *start_px)
-    end = tuple(float(round(v)) for v in to_page(page, ROBOT, *end_px))
-    page.mouse.move(*start)
-    page.mouse.down()
-    for fraction in np.linspace(1.0 / steps, 1.0, steps):
-        page.mouse.move(start[0] + fraction * (end[0] - start[0]), start[1] + fraction * (end[1] - start[1]))
-    page.mouse.up()
-    return end
-
-
 def test_mouse_then_keyboard_draw_3d_demonstrations_and_guidance_shows_in_every_view(browser, voila_server, page,
                                                                                     artifacts):
     widget = reference()
@@ -62,9 +51,9 @@ def test_mouse_then_keyboard_draw_3d_demonstrations_and_guidance_shows_in_every_
     # The mouse: horizontal components in the top view, then the height (and x) in the side view.
     top_end = widget.tool_pixel("top") + (40.0, -30.0)
     side_end = widget.tool_pixel("side") + (-20.0, -35.0)
-    mouse_drag(page, widget.tool_pixel("top"), top_end)
+    drag(page, ROBOT, widget.tool_pixel("top"), top_end)
     wait_for_status(page, "s.pending !== null")
-    mouse_drag(page, widget.tool_pixel("side"), side_end)
+    drag(page, ROBOT, widget.tool_pixel("side"), side_end)
     # Chromium reports whole CSS pixels: a pixel's worth of action is the tolerance.
     tolerance = 1.5 / widget.panel("top").scale / widget.action_length
     expected = expected_action(widget, top_end, side_end)
