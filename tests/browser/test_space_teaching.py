@@ -8,7 +8,7 @@ widget built here without a kernel.
 import numpy as np
 import pytest
 
-from .helpers import OKABE, to_page, touch_context, touch_drag, wait_for_color, wait_for_status
+from .helpers import OKABE, ax_names, to_page, touch_context, touch_drag, wait_for_color, wait_for_status
 
 pytestmark = pytest.mark.browser
 
@@ -105,6 +105,12 @@ def test_mouse_then_keyboard_draw_3d_demonstrations_and_guidance_shows_in_every_
     page.keyboard.press("d")
     wait_for_status(page, f"Math.abs(s.azimuth - {(azimuth + 10.0) % 360}) < 1e-9")
     page.screenshot(path=artifacts("desktop-keyboard-turned"))
+    # A screen reader gets the canvas's words (its accessible name), and Tab leaves the canvas.
+    page.wait_for_function("() => document.querySelector('canvas').getAttribute('aria-label')"
+                           "?.includes('turned 45 degrees round')")
+    assert any("State 3 of 4: the robot's hand is at" in name for name in ax_names(page))
+    page.keyboard.press("Tab")
+    assert page.evaluate("document.activeElement.tagName") != "CANVAS"
 
 
 def test_a_finger_draws_a_3d_demonstration_on_a_phone(browser, voila_server, artifacts):
