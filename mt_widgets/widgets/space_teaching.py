@@ -419,8 +419,9 @@ class SpaceTeachingCanvas(VBox):
             canvas.fill_style = theme.text
             canvas.fill_text(PANEL_TITLES[name], panel.left + 4, panel.top - 15)
             canvas.stroke_style = theme.grid
+            corner_pixels = panel.pixels(corners)  # projected once: an orbit repaints this often
             for a, b in box_edges:  # the frame of the scene's bounds: depth cues in the 3-D panel
-                canvas.stroke_lines(panel.pixels(corners[[a, b]]))
+                canvas.stroke_lines(corner_pixels[[a, b]])
             canvas.fill_style = theme.grid
             canvas.global_alpha = 0.6
             for surface in drawing.surfaces:

@@ -8,7 +8,7 @@ widget built here without a kernel.
 import numpy as np
 import pytest
 
-from .helpers import OKABE, drag, to_page, touch_context, touch_drag, wait_for_color, wait_for_status
+from .helpers import OKABE, ax_names, drag, to_page, touch_context, touch_drag, wait_for_color, wait_for_status
 
 pytestmark = pytest.mark.browser
 
@@ -94,6 +94,12 @@ def test_mouse_then_keyboard_draw_3d_demonstrations_and_guidance_shows_in_every_
     page.keyboard.press("d")
     wait_for_status(page, f"Math.abs(s.azimuth - {(azimuth + 10.0) % 360}) < 1e-9")
     page.screenshot(path=artifacts("desktop-keyboard-turned"))
+    # A screen reader gets the canvas's words (its accessible name), and Tab leaves the canvas.
+    page.wait_for_function("() => document.querySelector('canvas').getAttribute('aria-label')"
+                           "?.includes('turned 45 degrees round')")
+    assert any("State 3 of 4: the robot's hand is at" in name for name in ax_names(page))
+    page.keyboard.press("Tab")
+    assert page.evaluate("document.activeElement.tagName") != "CANVAS"
 
 
 def test_a_finger_draws_a_3d_demonstration_on_a_phone(browser, voila_server, artifacts):
@@ -145,3 +151,49 @@ def test_the_reproduction_plays_in_all_three_views_and_ends_on_the_last_frame(br
                        timeout=1000 * (float(trajectory.times[-1]) + 30.0))
     assert page.get_by_text("replays what it learnt").count() >= 1
     page.screenshot(path=artifacts("played"))
+
+
+@pytest.fixture
+def lab_page(page, lab_server):
+    yield page
+    # Kernels outlive pages: end every session this test started.
+    api = page.context.request
+    headers = {"Authorization": f"token {lab_server.token}"}
+    for session in api.get(lab_server.url("/api/sessions"), headers=headers).json():
+        api.delete(lab_server.url(f"/api/sessions/{session['id']}"), headers=headers)
+
+
+def test_in_jupyterlab_a_drag_and_keys_draw_the_3d_arrow_and_a_reload_redraws_it(lab_page, lab_server, artifacts):
+    page, widget = lab_page, reference()
+    page.goto(lab_server.url(f"/lab/tree/space_teaching.ipynb?reset&token={lab_server.token}"), timeout=60_000)
+    page.wait_for_function("() => document.body.innerText.includes('Idle')", timeout=60_000)
+    page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
+    page.get_by_text("Run All Cells", exact=True).click()
+    page.wait_for_selector("canvas", timeout=60_000)
+    for view in ("top", "side", "perspective"):
+        wait_for_color(page, ROBOT, *widget.tool_pixel(view), OKABE["yellow"], timeout=60_000)
+    page.locator("canvas").first.scroll_into_view_if_needed()
+    top_end = widget.tool_pixel("top") + (45.0, 25.0)
+    drag(page, ROBOT, widget.tool_pixel("top"), top_end)
+    # Then the keyboard (the canvas has the focus after the drag): z up two steps; Lab must not take the keys.
+    page.keyboard.press("z")
+    page.keyboard.press("ArrowUp")
+    page.keyboard.press("ArrowUp")
+    span = float(np.max(widget.drawing.bounds.high - widget.drawing.bounds.low))
+    step = 0.02 * span / widget.action_length
+    scale = widget.panel("top").scale * widget.action_length
+    tolerance = 1.5 / scale
+    expected = [45.0 / scale, -25.0 / scale, 2 * step]
+    wait_pending(page, expected, tolerance)
+    tip = widget.panel("top").pixels(widget._tool() + widget.action_length * np.array(expected))
+    wait_for_color(page, ROBOT, *tip, OKABE["blue"], radius=4)
+    page.screenshot(path=artifacts("lab-drawn"))
+    # Save and reload with the kernel running: the canvas draws again (ipycanvas issue #322).
+    page.locator(".lm-MenuBar-itemLabel", has_text="File").first.click()
+    page.get_by_text("Save Notebook", exact=True).first.click()
+    page.wait_for_function("() => !document.querySelector('.jp-mod-dirty')", timeout=10_000)
+    page.reload()
+    page.wait_for_selector("canvas", timeout=60_000)
+    wait_for_color(page, ROBOT, *tip, OKABE["blue"], radius=4)
+    wait_for_color(page, ROBOT, *widget.tool_pixel("side"), OKABE["yellow"])
+    page.screenshot(path=artifacts("lab-reloaded"))
