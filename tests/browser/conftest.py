@@ -61,3 +61,14 @@ def lab_server(tmp_path_factory):
                     port, root, "lab", f"http://127.0.0.1:{port}", token)
     yield server
     server.stop()
+
+
+@pytest.fixture
+def lab_page(page, lab_server):
+    """A page for JupyterLab; every kernel session it started is ended afterwards."""
+    yield page
+    # Kernels outlive pages: end every session this test started.
+    api = page.context.request
+    headers = {"Authorization": f"token {lab_server.token}"}
+    for session in api.get(lab_server.url("/api/sessions"), headers=headers).json():
+        api.delete(lab_server.url(f"/api/sessions/{session['id']}"), headers=headers)

@@ -8,16 +8,6 @@ from .helpers import OKABE, ee_pixel, reference_episode, to_canvas, to_page, wai
 pytestmark = pytest.mark.browser
 
 
-@pytest.fixture
-def lab_page(page, lab_server):
-    yield page
-    # Kernels outlive pages: end every session this test started.
-    api = page.context.request
-    headers = {"Authorization": f"token {lab_server.token}"}
-    for session in api.get(lab_server.url("/api/sessions"), headers=headers).json():
-        api.delete(lab_server.url(f"/api/sessions/{session['id']}"), headers=headers)
-
-
 def run_all(page, lab_server, ee) -> None:
     """Open the test page in Lab, run all cells, wait for the end-effector marker's pixels."""
     page.goto(lab_server.url(f"/lab/tree/episode_sim.ipynb?reset&token={lab_server.token}"), timeout=60_000)

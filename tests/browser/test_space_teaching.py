@@ -153,16 +153,6 @@ def test_the_reproduction_plays_in_all_three_views_and_ends_on_the_last_frame(br
     page.screenshot(path=artifacts("played"))
 
 
-@pytest.fixture
-def lab_page(page, lab_server):
-    yield page
-    # Kernels outlive pages: end every session this test started.
-    api = page.context.request
-    headers = {"Authorization": f"token {lab_server.token}"}
-    for session in api.get(lab_server.url("/api/sessions"), headers=headers).json():
-        api.delete(lab_server.url(f"/api/sessions/{session['id']}"), headers=headers)
-
-
 def test_in_jupyterlab_a_drag_and_keys_draw_the_3d_arrow_and_a_reload_redraws_it(lab_page, lab_server, artifacts):
     page, widget = lab_page, reference()
     page.goto(lab_server.url(f"/lab/tree/space_teaching.ipynb?reset&token={lab_server.token}"), timeout=60_000)
