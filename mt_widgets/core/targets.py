@@ -20,7 +20,7 @@ import numpy as np
 
 from .drawing import TargetShape, clip_line
 from .validation import as_float_array
-from .workspace import Box
+from .workspace import Box, belt_line
 
 
 class Target:
@@ -161,15 +161,10 @@ class ConveyorTarget(Target):
     dimension = 0
 
     def __post_init__(self):
-        origin = as_float_array("origin", self.origin, ndim=1, shape=(3,))
-        direction = as_float_array("direction", self.direction, ndim=1, shape=(3,))
-        norm = float(np.linalg.norm(direction))
-        if norm == 0:
-            raise ValueError("direction: expected a non-zero vector, got (0, 0, 0)")
-        phases = as_float_array("phase_range", self.phase_range, ndim=1, shape=(2,))
-        object.__setattr__(self, "origin", tuple(float(v) for v in origin))
-        object.__setattr__(self, "direction", tuple(float(v) / norm for v in direction))
-        object.__setattr__(self, "phase_range", (float(phases[0]), float(phases[1])))
+        origin, direction, phase_range = belt_line(self.origin, self.direction, self.phase_range)
+        object.__setattr__(self, "origin", origin)
+        object.__setattr__(self, "direction", direction)
+        object.__setattr__(self, "phase_range", phase_range)
 
     def at(self, phases) -> np.ndarray:
         """Where the part is at conveyor phases (...) m -> (..., 3) m."""

@@ -27,7 +27,7 @@ from .plants import ContinuousPlant, _check_rollout
 from .serial_chain import SerialChain
 from .trajectory import TrajectoryBatch
 from .validation import as_count, as_finite, as_float_array, as_positive
-from .workspace import Cuboid
+from .workspace import Cuboid, belt_line
 
 #: The UR5's home pose (rad): upper arm up, forearm level, tool pointing down at about
 #: (0.49, 0.11, 0.43) m.
@@ -57,18 +57,11 @@ class Conveyor:
     phase_range: tuple[float, float]
 
     def __post_init__(self):
-        origin = as_float_array("origin", self.origin, ndim=1, shape=(3,))
-        direction = as_float_array("direction", self.direction, ndim=1, shape=(3,))
-        norm = float(np.linalg.norm(direction))
-        if norm == 0:
-            raise ValueError("direction: expected a non-zero vector, got (0, 0, 0)")
-        low, high = as_float_array("phase_range", self.phase_range, ndim=1, shape=(2,))
-        if not low < high:
-            raise ValueError(f"phase_range: expected (low, high) with low < high, got {(float(low), float(high))}")
-        object.__setattr__(self, "origin", tuple(float(v) for v in origin))
-        object.__setattr__(self, "direction", tuple(float(v) / norm for v in direction))
+        origin, direction, phase_range = belt_line(self.origin, self.direction, self.phase_range)
+        object.__setattr__(self, "origin", origin)
+        object.__setattr__(self, "direction", direction)
         object.__setattr__(self, "speed", as_positive("speed", self.speed, allow_zero=True))
-        object.__setattr__(self, "phase_range", (float(low), float(high)))
+        object.__setattr__(self, "phase_range", phase_range)
 
     def part_position(self, phase) -> np.ndarray:
         """Where the part is at phases (...) -> (..., 3) m."""

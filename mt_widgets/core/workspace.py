@@ -113,3 +113,21 @@ class AnnulusSector:
         radius = np.sqrt(rng.uniform(self.r_min**2, self.r_max**2, size=n))
         yaw = np.deg2rad(rng.uniform(-self.max_yaw_deg, self.max_yaw_deg, size=n))
         return np.stack([radius * np.cos(yaw), radius * np.sin(yaw)], axis=-1)
+
+
+def belt_line(origin, direction, phase_range) -> tuple[tuple, tuple, tuple]:
+    """A conveyor's line in space, checked: ``origin`` (3,) m, ``direction`` (3,) made unit length, and
+    ``phase_range`` (low, high) m with low < high; returned as tuples of floats (for frozen dataclasses).
+
+    The belt a plant carries (``ur5_plant.Conveyor``) and the target that rides it
+    (``targets.ConveyorTarget``) both take their line from here.
+    """
+    origin = as_float_array("origin", origin, ndim=1, shape=(3,))
+    direction = as_float_array("direction", direction, ndim=1, shape=(3,))
+    norm = float(np.linalg.norm(direction))
+    if norm == 0:
+        raise ValueError("direction: expected a non-zero vector, got (0, 0, 0)")
+    low, high = as_float_array("phase_range", phase_range, ndim=1, shape=(2,))
+    if not low < high:
+        raise ValueError(f"phase_range: expected (low, high) with low < high, got {(float(low), float(high))}")
+    return (tuple(float(v) for v in origin), tuple(float(v) / norm for v in direction), (float(low), float(high)))

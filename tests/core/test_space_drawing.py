@@ -69,6 +69,14 @@ def test_space_targets_and_drawings_refuse_bad_input_by_name():
         SpaceDrawing(Cuboid((0, 1), (0, 1), (0, 1)), "m", "m/s", views=(ViewProjection("top"),))
     with pytest.raises(ValueError, match=r"zlim: expected \(low, high\) with low < high"):
         Cuboid((0, 1), (0, 1), (1, 0))
+    # The belt's line is checked in one place for the plant's conveyor and for the target riding it.
+    from mt_widgets.core.ur5_plant import Conveyor
+    for line in (lambda **k: ConveyorTarget(**k), lambda **k: Conveyor(speed=0.1, **k)):
+        with pytest.raises(ValueError, match=r"phase_range: expected \(low, high\) with low < high"):
+            line(origin=(0.5, 0, 0.1), direction=(0, 1, 0), phase_range=(0.2, 0.1))
+        with pytest.raises(ValueError, match="direction: expected a non-zero vector"):
+            line(origin=(0.5, 0, 0.1), direction=(0, 0, 0), phase_range=(0.0, 0.1))
+        assert line(origin=(0.5, 0, 0.1), direction=(0, 2, 0), phase_range=(0, 1)).direction == (0.0, 1.0, 0.0)
 
 
 def test_the_targets_of_the_place_and_reach_skills_are_their_goals():
