@@ -19,10 +19,11 @@ from .example_studies import EXAMPLE_STUDY, EXAMPLE_UARM_STUDY, write_example_st
 from .paper_comparison import baseline_comparison, compare_with_paper
 from .power import SimulatedPower, analytic_power, sample_size_per_group, simulated_power
 from .statistics import PAPER_CHANGES, Change, StudyStatistics, analyse_changes, hedges_g
-from .study_analysis import StudyAnalysis, analyse_study
+from .study_analysis import StudyAnalysis, analyse_study, refitted_trajectories
 
 __all__ = [
     "Change", "EXAMPLE_STUDY", "EXAMPLE_UARM_STUDY", "PAPER_CHANGES", "SimulatedPower", "StudyAnalysis",
     "StudyStatistics", "analyse_changes", "analyse_study", "analytic_power", "baseline_comparison",
     "compare_with_paper", "hedges_g", "sample_size_per_group", "simulated_power", "write_example_study",
+    "refitted_trajectories",
 ]
