@@ -162,3 +162,31 @@ def test_the_analysis_reports_the_reward_learner_and_rolls_out_what_was_taught(s
              if line.get_gid() == "P01/P4E1"]
     assert lines and all(np.allclose(line.get_xydata()[-1], expected) for line in lines)
     np.testing.assert_allclose(done["reproduction"]["final_position"], expected)
+
+
+def test_the_study_app_runs_the_reward_protocol_and_guides_with_its_mt(tmp_path):
+    from mt_widgets.apps import StudyApp
+    from mt_widgets.study.protocol import PROTOCOL_FOLDER
+
+    from .scripted import act
+
+    # The protocol's task as the participant page runs it (the steps around it are the paper's).
+    text = (PROTOCOL_FOLDER / "reward_sim.toml").read_text()
+    path = tmp_path / "reward.toml"
+    task = text[:text.index("# -- steps around the task")]
+    path.write_text(task.replace("[texts]\n", '[texts]\nconsent = "Consent."\n'))
+    app = StudyApp(protocol=str(path), log_folder=tmp_path / "logs")
+    app.start_participant("P01", group="target")
+    guided = 0
+    while not app.session.finished:
+        step = app.session.current_step()
+        if step.kind in ("demonstration", "episode_end") and app.episode.phase == "guidance":
+            states = app.episode.query_states
+            assert len(states) == 8 and step.phase == "P3"
+            np.testing.assert_allclose(app.episode.optimal,
+                                       teach(RewardLearner(), SKILLS[step.skill], states).optimal, atol=1e-9)
+            guided += 1
+        act(app)
+    assert guided == 8 * 8
+    finished = [e for e in read_log(tmp_path / "logs" / "P01.jsonl", "main") if e["type"] == "episode_finished"]
+    assert len(finished) == 12 and {e["learner"] for e in finished} == {"reward"}
