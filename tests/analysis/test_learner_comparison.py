@@ -35,3 +35,13 @@ def test_guidance_helps_the_teachers_of_each_learner_and_each_study_runs_its_lea
     def baseline(events):
         return [(e["state"], e["action"]) for e in events if e["type"] == "demonstration" and e["phase"] == "P1"]
     assert baseline(ridge) == baseline(reward) and len(baseline(ridge)) == 3
+
+
+def test_the_batched_engine_refuses_a_learner_it_does_not_fit():
+    from mt_widgets.in_silico import run_in_silico, run_many_studies
+
+    reward = load_protocol("reward-sim")
+    for run in (lambda: run_in_silico(2, protocol=reward), lambda: run_many_studies(2, 2, protocol=reward)):
+        with pytest.raises(ValueError, match="protocol: expected a protocol whose learner is ridge .* "
+                                             "'reward-sim' with learner 'reward'"):
+            run()
