@@ -6,9 +6,9 @@ same groups) through the session engine, so the guidance they see is that learne
 teaching and their errors are that learner's (ridge: ||Theta_hat - Theta||; any other: the
 policy risk). The protocol's analysis plan then compares its groups on its changes, per learner.
 
-The synthetic teachers' model was fitted to the paper's ridge study (``mt_widgets.in_silico.
-teachers``): for another learner it is an assumption that novices blend their naive arrows with
-the shown arrows the same way, whatever the robot does with them.
+The synthetic teachers' model was fitted to the paper's ridge study
+(``mt_widgets.in_silico.teachers``): for another learner it is an assumption that novices blend
+their naive arrows with the shown arrows the same way, whatever the robot does with them.
 """
 
 from __future__ import annotations
