@@ -190,3 +190,23 @@ def test_the_study_app_runs_the_reward_protocol_and_guides_with_its_mt(tmp_path)
     assert guided == 8 * 8
     finished = [e for e in read_log(tmp_path / "logs" / "P01.jsonl", "main") if e["type"] == "episode_finished"]
     assert len(finished) == 12 and {e["learner"] for e in finished} == {"reward"}
+
+
+def test_the_reward_protocol_runs_online_with_an_online_table(tmp_path):
+    from mt_widgets.study import parse_protocol
+    from mt_widgets.study.online import outcome_of
+    from mt_widgets.study.protocol import PROTOCOL_FOLDER
+
+    from .scripted import ONLINE
+
+    protocol = parse_protocol((PROTOCOL_FOLDER / "reward_sim.toml").read_text() + ONLINE,
+                              str(PROTOCOL_FOLDER / "reward_online.toml"))
+    arrival = protocol.online.participant_from_url({"PROLIFIC_PID": ["5f3a9c2e8b1d4a0012345678"]})
+    study = StudyFolder.create(tmp_path / "study", protocol)
+    with Session.arrive(study, arrival.participant_id, parameters=arrival.parameters) as session:
+        _teach(session, 0)
+        assert outcome_of(session) == "completed"
+        assert protocol.online.completion_url("completed").endswith("cc=C1MPL3T3")
+    finished = [e for e in read_log(study.folder / f"{arrival.participant_id}.jsonl", "main")
+                if e["type"] == "episode_finished"]
+    assert len(finished) == 12 and {e["learner"] for e in finished} == {"reward"}
