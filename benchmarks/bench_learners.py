@@ -77,11 +77,11 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="every part small (a smoke run)")
     args = parser.parse_args()
     print(f"cores available: {os.cpu_count()}; load average {os.getloadavg()[0]:.1f}")
-    baselines(5 if args.quick else 100)
+    baselines(2 if args.quick else 100)
     from bench_core import bench_learners
 
-    bench_learners(5 if args.quick else 40)
-    latencies(2 if args.quick else 10)
+    bench_learners(3 if args.quick else 40)
+    latencies(1 if args.quick else 10)
     guidance(4 if args.quick else 16)
 
 
