@@ -191,17 +191,17 @@ class SessionEpisodes:
         teaching = self._teaching_episodes[key]
         trajectory = teaching.reproduction
         if teaching.ridge:
-            learnt = {"theta_hat": teaching.theta_hat, "bound": teaching.bound, "residual": teaching.residual_norm}
+            theta_hat, bound, residual, learnt = teaching.theta_hat, teaching.bound, teaching.residual_norm, {}
         else:
             # No Theta: what every learner gives, its fitted policy at the query states (the
             # policy itself comes back from the logged states and actions: study_learners).
-            learnt = {"theta_hat": None, "bound": None, "residual": None, "learner": self.protocol.learner,
-                      "learnt_actions": learnt_actions(teaching)}
+            theta_hat = bound = residual = None
+            learnt = {"learner": self.protocol.learner, "learnt_actions": learnt_actions(teaching)}
         self.log.append(
             "episode_finished", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
             skill=started["skill"], guidance=started["guidance"], actions=teaching.actions,
-            optimal=teaching.optimal_actions, theta_hat=learnt.pop("theta_hat"), teaching_error=teaching.error,
-            rho1=teaching.rho1, rho2=teaching.rho2, bound=learnt.pop("bound"), residual=learnt.pop("residual"),
+            optimal=teaching.optimal_actions, theta_hat=theta_hat, teaching_error=teaching.error,
+            rho1=teaching.rho1, rho2=teaching.rho2, bound=bound, residual=residual,
             contributions=teaching.contribution_norms, exact=teaching.exact, **learnt,
             reproduction={"diverged": trajectory.diverged, "diverged_at": trajectory.diverged_at,
                           "final_position": trajectory.final_position, "duration_s": float(trajectory.times[-1])},
