@@ -20,10 +20,12 @@ EXPECTED = {
                      "MuJoCo stepped from Python", "feedback: fit + optimal actions"],
     "bench_widgets.py": ["feedback latency", "animation message", "Chromium playback", "pointer-to-arrow latency"],
     "bench_install.py": ["build sdist + wheel", "size MB", "import + first fit and optimal actions"],
+    "bench_learners.py": ["MT against the target's and random actions", "machine teaching per learner",
+                          "feedback latency per learner", "guidance per learner in silico"],
 }
 # Shorter runs where a full one takes minutes (the figures are reported, never asserted).
 ARGS = {"bench_kiosk.py": ["--loads", "2", "--no-study"], "bench_online.py": ["--participants", "2", "--think", "1"],
-        "bench_install.py": ["--shapes", "core"]}
+        "bench_install.py": ["--shapes", "core"], "bench_learners.py": ["--quick"]}
 
 
 @pytest.mark.slow

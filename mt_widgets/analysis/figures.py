@@ -229,6 +229,10 @@ def learnt_trajectories(episodes, participants, phases, duration: float | None =
     return out
 
 
+def _has_theta(value) -> bool:
+    return isinstance(value, list) or (isinstance(value, str) and value.strip() not in ("", "null"))
+
+
 def _theta(value) -> np.ndarray:
     return np.asarray(json.loads(value) if isinstance(value, str) else value, dtype=float)
 
@@ -435,7 +439,8 @@ def teaching_report(episodes, demonstrations, participant, changes=PAPER_CHANGES
 
     paths = figure.add_subplot(grid[2, 1])
     trained = mine["skill"].iloc[0] if "skill" in mine.columns else None
-    if trained is not None and "theta_hat" in mine.columns:
+    # Only ridge logs a Theta_hat (another learner's is empty: analysis.refitted_trajectories).
+    if trained is not None and "theta_hat" in mine.columns and mine["theta_hat"].map(_has_theta).all():
         skill_rows = mine[mine["skill"] == trained]
         first, last = skill_rows.iloc[0], skill_rows.iloc[-1]
         skill = SKILLS[trained]

@@ -30,6 +30,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from mt_widgets.core.learner_teaching import LEARNERS
 from mt_widgets.core.validation import as_fraction
 from mt_widgets.study.analysis_plan import ALTERNATIVES, PAPER_CHANGES, TESTS, Change
 
@@ -219,6 +220,9 @@ class StudyStatistics:
     compared: tuple = PAPER_CHANGES
     #: The baseline episodes checked (``posthoc_baseline``), or None.
     baseline_episodes: tuple | None = PAPER_BASELINE
+    #: The robot learner the participants taught (``mt_widgets.core.LEARNERS``): what the teaching
+    #: error measures depends on it (ridge: the distance of the parameters; else the policy risk).
+    learner: str = "ridge"
 
     @property
     def primary_p(self) -> pd.Series:
@@ -242,7 +246,7 @@ class StudyStatistics:
 
 def analyse_changes(episodes, changes=PAPER_CHANGES, alternative: str = "less", alpha: float = 0.05,
                     confidence: float = 0.95, test: str = "student", groups=None,
-                    baseline=PAPER_BASELINE, group_notes=None) -> StudyStatistics:
+                    baseline=PAPER_BASELINE, group_notes=None, learner: str = "ridge") -> StudyStatistics:
     """Every table of the paper's analysis from the episode rows.
 
     Args:
@@ -262,8 +266,11 @@ def analyse_changes(episodes, changes=PAPER_CHANGES, alternative: str = "less", 
             paper's target and control).
         baseline: the two (phase, episode) baselines ``posthoc_baseline`` compares, or None.
         group_notes: {group: what it received, in words} for the summary.
+        learner: the robot learner taught (a name of ``mt_widgets.core.LEARNERS``), for the summary.
     """
     check_alternative(alternative)
+    if learner not in LEARNERS:
+        raise ValueError(f"learner: expected one of the available learners ({', '.join(LEARNERS)}), got {learner!r}")
     if test not in TESTS:
         raise ValueError(f"test: expected one of {list(TESTS)}, got {test!r}")
     alpha = as_fraction("alpha", alpha)
@@ -286,6 +293,7 @@ def analyse_changes(episodes, changes=PAPER_CHANGES, alternative: str = "less", 
         group_notes=dict(group_notes or {}),
         compared=changes,
         baseline_episodes=None if baseline is None else tuple(tuple(b) for b in baseline),
+        learner=learner,
     )
 
 
@@ -317,4 +325,4 @@ def analyse_protocol(episodes, protocol, confidence: float = 0.95, **overrides) 
               "baseline": plan.baseline}
     values.update({k: v for k, v in overrides.items() if v is not None})
     return analyse_changes(episodes, confidence=confidence, groups=protocol.groups[:2],
-                           group_notes=protocol_group_notes(protocol), **values)
+                           group_notes=protocol_group_notes(protocol), learner=protocol.learner, **values)

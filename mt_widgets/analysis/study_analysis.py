@@ -7,12 +7,15 @@ the box.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from mt_widgets.study.study_folder import StudyFolder
+from mt_widgets.study.study_learners import PAPER_LEARNER, learnt_policy_of
 from mt_widgets.study.tidy import read_study
 
 from .example_studies import EXAMPLE_STUDY
@@ -103,6 +106,42 @@ def analyse_study(folder=None, alternative: str | None = None, alpha: float | No
         firsts = episodes.groupby("group")["participant"].first()
         trajectories_for = [firsts[g] for g in groups if g in firsts.index]
     if trajectories_for:
-        figures["trajectories"] = plot_trajectories(episodes, trajectories_for, panels=trajectory_panels(protocol),
-                                                    duration=trajectory_duration, skills=protocol.skills)
+        panels = trajectory_panels(protocol)
+        # Only ridge logs a Theta_hat to roll out; another learner's policy is fitted again from
+        # the logged states and actions (deterministic: the one the participant saw).
+        refitted = None if protocol.learner == PAPER_LEARNER else refitted_trajectories(
+            episodes, demonstrations, protocol, trajectories_for, [p for panel in panels for p in panel],
+            trajectory_duration)
+        figures["trajectories"] = plot_trajectories(episodes, trajectories_for, panels=panels,
+                                                    duration=trajectory_duration, trajectories=refitted,
+                                                    skills=protocol.skills)
     return StudyAnalysis(folder, episodes, demonstrations, statistics, figures)
+
+
+def refitted_trajectories(episodes, demonstrations, protocol, participants, phases, duration: float | None = None,
+                          record_every: int = 20) -> dict:
+    """The policies participants taught the protocol's learner, fitted again from the logged query
+    states and actions and rolled out from each skill's start.
+
+    Args:
+        episodes, demonstrations: the tidy rows (``read_study``) as DataFrames.
+        protocol: the study's ``Protocol`` (its learner, lambda and skills).
+        participants: participant codes; phases: phase ids.
+        duration: seconds per rollout (default the skill's); record_every: steps between samples.
+
+    Returns:
+        {(participant, phase, episode): Trajectory} for the completed episodes among them.
+    """
+    action_columns = sorted((c for c in demonstrations.columns if c.startswith("action_")), key=lambda c: int(c[7:]))
+    out = {}
+    chosen = episodes[episodes["participant"].isin([str(p) for p in participants]) & episodes["phase"].isin(phases)]
+    for row in chosen.itertuples():
+        mine = demonstrations[(demonstrations["participant"] == row.participant)
+                              & (demonstrations["phase_index"] == row.phase_index)
+                              & (demonstrations["episode"] == row.episode)].sort_values("index")
+        skill = protocol.skills[row.skill]
+        states = np.array([json.loads(state) for state in mine["state"]], dtype=float)
+        actions = mine[action_columns[:skill.plant.action_dim]].to_numpy(dtype=float)
+        policy = learnt_policy_of(protocol.learner, skill, states, actions, protocol.lam)
+        out[(row.participant, row.phase, int(row.episode))] = skill.reproduce_policy(policy, duration, record_every)
+    return out

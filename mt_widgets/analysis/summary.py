@@ -29,6 +29,7 @@ class SummarisedStatistics(Protocol):
     between: Any
     baseline: Any
     baseline_episodes: Any
+    learner: str
 
 #: The tests' names as a reader sees them.
 TEST_NAMES = {"student": "Student's t-test", "welch": "Welch's t-test", "mannwhitney": "Mann-Whitney U"}
@@ -38,6 +39,13 @@ def _p(p: float) -> str:
     if np.isnan(p):
         return "p not computable"
     return "p < 0.001" if p < 0.001 else f"p = {p:.3f}"
+
+
+def _error_meaning(learner: str) -> str:
+    if learner == "ridge":
+        return "Teaching error is the distance between the learnt and the true skill parameters"
+    return (f"The robot learnt with the {learner} learner; teaching error is the policy risk, the typical "
+            f"distance between the learnt policy's actions and the true skill's")
 
 
 def plain_language_summary(results: SummarisedStatistics) -> str:
@@ -51,8 +59,8 @@ def plain_language_summary(results: SummarisedStatistics) -> str:
     def note(group):
         return f" ({notes[group]})" if notes.get(group) else ""
     lines = [f"{n.get(first, 0)} participants in the {first} group{note(first)} and "
-             f"{n.get(second, 0)} in the {second} group{note(second)}. Teaching error is the distance between the "
-             f"learnt and the true skill parameters; a negative change means better teaching. "
+             f"{n.get(second, 0)} in the {second} group{note(second)}. {_error_meaning(results.learner)}; "
+             f"a negative change means better teaching. "
              f"Tests are {sided}, at alpha = {results.alpha}."]
     summary = results.change_summary.set_index(["change", "group"])
     meaning = {c.name: c.meaning for c in results.compared}

@@ -50,6 +50,15 @@ from .teachers import (
 
 # -- the batched engine ----------------------------------------------------------------------------
 
+def _ridge_protocol(protocol):
+    """The protocol, if its learner is ridge: the batched episode fits the paper's learner only."""
+    if protocol.learner != "ridge":
+        raise ValueError(f"protocol: expected a protocol whose learner is ridge (the batched engine fits the paper's "
+                         f"learner), got {protocol.name!r} with learner {protocol.learner!r}; run other learners "
+                         f"through the session engine (run_through_sessions, analysis.guidance_by_learner)")
+    return protocol
+
+
 @dataclass
 class _BatchOutcome:
     """One episode of the protocol for B simulated teachers at once, as arrays (not an
@@ -175,7 +184,7 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
     """
     reproduce = as_bool("reproduce", reproduce)
     progress = as_bool("progress", progress, allow_none=True)
-    protocol = resolve_protocol(protocol)
+    protocol = _ridge_protocol(resolve_protocol(protocol))
     n_participants = as_count("n_participants", n_participants)
     parameters = default_parameters(protocol) if parameters is None else parameters
     if groups is None:
@@ -280,7 +289,7 @@ def run_many_studies(n_studies: int, n_per_group: int, seed: int = 0, parameters
     """
     share_states = as_bool("share_states", share_states)
     progress = as_bool("progress", progress, allow_none=True)
-    protocol = resolve_protocol(protocol)
+    protocol = _ridge_protocol(resolve_protocol(protocol))
     parameters = default_parameters(protocol) if parameters is None else parameters
     n_studies, n_per_group = as_count("n_studies", n_studies), as_count("n_per_group", n_per_group)
     plan = episode_plan(protocol)

@@ -23,6 +23,7 @@ One concern per module::
     session_arrival.py which log a Session runs: start, resume, arrive (windows), lesson
     session_episodes.py the episode steps: one TeachingEpisode per episode (the one store of its
                        demonstrations), submit_demonstration, finish_episode, the EpisodeResult
+    study_learners.py  the robot learner a protocol names, and what the log records of it
     session_types.py   what the engine hands a view: Step, Feedback, EpisodeResult (core's),
                        SessionStateError
     schema.py          the files' schema version, the event types, migrations of older logs

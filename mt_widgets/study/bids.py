@@ -47,6 +47,7 @@ import mt_widgets
 from .log import read_log
 from .pseudonyms import codes_for
 from .study_folder import StudyFolder
+from .study_learners import PAPER_LEARNER, learner_parameters, study_learner
 from .tidy import excluded_participants, participant_logs
 
 BIDS_VERSION = "1.9.0"
@@ -132,10 +133,22 @@ def _beh_sidecar(protocol) -> dict:
     for i in range(2, max(s.plant.action_dim for s in skills)):
         columns[f"action_{i + 1}"] = {"Description": f"Component {i + 1} of the demonstrated action.", "Units": action}
         columns[f"optimal_{i + 1}"] = {"Description": f"Component {i + 1} of the optimal action.", "Units": action}
+    learner = {"Learner": protocol.learner}
+    if protocol.learner == PAPER_LEARNER:
+        learner["LearnerRidgeLambda"] = protocol.lam
+    else:
+        # Another learner has no Theta: the error is its policy risk, and its parameters are per
+        # skill (a kernel's width is the skill's typical distance).
+        columns["teaching_error"] = {"Description": "The episode's teaching error, the policy risk of the learnt "
+                                                    "policy: the RMS distance of its actions from the target's over "
+                                                    "the skill's evaluation states (mt_widgets.core.learner_teaching; "
+                                                    "n/a if the episode was not completed).", "Units": action}
+        learner["LearnerParameters"] = {s.key: learner_parameters(study_learner(protocol.learner, s))
+                                        for s in sorted(skills, key=lambda s: s.key)}
     return {"TaskName": protocol.name, "TaskDescription": protocol.title,
             "Instructions": protocol.texts["instructions"].strip(), "PositionUnits": unit,
-            # Which robot learner the demonstrations taught (mt_widgets.core.LEARNERS), and its parameter.
-            "Learner": protocol.learner, "LearnerRidgeLambda": protocol.lam, **columns}
+            # Which robot learner the demonstrations taught (mt_widgets.core.LEARNERS), and its parameters.
+            **learner, **columns}
 
 
 def export_bids(study_folder, out_folder) -> Path:

@@ -93,6 +93,9 @@ PROTOCOL_FOLDER = Path(__file__).parent / "protocols"
 BUILTIN_PROTOCOLS = {"paper-sim": "paper_sim.toml", "paper-uarm": "paper_uarm.toml",
                      "paper-sim-followup": "paper_sim_followup.toml"}
 
+# The reward-learning follow-up's study (arXiv 2505.10151; docs/guide/learners.md).
+BUILTIN_PROTOCOLS["reward-sim"] = "reward_sim.toml"
+
 __all__ = ["BUILTIN_PROTOCOLS", "FORMAT_VERSION", "OPTIONAL_TEXTS", "PROTOCOL_FOLDER", "Phase", "Practice", "Protocol",
            "ProtocolError", "ProtocolSkills", "load_protocol", "parse_protocol", "protocol_from_data",
            "protocol_hash"]

@@ -243,21 +243,18 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
                     reproduce_after=reproduce_after, matched_difficulty=matched, learner=learner)
 
 
-#: The learners a study can run today: its episodes (``TeachingEpisode``) fit and guide with ridge.
-STUDY_LEARNERS = ("ridge",)
+#: The learners a study can run: every one (its episodes fit and guide with any learner, and the log
+#: records what each gives: ``mt_widgets.study.study_learners``).
+STUDY_LEARNERS = tuple(LEARNERS)
 
 
 def _parse_learner(check, raw: dict) -> str:
-    """``learner = "..."``: one of ``mt_widgets.core.LEARNERS``, and one the study runner can teach
-    (``STUDY_LEARNERS``); "ridge" (the paper's, with ``lambda``) when absent."""
+    """``learner = "..."``: one of ``mt_widgets.core.LEARNERS`` (every one a study can teach:
+    ``STUDY_LEARNERS``); "ridge" (the paper's, with ``lambda``) when absent."""
     learner = check.get(raw, ("learner",), "text", default="ridge")
     if learner not in LEARNERS:
         check.fail(("learner",), f"unknown learner {learner!r}; expected one of the available learners "
                                  f"({', '.join(LEARNERS)})")
-    if learner not in STUDY_LEARNERS:
-        check.fail(("learner",), f"the learner {learner!r} exists (mt_widgets.core, docs/guide/learners.md) but the "
-                                 f"study runner's episodes teach {', '.join(STUDY_LEARNERS)} only so far; "
-                                 f"expected one of {', '.join(STUDY_LEARNERS)}")
     return learner
 
 

@@ -22,6 +22,7 @@ from mt_widgets.core.validation import as_positive
 
 from .log import to_jsonable
 from .session_types import EpisodeResult, Feedback, SessionStateError
+from .study_learners import PAPER_LEARNER, learner_parameters, learnt_actions, study_learner
 from .timeline import Slot, episode_query_states
 
 #: Timing keys ``submit_demonstration`` reads (seconds, None when unknown).
@@ -51,8 +52,8 @@ class SessionEpisodes:
             guidance=phase.guidance_for(self.group), guidance_modality=self.protocol.guidance_modality,
             n_demonstrations=phase.demonstrations, query_states=states,
             features=teaching.features, theta=skill.theta, lam=self.protocol.lam, optimal=teaching.optimal_actions,
-            exact=teaching.exact,
-            seed={"study_seed": self.protocol.seed, "spawn_key": list(seed.spawn_key)})
+            exact=teaching.exact, seed={"study_seed": self.protocol.seed, "spawn_key": list(seed.spawn_key)},
+            **self._learner_fields(teaching))
         self._episodes[(phase.index, slot.episode)] = event
         # Kept: the step's view shows this episode and the log records it (one per episode). The
         # episodes before it are over (every step reads its own episode only) and each holds its
@@ -62,8 +63,17 @@ class SessionEpisodes:
         self._teaching_episodes[(phase.index, slot.episode)] = teaching
 
     def _new_teaching_episode(self, skill, states) -> TeachingEpisode:
-        """The episode of ``skill`` on ``states`` with this protocol's lambda and reproduction length."""
-        return TeachingEpisode(skill, states, lam=self.protocol.lam, duration=self.protocol.reproduction_duration_s)
+        """The episode of ``skill`` on ``states`` with this protocol's learner (ridge: its lambda)
+        and reproduction length."""
+        return TeachingEpisode(skill, states, lam=self.protocol.lam, duration=self.protocol.reproduction_duration_s,
+                               learner=study_learner(self.protocol.learner, skill))
+
+    def _learner_fields(self, teaching: TeachingEpisode) -> dict:
+        """What ``episode_started`` logs of a learner other than ridge (nothing for ridge: the paper
+        protocols' log stays as it was): its name and parameters."""
+        if self.protocol.learner == PAPER_LEARNER:
+            return {}
+        return {"learner": self.protocol.learner, "learner_parameters": learner_parameters(teaching.learner)}
 
     def _episode_from_log(self, key, events) -> TeachingEpisode:
         """The episode a log describes: on its logged states, each logged demonstration recorded
@@ -180,12 +190,19 @@ class SessionEpisodes:
             self._teaching_episodes[key] = episode
         teaching = self._teaching_episodes[key]
         trajectory = teaching.reproduction
+        if teaching.ridge:
+            theta_hat, bound, residual, learnt = teaching.theta_hat, teaching.bound, teaching.residual_norm, {}
+        else:
+            # No Theta: what every learner gives, its fitted policy at the query states (the
+            # policy itself comes back from the logged states and actions: study_learners).
+            theta_hat = bound = residual = None
+            learnt = {"learner": self.protocol.learner, "learnt_actions": learnt_actions(teaching)}
         self.log.append(
             "episode_finished", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
             skill=started["skill"], guidance=started["guidance"], actions=teaching.actions,
-            optimal=teaching.optimal_actions, theta_hat=teaching.theta_hat, teaching_error=teaching.error,
-            rho1=teaching.rho1, rho2=teaching.rho2, bound=teaching.bound, residual=teaching.residual_norm,
-            contributions=teaching.contribution_norms, exact=teaching.exact,
+            optimal=teaching.optimal_actions, theta_hat=theta_hat, teaching_error=teaching.error,
+            rho1=teaching.rho1, rho2=teaching.rho2, bound=bound, residual=residual,
+            contributions=teaching.contribution_norms, exact=teaching.exact, **learnt,
             reproduction={"diverged": trajectory.diverged, "diverged_at": trajectory.diverged_at,
                           "final_position": trajectory.final_position, "duration_s": float(trajectory.times[-1])},
             started_at=started["time"], duration_s=max(0.0, time.time() - _parse_time(started["time"])))
@@ -205,6 +222,8 @@ class SessionEpisodes:
              and np.array_equal(episode.skill.theta, np.asarray(started["theta"], dtype=float)),
              f"the skill {started['skill']!r} and its theta", repr(episode.skill.key)),
             ("lam", episode.lam == self.protocol.lam, f"the protocol's lam {self.protocol.lam}", episode.lam),
+            ("learner", repr(episode.learner) == repr(logged.learner), f"the protocol's learner {logged.learner!r}",
+             repr(episode.learner)),
             ("duration", episode.duration == duration, f"the protocol's reproduction of {duration} s",
              episode.duration),
             ("query_states", np.array_equal(episode.query_states, np.asarray(started["query_states"], dtype=float)),

@@ -6,7 +6,8 @@ the standard library: analysis code may load the CSVs with pandas, the runner ne
 episodes.csv columns (``EPISODE_COLUMNS``): study, participant, group, session (the protocol
 session's id, "main" for a one-session protocol), phase, phase_index
 (0-based), episode (1-based within the phase), skill, guidance (0/1), n_demonstrations,
-teaching_error, rho1, rho2, theta_hat (JSON list of rows), reproduction_diverged (0/1),
+teaching_error, rho1, rho2, theta_hat (JSON list of rows; empty for a learner other than ridge,
+whose teaching_error is the policy risk), reproduction_diverged (0/1),
 started_at (ISO 8601 UTC), duration_s.
 
 demonstrations.csv columns (``DEMONSTRATION_COLUMNS``): study, participant, group, session, phase,
@@ -112,7 +113,8 @@ def read_study(study_folder) -> tuple[list[dict], list[dict]]:
                     "skill": event["skill"],
                     "guidance": int(bool(event["guidance"])), "n_demonstrations": len(event["actions"]),
                     "teaching_error": event["teaching_error"], "rho1": event["rho1"], "rho2": event["rho2"],
-                    "theta_hat": json.dumps(event["theta_hat"]),
+                    # Only ridge has a Theta_hat (another learner's is null in the log: study_learners).
+                    "theta_hat": None if event["theta_hat"] is None else json.dumps(event["theta_hat"]),
                     "reproduction_diverged": int(bool(event["reproduction"]["diverged"])),
                     "started_at": event["started_at"], "duration_s": event["duration_s"]})
     # Files sort by name; sessions go in the protocol's order (a stable sort keeps each log's).

@@ -138,7 +138,8 @@ def _with_learner(line: str) -> str:
 
 def test_a_protocol_names_its_learner_and_ridge_is_the_default():
     assert parse_protocol(_with_learner(""), check_files=False).learner == "ridge"
-    assert parse_protocol(_with_learner('learner = "ridge"'), check_files=False).learner == "ridge"
+    for name in ("ridge", "kernel-ridge", "gaussian-process", "neural-network", "reward"):
+        assert parse_protocol(_with_learner(f'learner = "{name}"'), check_files=False).learner == name
 
 
 def test_an_unknown_learner_names_the_line_and_the_learners_available():
@@ -148,7 +149,5 @@ def test_an_unknown_learner_names_the_line_and_the_learners_available():
     with pytest.raises(ProtocolError, match=rf"line {line}.*unknown learner 'svm'; expected one of the available "
                                             rf"learners {available}"):
         parse_protocol(text, check_files=False)
-    with pytest.raises(ProtocolError, match="the learner 'kernel-ridge' exists .* teach ridge only so far"):
-        parse_protocol(_with_learner('learner = "kernel-ridge"'), check_files=False)
     with pytest.raises(ProtocolError, match="learner.*expected text"):
         parse_protocol(_with_learner("learner = 3"), check_files=False)
