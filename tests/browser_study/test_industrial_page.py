@@ -88,11 +88,16 @@ def take_part_until_p1(page, server, pid, shot, name):
     query = urlencode({"PROLIFIC_PID": pid, "STUDY_ID": "ST1", "SESSION_ID": "SE1"})
     page.goto(f"{server.url(ONLINE)}?{query}", wait_until="commit", timeout=180_000)
     button(page, "Continue").wait_for(timeout=300_000)
+    # Each screen's words are waited for before its button: a click on the previous screen's
+    # Continue, about to be replaced, would be lost.
     button(page, "Continue").click()                # welcome
-    button(page, "Continue").click()                # information sheet
+    page.get_by_text("Information sheet").wait_for(timeout=30_000)
+    button(page, "Continue").click()
     button(page, "I agree").click()
+    page.get_by_text("Have you studied robotics").wait_for(timeout=30_000)
     page.get_by_role("radio", name="no").check()
     button(page, "Continue").click()
+    page.get_by_text("Your age, in years").wait_for(timeout=30_000)
     page.get_by_placeholder("a number (years)").fill("27")
     page.get_by_role("radio", name="female").check()
     button(page, "Continue").click()
