@@ -39,7 +39,7 @@ UR5_DEMO_SKILLS = (
 #: The arms a visitor picks from, each with the skills the chooser then offers.
 DEMO_ARMS = (
     ("Planar arms", DEMO_SKILLS),
-    ("UR5 industrial arm (3-D)", UR5_DEMO_SKILLS),
+    ("UR5 arm (3-D)", UR5_DEMO_SKILLS),
 )
 
 #: Options of ``EpisodeWidget`` that a 3-D episode takes too (the others are the planar views').
@@ -119,8 +119,8 @@ class DemoPage(VBox):
         self.episode_options = episode_options
         self.errors: list[tuple[str, bool, float]] = []
         self._switching_arm = False
-        self.arm_chooser = ToggleButtons(options=list(self.arms), value=arm, style={"button_width": "190px"},
-                                         tooltips=[f"Teach the {label.lower()}" for label in self.arms],
+        self.arm_chooser = ToggleButtons(options=list(self.arms), value=arm, style={"button_width": "120px"},
+                                         tooltips=[f"Teach the {label}" for label in self.arms],
                                          layout=Layout(display=None if len(self.arms) > 1 else "none"))
         self.skill_chooser = ToggleButtons(options=self._skill_options(arm), value=skill,
                                            style={"button_width": "150px"},

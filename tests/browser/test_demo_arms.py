@@ -9,7 +9,7 @@ from .helpers import OKABE, drag, ee_pixel, wait_for_color
 
 pytestmark = pytest.mark.browser
 
-UR5, PLANAR = "UR5 industrial arm (3-D)", "Planar arms"
+UR5, PLANAR = "UR5 arm (3-D)", "Planar arms"
 
 
 def references():

@@ -84,7 +84,7 @@ def test_the_visitor_picks_the_ur5_and_back_and_each_arm_gets_its_own_widget_and
     from mt_widgets.widgets import EpisodeWidget, SpaceEpisodeWidget
     page = DemoPage(duration=1.0)
     assert page.arm_chooser.layout.display is None and page.arm_chooser.options == ("Planar arms",
-                                                                                    "UR5 industrial arm (3-D)")
+                                                                                    "UR5 arm (3-D)")
     assert isinstance(page.episode, EpisodeWidget) and page.skill_chooser.value == "sim-point"
     started = []
     original = page.start_episode
@@ -93,7 +93,7 @@ def test_the_visitor_picks_the_ur5_and_back_and_each_arm_gets_its_own_widget_and
         started.append(page.skill_chooser.value)
         return original(*args, **kwargs)
     page.start_episode = counted
-    page.arm_chooser.value = "UR5 industrial arm (3-D)"
+    page.arm_chooser.value = "UR5 arm (3-D)"
     # one episode per switch, of the arm's first skill; the chooser offers the UR5's skills only
     assert started == ["ur5-reach"] and [key for _, key in page.skill_chooser.options] == [
         "ur5-reach", "ur5-place", "ur5-conveyor"]
@@ -102,7 +102,7 @@ def test_the_visitor_picks_the_ur5_and_back_and_each_arm_gets_its_own_widget_and
     assert page.episode_slot.children == (episode,) and page.new_states_button in episode.next_actions.children
     # twice, quickly: back to the planar arms and to the UR5 again
     page.arm_chooser.value = "Planar arms"
-    page.arm_chooser.value = "UR5 industrial arm (3-D)"
+    page.arm_chooser.value = "UR5 arm (3-D)"
     assert started == ["ur5-reach", "sim-point", "ur5-reach"]
     assert isinstance(page.episode, SpaceEpisodeWidget) and page.episode is not episode
     # the UR5 episode teaches and reports its error like the planar one
