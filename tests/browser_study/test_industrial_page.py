@@ -161,9 +161,11 @@ def test_a_participant_draws_3d_demonstrations_on_the_study_page_and_moves_on(br
             raise
         teach_p1(page, server, pid, draw, artifacts, device)
         # The reproduction plays in the three views; Continue comes once it has played.
-        page.screenshot(path=artifacts(f"{device}-reproduction"))
+        page.get_by_text("This is what the robot learnt from your demonstrations").wait_for(timeout=60_000)
         go_on = button(page, "Continue")
         page.wait_for_function("b => !b.disabled", arg=go_on.element_handle(timeout=60_000), timeout=60_000)
+        go_on.scroll_into_view_if_needed()
+        page.screenshot(path=artifacts(f"{device}-reproduction"))
         go_on.click()
         page.get_by_text("Part 2 of 5").wait_for(timeout=30_000)
         page.get_by_text("a part rides a conveyor across the table").wait_for(timeout=30_000)
