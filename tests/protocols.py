@@ -63,3 +63,19 @@ def protocol_toml(name: str, phases: list[dict], *, seed: int = 5, lam: float = 
     for table in phases:
         lines += _table("[[phases]]", table)
     return "\n".join(lines) + "\n"
+
+
+def industrial_online_toml(practice_s: int | None = None) -> str:
+    """The shipped industrial-sim protocol (the paper's phases on the UR5) with the online pilot's
+    ``[online]`` tables (notebooks/study_online_pilot.toml), for the online page; ``practice_s``
+    shortens the practice."""
+    from pathlib import Path
+
+    from mt_widgets.study.protocol import PROTOCOL_FOLDER
+    text = (PROTOCOL_FOLDER / "industrial_sim.toml").read_text(encoding="utf-8")
+    pilot = (Path(__file__).resolve().parents[1] / "notebooks" / "study_online_pilot.toml").read_text(encoding="utf-8")
+    online = pilot[pilot.index("\n[online]\n"):]
+    online = online[:online.index("\n[", online.index("[online.completion.withdrawn]") + 1)]
+    if practice_s is not None:
+        text = text.replace("duration_s = 120", f"duration_s = {int(practice_s)}", 1)
+    return text.rstrip() + "\n" + online + "\n"

@@ -11,16 +11,20 @@ from __future__ import annotations
 import numpy as np
 
 from mt_widgets.core import SKILLS, PointTarget, Skill
+from mt_widgets.core.targets import SpacePointTarget
 
 
 def _practice_skills() -> dict[str, Skill]:
-    sim, uarm = SKILLS["sim-point"], SKILLS["uarm-point"]
+    sim, uarm, ur5 = SKILLS["sim-point"], SKILLS["uarm-point"], SKILLS["ur5-reach"]
     # The simulated arm's practice goal mirrors skill 1's point across the vertical axis.
     sim_goal = (-0.8, 1.2)
     # The uArm's practice goal lies right of skill 1's start, inside the workspace (r 26.6 cm,
     # 20 degrees of yaw), and its start left of it, so the practice reproduction crosses the
     # workspace without meeting skill 1's point (23, 11) cm or the line r1 = 2 r2.
     uarm_goal, uarm_start = (25.0, -9.0), np.array([17.0, 5.0])
+    # The UR5's practice goal hangs in the air on the other side of the base from the part
+    # (0.55, -0.10, 0.10) m and high above the fixture and the conveyor: no phase's goal.
+    ur5_goal = np.array([0.30, 0.30, 0.45])
     return {skill.key: skill for skill in (
         Skill("sim-practice", "Practice: reach the point (-0.8, 1.2) m", sim.plant, sim.feature_map,
               [[-1, 0, -1, 0, sim_goal[0]], [0, -1, 0, -1, sim_goal[1]]], sim.start, PointTarget(sim_goal),
@@ -28,8 +32,11 @@ def _practice_skills() -> dict[str, Skill]:
         Skill("uarm-practice", "Practice: reach the point (25, -9) cm", uarm.plant, uarm.feature_map,
               [[-0.2, 0, 0.2 * uarm_goal[0]], [0, -0.2, 0.2 * uarm_goal[1]]], uarm_start, PointTarget(uarm_goal),
               "A practice goal that no part of the study uses.", max_condition=uarm.max_condition),
+        Skill("ur5-practice", "Practice: reach the point (0.30, 0.30, 0.45) m", ur5.plant, ur5.feature_map,
+              np.hstack([-0.8 * np.eye(3), 0.8 * ur5_goal[:, None]]) + 0.0, ur5.start, SpacePointTarget(ur5_goal),
+              "A practice goal that no part of the study uses.", max_condition=ur5.max_condition),
     )}
 
 
-#: Practice skills by key ("sim-practice", "uarm-practice"); protocols name them like skills.
+#: Practice skills by key ("sim-practice", "uarm-practice", "ur5-practice"); protocols name them like skills.
 PRACTICE_SKILLS: dict[str, Skill] = _practice_skills()

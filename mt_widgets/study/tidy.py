@@ -13,7 +13,8 @@ started_at (ISO 8601 UTC), duration_s.
 demonstrations.csv columns (``DEMONSTRATION_COLUMNS``): study, participant, group, session, phase,
 phase_index, episode, index (0-based), skill, state (JSON list), action_1, action_2,
 optimal_1, optimal_2, guidance_shown (0/1), time_to_first_input_s, drawing_duration_s
-(empty when unknown).
+(empty when unknown), action_3, optimal_3 (a plant's third action component, the UR5's
+tool velocity along z; empty for a planar plant's two components).
 
 Only completed episodes are exported; demonstrations of an episode still in progress are
 exported (they are data), marked by the absence of their episode's row. A participant who
@@ -37,7 +38,7 @@ EPISODE_COLUMNS = ("study", "participant", "group", "session", "phase", "phase_i
                    "started_at", "duration_s")
 DEMONSTRATION_COLUMNS = ("study", "participant", "group", "session", "phase", "phase_index", "episode", "index",
                          "skill", "state", "action_1", "action_2", "optimal_1", "optimal_2", "guidance_shown",
-                         "time_to_first_input_s", "drawing_duration_s")
+                         "time_to_first_input_s", "drawing_duration_s", "action_3", "optimal_3")
 
 
 def participant_logs(study_folder) -> list[Path]:
@@ -105,7 +106,8 @@ def read_study(study_folder) -> tuple[list[dict], list[dict]]:
                     "optimal_1": event["optimal"][0], "optimal_2": event["optimal"][1],
                     "guidance_shown": int(bool(event["guidance_shown"])),
                     "time_to_first_input_s": event["time_to_first_input_s"],
-                    "drawing_duration_s": event["drawing_duration_s"]})
+                    "drawing_duration_s": event["drawing_duration_s"],
+                    **_third_component(event)})
             elif kind == "episode_finished":
                 episodes.append({
                     "study": study, "participant": participant, "group": group, "session": session,
@@ -121,6 +123,11 @@ def read_study(study_folder) -> tuple[list[dict], list[dict]]:
     def key(row):
         return row["participant"], order.get(row["session"], len(order))
     return sorted(episodes, key=key), sorted(demonstrations, key=key)
+
+
+def _third_component(event: dict) -> dict:
+    """action_3 and optimal_3 of a demonstration event: its third components, None for two."""
+    return {f"{name}_3": event[name][2] if len(event[name]) > 2 else None for name in ("action", "optimal")}
 
 
 def _write_csv(path: Path, columns, rows) -> None:

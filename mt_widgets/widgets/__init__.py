@@ -1,6 +1,7 @@
 """Teaching widgets (ipycanvas + ipywidgets): draw demonstrations, see guidance, watch the robot.
 
-- ``EpisodeWidget``: a whole episode (the three-line entry point).
+- ``EpisodeWidget``: a whole episode (the three-line entry point); ``SpaceEpisodeWidget`` the same
+  for a plant drawn in space (the UR5), ``drawn_in_space(skill)`` says which a skill needs.
 - ``TeachingCanvas``: query states one after another, an arrow drawn at each.
 - ``ArmView``: the workspace, target and robot on layered canvases.
 - ``ReproductionPlayer``: the learnt skill's rollout as an animation.
@@ -23,6 +24,7 @@ from .guidance import GuidancePanel
 from .progress import EffortProgress
 from .reproduction import ReproductionPlayer
 from .robots import RobotPainter, painter_for
+from .space_episode import SpaceEpisodeWidget, drawn_in_space
 from .space_teaching import SpaceTeachingCanvas
 from .teaching import TeachingCanvas
 from .theme import DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, Theme, get_theme
@@ -35,4 +37,5 @@ __all__ = [
     "DemonstrationRecord", "EffortProgress", "EpisodeResult", "EpisodeWidget", "GuidancePanel", "ReproductionPlayer",
     "RobotPainter", "TeachingCanvas", "Theme", "ViewTransform", "draw_arrow", "get_theme", "painter_for",
     "play_frames", "retire", "stop_animations", "SpaceTeachingCanvas",
+    "SpaceEpisodeWidget", "drawn_in_space",
 ]

@@ -2,8 +2,12 @@
 
 ``notebooks/demo.ipynb`` shows a ``DemoPage`` and nothing else, so Voila (or Binder with
 ``?urlpath=voila/render/notebooks/demo.ipynb``) gives a one-click page. The page only
-composes ``EpisodeWidget``: choosing a skill, switching guidance or asking for new states
+composes ``EpisodeWidget`` (``SpaceEpisodeWidget`` for a skill whose plant is drawn in space,
+``drawn_in_space``): choosing an arm or a skill, switching guidance or asking for new states
 starts a fresh episode; the teaching error comes from the episode's result.
+
+The visitor picks the arm first (``DEMO_ARMS``: the paper's planar arms, or the UR5 in 3-D); the
+skill chooser then offers that arm's skills.
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ from mt_widgets.core.validation import as_bool
 
 from .animation import retire
 from .episode import EpisodeResult, EpisodeWidget
+from .space_episode import SpaceEpisodeWidget, drawn_in_space
 
 #: The four skills of the paper, as a visitor reads them on the chooser.
 DEMO_SKILLS = (
@@ -23,6 +28,22 @@ DEMO_SKILLS = (
     ("uArm: reach a point", "uarm-point"),
     ("uArm: reach a line", "uarm-line"),
 )
+
+#: The UR5's production-line skills (issue 31), taught in 3-D.
+UR5_DEMO_SKILLS = (
+    ("UR5: reach the part", "ur5-reach"),
+    ("UR5: place it", "ur5-place"),
+    ("UR5: follow the conveyor", "ur5-conveyor"),
+)
+
+#: The arms a visitor picks from, each with the skills the chooser then offers.
+DEMO_ARMS = (
+    ("Planar arms", DEMO_SKILLS),
+    ("UR5 arm (3-D)", UR5_DEMO_SKILLS),
+)
+
+#: Options of ``EpisodeWidget`` that a 3-D episode takes too (the others are the planar views').
+_SPACE_OPTIONS = ("lam", "theme", "duration")
 
 WELCOME = (
     "<h2 style='margin:2px 0'>Teach a robot by showing it what to do</h2>"
@@ -56,31 +77,54 @@ def _chooser_skills(skills) -> dict[str, Skill]:
 
 
 class DemoPage(VBox):
-    """A welcome line, a skill chooser, a guidance switch, an episode and a "try again" button.
+    """A welcome line, an arm chooser, a skill chooser, a guidance switch, an episode and a "try again" button.
 
     Args:
-        skill: Key of the first skill shown (one of ``skills``; default the first).
+        skill: Key of the first skill shown (one of the arms' skills; default the first arm's first).
         guidance: Whether guidance starts on.
         seed: Seed of the first query states; "Try again with new states" adds one.
         skills: (label, skill) pairs for the chooser, a skill being a ``Skill`` (a user's own,
-            on any plant) or a key of ``SKILLS``; default the paper's four (``DEMO_SKILLS``).
-        episode_options: Further keyword arguments for every ``EpisodeWidget`` (e.g. ``duration``).
+            on any plant) or a key of ``SKILLS``: one arm's, and no arm chooser. Default: the arms
+            of ``arms``.
+        arms: (label, skills) pairs for the arm chooser, ``skills`` as above; default ``DEMO_ARMS``
+            (the paper's planar arms, the UR5 in 3-D) when ``skills`` is not given.
+        episode_options: Further keyword arguments for every ``EpisodeWidget`` (e.g. ``duration``;
+            a 3-D episode takes ``lam``, ``theme`` and ``duration`` of them).
     """
 
-    def __init__(self, skill: str | None = None, guidance: bool = True, seed: int = 0, skills=DEMO_SKILLS,
+    def __init__(self, skill: str | None = None, guidance: bool = True, seed: int = 0, skills=None, arms=None,
                  **episode_options):
-        self.skills = _chooser_skills(skills)
+        if skills is not None and arms is not None:
+            raise ValueError("skills, arms: expected one of them (skills: one arm's), got both")
+        if arms is None:
+            arms = DEMO_ARMS if skills is None else (("", skills),)
+        if not isinstance(arms, (tuple, list)) or not arms or not all(
+                isinstance(a, tuple) and len(a) == 2 and isinstance(a[0], str) for a in arms):
+            raise ValueError(f"arms: expected (label, skills) pairs, got {arms!r}"[:200])
+        #: {arm label: {key: Skill}}, in the chooser's order.
+        self.arms = {label: _chooser_skills(arm_skills) for label, arm_skills in arms}
+        self.skills = {}
+        for arm in self.arms.values():
+            for key, value in arm.items():
+                if key in self.skills:
+                    raise ValueError(f"arms: expected each skill in one arm, got {key!r} twice")
+                self.skills[key] = value
         keys = list(self.skills)
         skill = keys[0] if skill is None else skill
         if skill not in keys:
             raise ValueError(f"skill: expected one of {keys}, got {skill!r}")
-        labels = {_key_of(value): label for label, value in skills}
+        self._labels = {_key_of(value): label for _, arm_skills in arms for label, value in arm_skills}
+        arm = next(label for label, arm_skills in self.arms.items() if skill in arm_skills)
         self.seed = int(seed)
         self.episode_options = episode_options
         self.errors: list[tuple[str, bool, float]] = []
-        self.skill_chooser = ToggleButtons(options=[(labels[key], key) for key in keys], value=skill,
+        self._switching_arm = False
+        self.arm_chooser = ToggleButtons(options=list(self.arms), value=arm, style={"button_width": "120px"},
+                                         tooltips=[f"Teach the {label}" for label in self.arms],
+                                         layout=Layout(display=None if len(self.arms) > 1 else "none"))
+        self.skill_chooser = ToggleButtons(options=self._skill_options(arm), value=skill,
                                            style={"button_width": "150px"},
-                                           tooltips=[self.skills[key].title for key in keys])
+                                           tooltips=[s.title for s in self.arms[arm].values()])
         self.guidance_switch = Checkbox(value=as_bool("guidance", guidance),
                                         description="Guidance: show the best arrow after each of mine", indent=False,
                                         layout=Layout(width="auto"))
@@ -89,19 +133,38 @@ class DemoPage(VBox):
         self.result_line = HTML(value="")
         self.episode_slot = Box()
         self.episode: EpisodeWidget | None = None
-        self.skill_chooser.observe(lambda _: self.start_episode(), names="value")
+        self.arm_chooser.observe(lambda _: self._on_arm_chosen(), names="value")
+        self.skill_chooser.observe(lambda _: None if self._switching_arm else self.start_episode(), names="value")
         self.guidance_switch.observe(lambda _: self._on_guidance_switched(), names="value")
         self.new_states_button.on_click(lambda _: self.start_episode(new_states=True))
         # The choices on one line, so the episode's canvas starts high on the page; the result and
         # "try again" go beside the canvas (the episode's next_actions), where the visitor is
         # looking when the reproduction plays.
-        choices = HBox([self.skill_chooser, self.guidance_switch],
+        choices = HBox([self.arm_chooser, self.skill_chooser, self.guidance_switch],
                        layout=Layout(flex_flow="row wrap", align_items="center", grid_gap="2px 16px"))
         super().__init__([HTML(WELCOME), choices, self.episode_slot])
         self.add_class("mt-focus")  # a visible focus on each control (canvas_access.py)
         self.start_episode()
 
-    def start_episode(self, new_states: bool = False, keep=None) -> EpisodeWidget:
+    def _skill_options(self, arm: str) -> list[tuple[str, str]]:
+        return [(self._labels[key], key) for key in self.arms[arm]]
+
+    def _on_arm_chosen(self) -> None:
+        """Another arm: the chooser offers its skills, and its first skill's episode starts (once)."""
+        arm = self.arm_chooser.value
+        self._switching_arm = True
+        try:
+            # Options, value and tooltips in one message: the chooser never shows an arm's labels
+            # with another's value.
+            with self.skill_chooser.hold_sync():
+                self.skill_chooser.options = self._skill_options(arm)
+                self.skill_chooser.tooltips = [s.title for s in self.arms[arm].values()]
+                self.skill_chooser.value = next(iter(self.arms[arm]))
+        finally:
+            self._switching_arm = False
+        self.start_episode()
+
+    def start_episode(self, new_states: bool = False, keep=None) -> EpisodeWidget | SpaceEpisodeWidget:
         """Replace the episode with a fresh one for the chosen skill and guidance setting.
 
         ``keep``: (k, R) demonstrations already given on the same states, shown as given (the
@@ -113,9 +176,15 @@ class DemoPage(VBox):
         if shown is not None:
             # The page's own widgets move to the next episode.
             shown.next_actions.children = []
-        self.episode = EpisodeWidget(self.skills[self.skill_chooser.value], seed=self.seed,
-                                     guidance=self.guidance_switch.value, demonstrations=keep,
-                                     on_finished=self._on_finished, **self.episode_options)
+        skill = self.skills[self.skill_chooser.value]
+        if drawn_in_space(skill):
+            # The plant is drawn in space: the 3-D episode (which keeps no arrows across a switch).
+            options = {name: value for name, value in self.episode_options.items() if name in _SPACE_OPTIONS}
+            self.episode = SpaceEpisodeWidget(skill, seed=self.seed, guidance=self.guidance_switch.value,
+                                              on_finished=self._on_finished, **options)
+        else:
+            self.episode = EpisodeWidget(skill, seed=self.seed, guidance=self.guidance_switch.value,
+                                         demonstrations=keep, on_finished=self._on_finished, **self.episode_options)
         self.episode.next_actions.children = [self.result_line, self.new_states_button]
         self.episode_slot.children = [self.episode]
         if shown is not None:
@@ -129,7 +198,7 @@ class DemoPage(VBox):
         """Guidance on or off: the same states again, with every arrow confirmed so far (and the one
         drawn) kept, and a word saying so; after a finished episode, a fresh one."""
         old = self.episode
-        if old is None or old.phase == "finished" or not old.demonstrations:
+        if not isinstance(old, EpisodeWidget) or old.phase == "finished" or not old.demonstrations:
             self.start_episode()
             return
         kept = [list(a) for a in old.demonstrations]

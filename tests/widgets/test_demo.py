@@ -78,3 +78,48 @@ def test_switching_guidance_mid_episode_keeps_the_arrows_and_says_so(recorder):
     assert page.episode.phase == "finished" and len(page.episode.result.demonstrations) == 5
     page.guidance_switch.value = False                          # after the end: a fresh episode
     assert page.episode.demonstrations == [] and page.result_line.value == ""
+
+
+def test_the_visitor_picks_the_ur5_and_back_and_each_arm_gets_its_own_widget_and_skills():
+    from mt_widgets.widgets import EpisodeWidget, SpaceEpisodeWidget
+    page = DemoPage(duration=1.0)
+    assert page.arm_chooser.layout.display is None and page.arm_chooser.options == ("Planar arms",
+                                                                                    "UR5 arm (3-D)")
+    assert isinstance(page.episode, EpisodeWidget) and page.skill_chooser.value == "sim-point"
+    started = []
+    original = page.start_episode
+
+    def counted(*args, **kwargs):
+        started.append(page.skill_chooser.value)
+        return original(*args, **kwargs)
+    page.start_episode = counted
+    page.arm_chooser.value = "UR5 arm (3-D)"
+    # one episode per switch, of the arm's first skill; the chooser offers the UR5's skills only
+    assert started == ["ur5-reach"] and [key for _, key in page.skill_chooser.options] == [
+        "ur5-reach", "ur5-place", "ur5-conveyor"]
+    episode = page.episode
+    assert isinstance(episode, SpaceEpisodeWidget) and episode.skill.key == "ur5-reach"
+    assert page.episode_slot.children == (episode,) and page.new_states_button in episode.next_actions.children
+    # twice, quickly: back to the planar arms and to the UR5 again
+    page.arm_chooser.value = "Planar arms"
+    page.arm_chooser.value = "UR5 arm (3-D)"
+    assert started == ["ur5-reach", "sim-point", "ur5-reach"]
+    assert isinstance(page.episode, SpaceEpisodeWidget) and page.episode is not episode
+    # the UR5 episode teaches and reports its error like the planar one
+    page.skill_chooser.value = "ur5-place"
+    shown = page.episode
+    assert shown.skill.key == "ur5-place" and shown.guidance
+    for index in range(shown.episode.n_states):
+        shown.demonstrate(shown.episode.optimal_actions[index])
+        shown.next()
+    assert shown.phase == "finished" and shown.error < 1e-9
+    assert page.errors[-1][0] == "ur5-place" and "Your teaching error: 0.000" in page.result_line.value
+    page.guidance_switch.value = False   # after a finished 3-D episode: a fresh one, unguided
+    assert not page.episode.guidance and page.episode.skill.key == "ur5-place"
+
+
+def test_a_page_of_given_skills_has_no_arm_chooser_and_both_at_once_are_refused():
+    page = DemoPage(skills=[("Arm: reach a point", "sim-point")], duration=1.0)
+    assert page.arm_chooser.layout.display == "none" and list(page.skills) == ["sim-point"]
+    with pytest.raises(ValueError, match="skills, arms: expected one of them"):
+        DemoPage(skills=[("a", "sim-point")], arms=[("x", [("a", "sim-point")])])
