@@ -173,6 +173,6 @@ def tool_features(positions, phases=None) -> np.ndarray:
 
 
 def stop_report(skill, theta) -> tuple:
-    """(why the reproduction of ``theta`` stopped, "" when it ran to the end; the tool point (3,) at its last sample)."""
+    """(why the reproduction of ``theta`` stopped, "" if it ran to the end; the tool point (3,) at its last sample)."""
     trajectory = skill.reproduce(np.asarray(theta, dtype=float))
     return trajectory.stop_reason, trajectory.positions[-1]
