@@ -124,18 +124,25 @@ def timed(function, repeat: int) -> list[float]:
 
 
 def widget_feedback(key: str = "ur5-reach", repeats: int = 12) -> dict:
-    """Last confirmation -> the reproduction's animation sent, through ``SpaceTeachingCanvas`` (seconds, bytes).
+    """Last confirmation -> the reproduction's animation under way, through ``SpaceTeachingCanvas``.
 
-    Outside a kernel the widget sends every frame at once (no event loop paces it): an upper bound on
-    the first chunk a kernel sends before playing."""
+    In a kernel the widget sends the animation's first chunk (``animation.CHUNK_S`` of frames) at once
+    and the rest paced by the kernel's event loop; here an event loop that is not run stands for the
+    kernel's, so the time is the kernel's until the first frames leave. Returns the latencies (s), the
+    first message's bytes and the whole animation's bytes (every chunk)."""
+    import asyncio
+
     import ipycanvas
 
+    from mt_widgets.widgets import animation
     from mt_widgets.widgets.space_teaching import SpaceTeachingCanvas
     manager = ipycanvas.canvas._CANVAS_MANAGER
     sent = []
-    original = manager._send_custom
+    original, original_loop = manager._send_custom, animation.kernel_loop
+    loop = asyncio.new_event_loop()
     manager._send_custom = lambda command, buffers=(): sent.append((command, list(buffers)))
-    latencies, sizes = [], []
+    animation.kernel_loop = lambda: loop
+    latencies, sizes, whole = [], [], []
     try:
         for seed in range(repeats + 1):
             widget = SpaceTeachingCanvas(key, seed=seed, guidance=False)
@@ -148,13 +155,21 @@ def widget_feedback(key: str = "ur5-reach", repeats: int = 12) -> dict:
             started = time.perf_counter()
             widget.confirm()   # records, fits, rolls out 10 s and sends the animation
             elapsed = time.perf_counter() - started
+            first = sum(len(json.dumps(command).encode()) + sum(memoryview(b).nbytes for b in buffers)
+                        for command, buffers in sent)
+            play = widget.animation
+            while not play.done:   # the remaining chunks, as the kernel's loop would send them
+                play._send(min(play.n_frames, play._next + play._chunk))
             if seed:   # the first run loads the compiled kernels
                 latencies.append(elapsed)
-                sizes.append(sum(len(json.dumps(command).encode()) + sum(memoryview(b).nbytes for b in buffers)
+                sizes.append(first)
+                whole.append(sum(len(json.dumps(command).encode()) + sum(memoryview(b).nbytes for b in buffers)
                                  for command, buffers in sent))
+            widget.animation.cancel()
     finally:
-        manager._send_custom = original
-    return {"latency_s": latencies, "bytes": sizes}
+        manager._send_custom, animation.kernel_loop = original, original_loop
+        loop.close()
+    return {"latency_s": latencies, "bytes": sizes, "animation_bytes": whole}
 
 
 _MEMORY_SCRIPT = """
@@ -280,7 +295,10 @@ def browser_figures(drag_s: float = 3.0) -> dict:
     play = _shown_intervals(play_ticks)
     # A playback frame: the browser draws it, then sleeps (setTimeout) before the next one. The time
     # from one timer's firing to the next timer's request is the drawing of a frame.
-    timers = timers[np.argsort(timers[:, 0])] if len(timers) else timers
+    if len(timers):
+        # ipycanvas may set two timers for one sleep (a layer and the canvas it is composed on): keep one.
+        timers = timers[np.argsort(timers[:, 0])]
+        timers = timers[np.concatenate([[True], np.diff(timers[:, 0]) > 2.0])]
     drawing = timers[1:, 0] - timers[:-1, 1] if len(timers) > 1 else np.array([np.nan])
     waited = timers[:, 1] - timers[:, 0] if len(timers) else np.array([np.nan])
     return {"drag_ms": drag.tolist(), "drag_moves": moves, "drag_s": drag_s, "play_ms": play.tolist(),
@@ -359,11 +377,12 @@ def main() -> int:
         p50, p95 = np.percentile(latencies, [50, 95]) * 1e3
         print(f"   {key:<13} p50 {p50:5.1f} ms  p95 {p95:5.1f} ms  (target p95 <= 150 ms)")
 
-    print("\n4. feedback through SpaceTeachingCanvas: last confirmation -> the animation sent")
+    print("\n4. feedback through SpaceTeachingCanvas: last confirmation -> the animation's first frames sent")
     widget = widget_feedback()
     p50, p95 = np.percentile(widget["latency_s"], [50, 95]) * 1e3
     print(f"   ur5-reach     p50 {p50:5.1f} ms  p95 {p95:5.1f} ms  (target p95 <= 150 ms: "
-          f"{'met' if p95 <= 150 else 'missed'}); animation message {max(widget['bytes']) / 1e3:.0f} KB")
+          f"{'met' if p95 <= 150 else 'missed'}); first message {max(widget['bytes']) / 1e3:.0f} KB, "
+          f"the whole animation {max(widget['animation_bytes']) / 1e3:.0f} KB")
 
     print("\n5. kernel memory of one widget with its played episode (fresh process, resident set)")
     memory = kernel_memory()
