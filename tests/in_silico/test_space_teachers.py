@@ -112,3 +112,20 @@ def test_an_arrow_of_neither_two_nor_three_components_is_refused_with_its_size()
     people = TeacherPopulation.draw(PAPER_FIT, [1], 1, 1)
     with pytest.raises(ValueError, match="offsets: expected arrows of 2 .* got 4"):
         people.act(0, 0, np.ones((1, 4)), np.ones((1, 4)), 1.0, "x", True)
+
+
+@pytest.mark.slow
+def test_in_space_the_session_engine_and_the_batched_engine_give_the_same_study(tmp_path):
+    import pandas as pd
+
+    from mt_widgets.in_silico.sessions import run_through_sessions
+    from mt_widgets.study.tidy import read_study
+    protocol = industrial_protocol("ur5-conveyor", "ur5-place")
+    run_through_sessions(tmp_path / "study", 2, protocol=protocol, seed=4)
+    episodes, _ = read_study(tmp_path / "study")
+    logged = pd.DataFrame(episodes)
+    groups = logged.groupby("participant").group.first().tolist()
+    batched = run_in_silico(2, protocol, seed=4, groups=groups, reproduce=False).episodes
+    key = ["participant", "phase_index", "episode"]
+    assert logged.sort_values(key).teaching_error.to_numpy() == pytest.approx(
+        batched.sort_values(key).teaching_error.to_numpy(), abs=1e-9)
