@@ -159,3 +159,20 @@ def smoother_teaching_actions(S, Y) -> np.ndarray:
 def smoother_risk(S, U, Y) -> float:
     """The policy risk sqrt(mean_m ||(S U)_m - Y_m||^2) of the demonstration U."""
     return policy_risk(np.asarray(S, dtype=float) @ np.asarray(U, dtype=float), Y)
+
+
+# -- a9: teaching an industrial arm in 3-D -----------------------------------------------------------
+
+
+def tool_features(positions, phases=None) -> np.ndarray:
+    """phi (N, S) of the ``ur5-`` skills from tool points (N, 3) m: (r1, r2, r3, 1), or (r1, r2, r3, s, 1)
+    with the conveyor's phases s (N,) m."""
+    positions = np.asarray(positions, dtype=float)
+    columns = [positions] + ([] if phases is None else [np.asarray(phases, dtype=float)[:, None]])
+    return np.hstack(columns + [np.ones((len(positions), 1))])
+
+
+def stop_report(skill, theta) -> tuple:
+    """(why the reproduction of ``theta`` stopped, "" if it ran to the end; the tool point (3,) at its last sample)."""
+    trajectory = skill.reproduce(np.asarray(theta, dtype=float))
+    return trajectory.stop_reason, trajectory.positions[-1]

@@ -44,8 +44,8 @@ from .teachers import (
     TeacherParameters,
     TeacherPopulation,
     along_line_offsets,
-    naive_offsets,
     position_gain,
+    target_offsets,
 )
 
 # -- the batched engine ----------------------------------------------------------------------------
@@ -105,7 +105,7 @@ def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study
         states = states_by_episode[e]
         batch = EpisodeBatch.of(skill, states, protocol.lam, protocol.reproduction_duration_s)
         positions, _ = skill.end_effector(states)
-        offsets = naive_offsets(positions, skill.target)[study_of]                  # (B, N, 2)
+        offsets = target_offsets(skill, states)[study_of]                          # (B, N, R)
         anchor = imagined_line_target(protocol, step["phase_index"], step["session"])
         along = None if anchor is None else along_line_offsets(positions, skill.target, anchor)[study_of]
         optimal = batch.optimal_for(study_of, len(groups))                            # (B, N, R)
@@ -251,8 +251,8 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
                     "phase": step["phase"], "phase_index": step["phase_index"], "episode": step["episode"],
                     "index": d,
                     "skill": step["skill"], "state": json.dumps(states[e][study_of[p], d].tolist()),
-                    "action_1": float(r.actions[p, d, 0]), "action_2": float(r.actions[p, d, 1]),
-                    "optimal_1": float(r.optimal[p, d, 0]), "optimal_2": float(r.optimal[p, d, 1]),
+                    **{f"{kind}_{c + 1}": float(values[p, d, c]) for kind, values in
+                       (("action", r.actions), ("optimal", r.optimal)) for c in range(values.shape[-1])},
                     "guidance_shown": int(guided), "time_to_first_input_s": float(r.first_input[p, d]),
                     "drawing_duration_s": float(r.drawing[p, d])})
     return InSilicoStudy(protocol, population.parameters, seed, pd.DataFrame(episode_rows),

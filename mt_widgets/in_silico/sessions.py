@@ -25,7 +25,7 @@ from .plan import (
     teacher_seed,
 )
 from .progress import Progress
-from .teachers import TeacherParameters, TeacherPopulation, along_line_offsets, naive_offsets, position_gain
+from .teachers import TeacherParameters, TeacherPopulation, along_line_offsets, position_gain, target_offsets
 
 
 class SessionTeacher:
@@ -110,7 +110,7 @@ class SessionTeacher:
             optimal = step.teaching_episode.optimal_actions
             anchor = imagined_line_target(self.protocol, step.phase_index, session.plan.id)
             along = None if anchor is None else along_line_offsets(positions, skill.target, anchor)
-            self._episode = (e, naive_offsets(positions, skill.target), optimal, along)
+            self._episode = (e, target_offsets(skill, step.query_states), optimal, along)
         _, offsets, optimal, along = self._episode
         d = step.index
         guided = np.array([bool(step.guidance)])

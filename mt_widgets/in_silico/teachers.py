@@ -35,6 +35,14 @@ The model follows what the paper observed of its participants:
    only explore the direction of action and failed to adjust the magnitude": in every episode
    without guidance the teacher turns all arrows by a fresh exploration angle
    (``exploration`` rad), scaled by ``1 - w``; their magnitude habit ``m_i`` never changes.
+3-4 in space. With 3-D actions (the ``ur5-`` skills: a tool velocity in space) a turn needs an
+   axis as well as an angle. The direction slip turns the arrow by its angle about an axis
+   perpendicular to it (so it leaves the arrow off by exactly that angle, as in the plane), the
+   axis's bearing around the arrow drawn per demonstration; the exploration turns all the
+   episode's arrows alike about one axis drawn per episode. These axes are drawn after every
+   other draw of a teacher, so planar teachers are the same people as before they existed.
+   A novice's naive arrow on a moving target (a part on a conveyor) points at where the part
+   is in the query state, not at the belt.
 5. **Guided teachers move toward the optimal arrows.** After each demonstration with
    guidance (seeing their arrow beside the optimal one) ``w <- w + a_i (1 - w)``, with a
    learning rate ``a_i`` drawn per participant (logit-normal around ``learning_rate``).
@@ -75,6 +83,7 @@ from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
+from mt_widgets.core.targets import ConveyorTarget
 from mt_widgets.core.validation import as_positive
 
 #: Standard-normal draws kept per demonstration: direction slip, magnitude slip, the time to
@@ -192,8 +201,10 @@ def logit(p: float) -> float:
 
 
 def position_gain(theta) -> float:
-    """g: the spectral norm of the position block (first two columns) of Theta (R, S)."""
-    return float(np.linalg.norm(np.asarray(theta, dtype=float)[:, :2], 2))
+    """g: the spectral norm of the position block of Theta (R, S): its first R columns (the features
+    start with the end-effector's position, one coordinate per action component: 2 in the plane, 3 in space)."""
+    theta = np.asarray(theta, dtype=float)
+    return float(np.linalg.norm(theta[:, :theta.shape[0]], 2))
 
 
 def naive_offsets(positions: np.ndarray, target) -> np.ndarray:
@@ -209,6 +220,16 @@ def naive_offsets(positions: np.ndarray, target) -> np.ndarray:
     """
     positions = np.asarray(positions, dtype=float)
     return target.nearest(positions) - positions
+
+
+def target_offsets(skill, states) -> np.ndarray:
+    """What a novice pulls the tool toward at each query state: the vectors (N, R) from its end-effector
+    to the nearest point of the skill's target, or, for a part moving on a conveyor, to the part where
+    the state says it is."""
+    positions, _ = skill.end_effector(states)
+    if isinstance(skill.target, ConveyorTarget):
+        return skill.target.at(skill.plant.conveyor_phase(states)) - positions
+    return naive_offsets(positions, skill.target)
 
 
 def line_foot(point, target) -> np.ndarray:
@@ -243,6 +264,28 @@ def _rotate(vectors: np.ndarray, angles: np.ndarray) -> np.ndarray:
     return np.stack([c * x - s * y, s * x + c * y], axis=-1)
 
 
+def _turn_about(vectors: np.ndarray, axes: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """Rodrigues' rotation of vectors (B, 3) about unit axes (B, 3) by angles (B,) rad."""
+    c, s = np.cos(angles)[:, None], np.sin(angles)[:, None]
+    along = np.sum(axes * vectors, axis=-1, keepdims=True)
+    return vectors * c + np.cross(axes, vectors) * s + axes * along * (1 - c)
+
+
+def _unit(vectors: np.ndarray) -> np.ndarray:
+    norm = np.linalg.norm(vectors, axis=-1, keepdims=True)
+    return vectors / np.where(norm > 0, norm, 1.0)
+
+
+def _turn_in_space(vectors: np.ndarray, slip: np.ndarray, slip_axes: np.ndarray, explore: np.ndarray,
+                   explore_axes: np.ndarray) -> np.ndarray:
+    """Arrows (B, 3) turned by the episode's exploration about its axis, then by the slip (rad) about the
+    drawn axis made perpendicular to each arrow (model items 3-4 in space)."""
+    turned = _turn_about(vectors, _unit(explore_axes), explore)
+    direction = _unit(turned)
+    across = slip_axes - np.sum(slip_axes * direction, axis=-1, keepdims=True) * direction
+    return _turn_about(turned, _unit(across), slip)
+
+
 class TeacherPopulation:
     """B synthetic teachers stepped together (B = 1 for a single teacher in a session).
 
@@ -257,13 +300,16 @@ class TeacherPopulation:
         understanding: (B,) current w.
         demonstration_noise: (B, episodes, max_demonstrations, 4) standard normals.
         episode_noise: (B, episodes) standard normals (exploration angle).
+        turn_axes: (B, episodes, max_demonstrations + 1, 3) standard normals: per demonstration the
+            axis of the direction slip, last the episode's exploration axis (3-D actions only).
     """
 
-    def __init__(self, parameters: TeacherParameters, traits, demonstration_noise, episode_noise):
+    def __init__(self, parameters: TeacherParameters, traits, demonstration_noise, episode_noise, turn_axes):
         self.parameters = parameters
         self.traits = np.asarray(traits, dtype=float)
         self.demonstration_noise = np.asarray(demonstration_noise, dtype=float)
         self.episode_noise = np.asarray(episode_noise, dtype=float)
+        self.turn_axes = np.asarray(turn_axes, dtype=float)
         p = parameters
         self.magnitude = p.magnitude * np.exp(p.magnitude_spread * self.traits[:, 0])
         if p.learning_rate == 0:
@@ -275,7 +321,7 @@ class TeacherPopulation:
 
     def with_parameters(self, parameters: TeacherParameters) -> TeacherPopulation:
         """The same people (the same draws) with other parameters, back at the start."""
-        return TeacherPopulation(parameters, self.traits, self.demonstration_noise, self.episode_noise)
+        return TeacherPopulation(parameters, self.traits, self.demonstration_noise, self.episode_noise, self.turn_axes)
 
     def __len__(self) -> int:
         return len(self.magnitude)
@@ -300,12 +346,15 @@ class TeacherPopulation:
         traits = np.empty((len(seeds), 2))
         demonstration = np.empty((len(seeds), n_episodes, max_demonstrations, _PER_DEMONSTRATION))
         episode = np.empty((len(seeds), n_episodes))
+        axes = np.empty((len(seeds), n_episodes, max_demonstrations + 1, 3))
         for i, seed in enumerate(seeds):
             rng = np.random.default_rng(seed)
             traits[i] = rng.standard_normal(2)
             demonstration[i] = rng.standard_normal((n_episodes, max_demonstrations, _PER_DEMONSTRATION))
             episode[i] = rng.standard_normal(n_episodes)
-        return cls(parameters, traits, demonstration, episode)
+            # Last, so the draws above (all a planar teacher uses) do not depend on them.
+            axes[i] = rng.standard_normal((n_episodes, max_demonstrations + 1, 3))
+        return cls(parameters, traits, demonstration, episode, axes)
 
     # -- one demonstration ------------------------------------------------------------------------
     def effective_understanding(self, skill_key: str, guided) -> np.ndarray:
@@ -325,8 +374,9 @@ class TeacherPopulation:
         Args:
             episode: 0-based episode index in the protocol.
             demonstration: 0-based demonstration index in the episode.
-            offsets: (B, 2) from the end-effector to the target (``naive_offsets``).
-            optimal: (B, 2) the optimal arrows U_bar at this state.
+            offsets: (B, R) from the end-effector to the target (``target_offsets``); R = 2 in the
+                plane, 3 in space.
+            optimal: (B, R) the optimal arrows U_bar at this state.
             gain: the skill's position gain g (``position_gain``).
             skill_key: the skill taught (for transfer).
             guided: bool or (B,) whether each teacher sees guidance in this episode.
@@ -334,7 +384,7 @@ class TeacherPopulation:
                 target (``along_line_offsets``), or None (a point skill).
 
         Returns:
-            (B, 2) actions, in the skill's action units.
+            (B, R) actions, in the skill's action units.
         """
         p = self.parameters
         w = self.effective_understanding(skill_key, guided)[:, None]
@@ -346,8 +396,15 @@ class TeacherPopulation:
         intended = (1 - w) * naive + w * optimal
         guided = np.broadcast_to(np.asarray(guided, dtype=bool), self.understanding.shape)
         explore = np.where(guided, 0.0, p.exploration * self.episode_noise[:, episode]) * (1 - w[:, 0])
-        angle = p.direction_noise * noise[:, 0] + explore
-        return _rotate(intended, angle) * np.exp(p.magnitude_noise * noise[:, 1])[:, None]
+        slip = p.direction_noise * noise[:, 0]
+        if intended.shape[-1] == 2:
+            drawn = _rotate(intended, slip + explore)
+        elif intended.shape[-1] == 3:
+            axes = self.turn_axes[:, episode]
+            drawn = _turn_in_space(intended, slip, axes[:, demonstration], explore, axes[:, -1])
+        else:
+            raise ValueError(f"offsets: expected arrows of 2 (plane) or 3 (space) components, got {intended.shape[-1]}")
+        return drawn * np.exp(p.magnitude_noise * noise[:, 1])[:, None]
 
     def timings(self, episode: int, demonstration: int, guided) -> tuple[np.ndarray, np.ndarray]:
         """(time to first input (B,), drawing duration (B,)) in seconds; guided teachers deliberate longer."""

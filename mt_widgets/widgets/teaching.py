@@ -39,6 +39,7 @@ from .arm_view import ArmView
 from .arrows import draw_arrow_pair
 from .callbacks import Callbacks
 from .canvas_access import CanvasDescription
+from .pointer_drag import ARROW_KEY_SIGNS, PointerDrag, confirm_or_clear
 from .redraw import drawing_batch
 
 #: How often the text readout follows a drag, at most (seconds): the canvas follows every
@@ -139,11 +140,11 @@ class TeachingCanvas(VBox):
                             css_width=css_width, target_label=target_label)
         self.theme = self.view.theme
         self._confirm_callbacks = Callbacks()
-        self._dragging = False
+        self._pointer = PointerDrag(self._press, self._drag_to, lambda pointer: self._drag_to(pointer, final=True),
+                                    self._accepting)
         self._last_readout = 0.0
         self._guidance = None
         self._guidance_words = ""
-        self._last_touch = None
         self._timing = InputTiming(time.monotonic())
         self._enter_when_locked = Callbacks()
 
@@ -168,15 +169,8 @@ class TeachingCanvas(VBox):
         self.clear_button.on_click(lambda _: self.clear_action())
 
         canvas = self.view.canvas
-        canvas.on_mouse_down(self._on_mouse_down)
-        canvas.on_mouse_move(self._on_mouse_move)
-        canvas.on_mouse_up(self._on_mouse_up)
-        canvas.on_mouse_out(self._on_mouse_up)
-        canvas.on_key_down(self._on_key_down)
-        canvas.on_touch_start(self._on_touch_start)
-        canvas.on_touch_move(self._on_touch_move)
-        canvas.on_touch_end(self._on_touch_end)
-        canvas.on_touch_cancel(self._on_touch_end)
+        self._pointer.connect(canvas, lambda: self.grab_radius, lambda: TOUCH_RADIUS_FACTOR * self.grab_radius,
+                              self._on_key_down)
         #: The canvas's text alternative and grab zones (a hidden widget; canvas_access.py).
         self.description = CanvasDescription(canvas)
 
@@ -254,7 +248,7 @@ class TeachingCanvas(VBox):
 
     def clear_action(self) -> None:
         """Remove the pending (unconfirmed) arrow."""
-        self._dragging = False  # Escape mid-drag: the pointer still moving must not redraw it
+        self._pointer.cancel()  # Escape mid-drag: the pointer still moving must not redraw it
         self.pending_action = None
         self._draw_arrows()
         self._update_readout()
@@ -268,7 +262,7 @@ class TeachingCanvas(VBox):
             raise RuntimeError("confirm: draw an arrow first (pending_action is None)")
         # Enter mid-drag: the drag ends with the confirmation, so later moves of the still
         # pressed pointer cannot change the confirmed arrow or draw one at the next state.
-        self._dragging = False
+        self._pointer.cancel()
         now = time.monotonic()
         timing = self._timing
         demonstration = self.episode.analyse(
@@ -311,7 +305,7 @@ class TeachingCanvas(VBox):
         """Move on to the next query state (after a confirmation)."""
         if len(self.demonstrations) <= self.state_index:
             raise RuntimeError("advance: confirm the current arrow first")
-        self._dragging = False
+        self._pointer.cancel()
         self.state_index += 1
         self.pending_action = None
         self._guidance = None
@@ -328,7 +322,7 @@ class TeachingCanvas(VBox):
 
     def _show_given(self) -> None:
         """Show the episode as it stands: its demonstrations confirmed, the next state awaiting one."""
-        self._dragging = False
+        self._pointer.cancel()
         self._show_demonstrations()
         self.state_index = len(self.episode.demonstrations)
         self.pending_action = None
@@ -387,7 +381,7 @@ class TeachingCanvas(VBox):
         can_confirm = self.pending_action is not None and not self.locked and self.current_state is not None
         self.confirm_button.disabled = not can_confirm
         self.clear_button.disabled = not can_confirm
-        if not self._dragging:  # mid-drag the words would change 12 times a second: said on release
+        if not self._pointer.active:  # mid-drag the words would change 12 times a second: said on release
             self._describe()
 
     def _describe(self) -> None:
@@ -452,12 +446,12 @@ class TeachingCanvas(VBox):
         return not self.locked and self.current_state is not None
 
     def _on_mouse_down(self, x, y) -> None:
-        self._press(x, y, self.grab_radius)
+        self._pointer.mouse_down(x, y, self.grab_radius)
 
-    def _press(self, x, y, radius: float) -> None:
-        """A mouse button or a finger down at canvas pixel (x, y): start a drag if on a grab zone."""
+    def _press(self, x, y, radius: float) -> bool:
+        """A mouse button or a finger down at canvas pixel (x, y): True when it starts a drag (on a grab zone)."""
         if not self._accepting():
-            return
+            return False
         state = self.current_state
         view = self.view
         pointer = np.array([x, y], dtype=float)
@@ -468,54 +462,14 @@ class TeachingCanvas(VBox):
         if not (near_origin or near_tip):
             self.hint.value = (f"<small>Press on the robot's hand ({self.theme.marker_words(self.view.drawing)}) "
                                f"to start an arrow.</small>")
-            return
+            return False
         self.hint.value = ""
-        self._dragging = True
+        self._pointer.active = True   # from here on a drag: the readout's words wait for the release
         self._note_input("pointer")
         if near_tip and not near_origin:
-            return  # keep the arrow; the drag moves its tip
+            return True  # keep the arrow; the drag moves its tip
         self._drag_to(pointer)
-
-    # ipycanvas reports touches as lists of (x, y), one per finger on the canvas; touch_end and
-    # touch_cancel list the fingers still down, so a drag ends where its finger last moved.
-    def _on_touch_start(self, points) -> None:
-        if len(points) == 1 and not self._dragging:
-            self._last_touch = points[0]
-            self._press(*points[0], TOUCH_RADIUS_FACTOR * self.grab_radius)
-        elif len(points) > 1 and self._dragging:
-            # A second finger (a pinch): the arrow stays where the first finger had drawn it.
-            self._end_touch_drag()
-
-    def _on_touch_move(self, points) -> None:
-        if len(points) == 1 and self._dragging:
-            self._last_touch = points[0]
-            self._on_mouse_move(*points[0])
-
-    def _on_touch_end(self, points) -> None:
-        if not points:
-            self._end_touch_drag()
-
-    def _end_touch_drag(self) -> None:
-        if self._dragging and self._last_touch is not None:
-            self._on_mouse_up(*self._last_touch)
-        self._dragging = False
-        self._last_touch = None
-
-    def _on_mouse_move(self, x, y) -> None:
-        # Called for every pointer move over the canvas: return at once unless dragging.
-        if not self._dragging:
-            return
-        if not self._accepting():  # locked or done since the press: the drag is over
-            self._dragging = False
-            return
-        self._drag_to((x, y))
-
-    def _on_mouse_up(self, x, y) -> None:
-        if not self._dragging:
-            return
-        self._dragging = False
-        if self._accepting():
-            self._drag_to((x, y), final=True)
+        return True
 
     def _drag_to(self, pointer, final: bool = False) -> None:
         origin, _ = self.view.painter.end_effector(self.current_state)
@@ -535,16 +489,13 @@ class TeachingCanvas(VBox):
             return
         if not self._accepting():
             return
-        step = self.view.transform.nice_action_step() / (50.0 if shift_key else 10.0)
-        moves = {"ArrowLeft": (-step, 0.0), "ArrowRight": (step, 0.0), "ArrowUp": (0.0, step),
-                 "ArrowDown": (0.0, -step)}
-        if key in moves:
-            base = np.zeros(2) if self.pending_action is None else np.array(self.pending_action)
-            self.set_action(base + np.array(moves[key]), method="keyboard")
-        elif key == "Enter" and self.pending_action is not None:
-            self.confirm()
-        elif key in ("Escape", "Backspace", "Delete"):
-            self.clear_action()
+        if key in ARROW_KEY_SIGNS:
+            step = ARROW_KEY_SIGNS[key] * self.view.transform.nice_action_step() / (50.0 if shift_key else 10.0)
+            action = np.zeros(2) if self.pending_action is None else np.array(self.pending_action, dtype=float)
+            action[1 if key in ("ArrowUp", "ArrowDown") else 0] += step
+            self.set_action(action, method="keyboard")
+        else:
+            confirm_or_clear(key, self.pending_action is not None, self.confirm, self.clear_action)
 
     def _on_entry_mode(self, change) -> None:
         units = self.skill.action_units
@@ -570,7 +521,7 @@ class TeachingCanvas(VBox):
 
     def _set_locked(self, locked: bool) -> None:
         if locked:
-            self._dragging = False
+            self._pointer.cancel()
         self.locked = locked
         for widget in (self.set_button, self.first_entry, self.second_entry, self.entry_mode):
             widget.disabled = locked

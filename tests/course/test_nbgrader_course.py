@@ -98,8 +98,8 @@ def graded(tmp_path_factory):
 
 # -- the sources --------------------------------------------------------------------------------
 
-def test_there_are_eight_assignments_each_worth_ten_autograded_points():
-    assert len(ASSIGNMENTS) == 8
+def test_there_are_nine_assignments_each_worth_ten_autograded_points():
+    assert len(ASSIGNMENTS) == 9
     assert all(auto_points(a) == 10 for a in ASSIGNMENTS)
 
 
@@ -241,6 +241,15 @@ def _expected_values() -> dict[str, list[float]]:
     out["a8_kernel_machine_teaching"] = [ref.smoother_risk(S8, U8, Y8),
                                          ref.smoother_risk(S8, skill.target_actions(skill.query_states(seed=8)), Y8),
                                          *U8.ravel()]
+    reach = SKILLS["ur5-reach"]
+    states9 = reach.query_states(seed=9)
+    Phi9, positions9 = reach.features(states9), reach.end_effector(states9)[0]
+    U9 = 2.0 * (np.array(reach.target.point) - positions9)
+    low = reach.theta.copy()
+    low[2, 3] = 0.8 * -0.15
+    out["a9_industrial_arm"] = [ref.teach_error(Phi9, U9, reach.theta, 0.01),
+                                *ref.optimal_demo(Phi9, reach.theta, 0.01).ravel(),
+                                *ref.stop_report(reach, low)[1]]
     return out
 
 

@@ -284,6 +284,60 @@ def risk(S, U, Y):
     return 0.0
 """}, 7.0),
     ],
+    "a9_industrial_arm": [
+        ("own-actions", "optimal_actions_3d returns the skill's own actions", {"optimal_actions_3d": """
+def optimal_actions_3d(Phi, theta, lam):
+    return np.asarray(Phi) @ np.asarray(theta).T
+"""}, 7.0),
+        ("bias-first", "tool_features with the bias first", {"tool_features": """
+def tool_features(positions, phases=None):
+    positions = np.asarray(positions, dtype=float)
+    columns = [np.ones((len(positions), 1)), positions]
+    if phases is not None:
+        columns.append(np.asarray(phases, dtype=float)[:, None])
+    return np.hstack(columns)
+"""}, 8.0),
+        ("phase-last", "tool_features puts the conveyor's phase after the bias", {"tool_features": """
+def tool_features(positions, phases=None):
+    positions = np.asarray(positions, dtype=float)
+    columns = [positions, np.ones((len(positions), 1))]
+    if phases is not None:
+        columns.append(np.asarray(phases, dtype=float)[:, None])
+    return np.hstack(columns)
+"""}, 9.0),
+        ("pasted", "values pasted, no functions", {
+            **_unwritten("tool_features(positions, phases=None)", "optimal_actions_3d(Phi, theta, lam)",
+                         "teaching_risk_3d(Phi, U, theta, lam)", "stop_report(skill, theta)")}, 0.0),
+        ("solver", "optimal_actions inside optimal_actions_3d", {"optimal_actions_3d": """
+from mt_widgets import optimal_actions
+def optimal_actions_3d(Phi, theta, lam):
+    return optimal_actions(Phi, theta, lam)
+"""}, 7.0),
+        ("closed-form", "the N = S closed form with (Phi^T Phi)^-1", {"optimal_actions_3d": """
+def optimal_actions_3d(Phi, theta, lam):
+    theta = np.asarray(theta)
+    return Phi @ theta.T + lam * Phi @ np.linalg.inv(Phi.T @ Phi) @ theta.T
+"""}, 8.0),
+        ("spectral", "spectral norm for E", {"teaching_risk_3d": """
+def teaching_risk_3d(Phi, U, theta, lam):
+    theta_hat = np.linalg.solve(Phi.T @ Phi + lam * np.eye(Phi.shape[1]), Phi.T @ U).T
+    return float(np.linalg.norm(theta_hat - theta, 2))
+"""}, 8.0),
+        ("stopped-flag", "stop_report says \"stopped\" for any stop, not why", {"stop_report": """
+def stop_report(skill, theta):
+    trajectory = skill.reproduce(theta)
+    return ("stopped" if trajectory.diverged else ""), trajectory.positions[-1]
+"""}, 7.0),
+        ("target-end", "stop_report gives the skill's target, not where the tool stopped", {"stop_report": """
+def stop_report(skill, theta):
+    trajectory = skill.reproduce(theta)
+    return trajectory.stop_reason, np.array(skill.target.point)
+"""}, 7.0),
+        ("zero", "teaching_risk_3d returns 0.0", {"teaching_risk_3d": """
+def teaching_risk_3d(Phi, U, theta, lam):
+    return 0.0
+"""}, 8.0),
+    ],
 }
 
 

@@ -179,9 +179,12 @@ def test_a_whole_episode_ends_in_the_reproduction_played_in_one_batch_with_sleep
     commands = recorder.on(widget.plant_layer)
     sleeps = [args for name, args in commands if name == "sleep"]
     assert len(sleeps) == widget.animation.n_frames - 1
-    assert sleeps[0][0] == pytest.approx(20.0)  # 50 fps
+    assert sleeps[0][0] == pytest.approx(1000.0 / 60, abs=0.01)  # sent at 60 fps
     assert "replays what it learnt" in widget.describe()
-    # Every frame draws the chain in each of the three views: three polylines a frame, batched.
-    lines = [args for name, args in commands if name == "strokeLines"]
-    assert len(lines) >= 3 * widget.animation.n_frames
+    # Every frame draws the chain in each of the three views with one command, and the three hands with another.
+    arms = [args for name, args in commands if name == "strokeLineSegments"]
+    hands = [args for name, args in commands if name == "fillCircles"]
+    # Each frame once, then the final picture: the tool's path and the last frame again.
+    assert len(arms) == widget.animation.n_frames + 2 and len(hands) == widget.animation.n_frames + 1
+    assert all(args[0] == 3 for args in arms)   # three polylines: one per view
     assert len(COMPONENTS) == 3
