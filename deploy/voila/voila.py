@@ -42,6 +42,15 @@ if len(f"{_connection_root}/voila_xxxxxxxx/kernel-{'0' * 36}-ipc-5") > 107:
 c.Voila.connection_dir_root = _connection_root
 c.KernelManager.transport = "ipc"
 
+# --- Online arrivals turned away before a kernel starts ----------------------------------------
+# A link to the online study page that names no usable participant, or a new participant while
+# the server is at capacity ($MT_WIDGETS_STUDY_MAX_PARTICIPANTS, $MT_WIDGETS_STUDY_MIN_FREE_MIB),
+# gets a plain page in words from the server itself: no kernel starts for them (the preheated
+# spare stays for the next participant) and nothing is recorded (deploy/voila/arrival_gate.py).
+import arrival_gate  # noqa: E402 (beside this file, found through the path set above)
+
+arrival_gate.install()
+
 # --- Idle-kernel culling: what the beacon cannot catch -----------------------------------------
 # A tab that vanishes without `beforeunload` (a crashed or killed browser, a phone that
 # discards a background tab, a lost network) leaves a kernel with no page. jupyter_server's

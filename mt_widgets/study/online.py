@@ -27,9 +27,17 @@ who was screened out, who declined and who withdrew)::
     url = "https://app.prolific.com/submissions/complete?cc={code}"
     code = "W1THDR4WN"
 
+    # Optional: where a participant who cannot take part now goes to give their place back.
+    # Prolific asks such a participant to "return" their submission (no payment, no penalty),
+    # which they do on their Prolific submissions page, not on the study's page.
+    return_url = "https://app.prolific.com/submissions"
+
 Every outcome of ``OUTCOMES`` must be given: a participant who ends in a way the protocol
 did not plan for would otherwise be stranded. ``{code}`` (optional) in a URL is replaced by
-the outcome's code; a URL must be ``https://`` (or ``http://localhost`` for a pilot).
+the outcome's code; a URL must be ``https://`` (or ``http://localhost`` for a pilot). The
+``return_url`` is shown, never followed automatically, on the pages that turn a participant away
+before their session starts (the study is busy, the link names no one, the session's window is
+closed) and beside the completion code when a session ends early.
 
 API (for the online participant page)::
 
@@ -102,10 +110,12 @@ class OnlineSettings:
     Attributes:
         identify: "prolific" or "participant".
         completions: {outcome: ``Completion``} for every outcome of ``OUTCOMES``.
+        return_url: where a participant who cannot take part gives their place back (None: not given).
     """
 
     identify: str
     completions: Mapping[str, Completion]
+    return_url: str | None = None
 
     @property
     def id_parameter(self) -> str:
@@ -163,8 +173,11 @@ class OnlineSettings:
         return self.completion(outcome).url
 
     def as_dict(self) -> dict:
-        return {"identify": self.identify,
-                "completion": {k: {"url": c.url_template, "code": c.code} for k, c in self.completions.items()}}
+        table = {"identify": self.identify,
+                 "completion": {k: {"url": c.url_template, "code": c.code} for k, c in self.completions.items()}}
+        if self.return_url is not None:
+            table["return_url"] = self.return_url
+        return table
 
 
 def outcome_of(session) -> str:
@@ -193,7 +206,7 @@ def parse_online(check, raw: dict) -> OnlineSettings | None:
     if "online" not in raw:
         return None
     table = check.get(raw, ("online",), "table")
-    check.unknown(table, ("online",), ("identify", "completion"))
+    check.unknown(table, ("online",), ("identify", "completion", "return_url"))
     identify = check.get(table, ("online", "identify"), "text", choices=tuple(IDENTIFY))
     completion = check.get(table, ("online", "completion"), "table")
     check.unknown(completion, ("online", "completion"), OUTCOMES)
@@ -205,13 +218,20 @@ def parse_online(check, raw: dict) -> OnlineSettings | None:
                              f"session can end ({', '.join(OUTCOMES)}) needs its completion URL")
         entry = check.get(completion, path, "table")
         check.unknown(entry, path, ("url", "code"))
-        url = check.get(entry, path + ("url",), "text", nonempty=True)
-        parts = urlsplit(url)
-        local = parts.scheme == "http" and parts.hostname in ("localhost", "127.0.0.1")
-        if not (parts.scheme == "https" or local) or not parts.netloc:
-            check.fail(path + ("url",), f"expected an https:// URL (or http://localhost for a pilot), got {url!r}")
+        url = _check_url(check, entry, path + ("url",))
         code = check.get(entry, path + ("code",), "text", nonempty=True)
         if not _CODE.match(code):
             check.fail(path + ("code",), f"expected a code of letters, digits, '-' or '_' (at most 64), got {code!r}")
         completions[outcome] = Completion(outcome, url, code)
-    return OnlineSettings(identify, completions)
+    return_url = _check_url(check, table, ("online", "return_url")) if "return_url" in table else None
+    return OnlineSettings(identify, completions, return_url)
+
+
+def _check_url(check, table: dict, path: tuple) -> str:
+    """A URL a participant is sent to: https (a pool's page), or http://localhost for a pilot."""
+    url = check.get(table, path, "text", nonempty=True)
+    parts = urlsplit(url)
+    local = parts.scheme == "http" and parts.hostname in ("localhost", "127.0.0.1")
+    if not (parts.scheme == "https" or local) or not parts.netloc or any(ch in url for ch in "\"'<> \t\n"):
+        check.fail(path, f"expected an https:// URL (or http://localhost for a pilot), got {url!r}")
+    return url

@@ -193,7 +193,7 @@ def stop_animations(widget) -> None:
         stop_animation(node)
 
 
-def retire(widget, keep=None) -> None:
+def retire(widget, keep=None, shown_only: bool = False) -> None:
     """Takes a widget tree off the page for good: stops its animations now, and closes every widget
     it owns (``tree.widget_tree``: layouts, styles and off-page parts included) once the browser has
     played what was already sent (closing earlier would leave queued commands pointing at a closed
@@ -203,7 +203,11 @@ def retire(widget, keep=None) -> None:
         widget: the view leaving the page.
         keep: the page that stays, or None: a widget it shows when the close comes (a part the page
             moved into its new view) stays open.
+        shown_only: close only what ``widget`` shows (children, layouts, styles), never what its
+            attributes hold: for a screen of text and buttons, whose attributes may reach the page.
     """
+    if not isinstance(shown_only, bool):
+        raise TypeError(f"shown_only: expected a bool, got {type(shown_only).__name__}")
     for node in _canvases(widget):
         stop_animation(node)
 
@@ -211,7 +215,7 @@ def retire(widget, keep=None) -> None:
         # Walked here, not when the view leaves: the walk costs tens of milliseconds that the page's
         # answer to the click that replaced the view should not wait for.
         kept = {id(node) for node in widget_tree(keep, shown_only=True)} if keep is not None else set()
-        for node in list(widget_tree(widget)):
+        for node in list(widget_tree(widget, shown_only=shown_only)):
             if id(node) not in kept:
                 node.close()
 

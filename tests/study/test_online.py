@@ -99,6 +99,25 @@ def test_a_bad_online_table_is_refused_naming_the_field(change, message):
         online_protocol(ONLINE.replace(*change))
 
 
+RETURN = 'identify = "prolific"\nreturn_url = "https://app.prolific.com/submissions"'
+
+
+def test_the_return_url_is_optional_and_read_back():
+    assert online_protocol().online.return_url is None
+    online = online_protocol(ONLINE.replace('identify = "prolific"', RETURN)).online
+    assert online.return_url == "https://app.prolific.com/submissions"
+    assert online.as_dict()["return_url"] == online.return_url
+    assert "return_url" not in online_protocol().online.as_dict()
+
+
+@pytest.mark.parametrize("url", ["http://app.prolific.com/submissions", "javascript:alert(1)", "https://",
+                                 "app.prolific.com/submissions", "https://a.org/x' onclick='y", ""])
+def test_a_return_url_that_is_not_https_is_refused_naming_the_field(url):
+    with pytest.raises(ProtocolError, match=r"online.return_url: (expected an https:// URL|expected)") as caught:
+        online_protocol(ONLINE.replace('identify = "prolific"', f'identify = "prolific"\nreturn_url = "{url}"'))
+    assert caught.value.field == "online.return_url"
+
+
 def test_every_outcome_needs_its_url():
     text = ONLINE.split("[online.completion.withdrawn]")[0]
     with pytest.raises(ProtocolError, match="online.completion.withdrawn: missing required table"):

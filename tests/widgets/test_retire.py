@@ -1,8 +1,9 @@
 """A view leaving the page for good closes every widget it owns, and nothing it does not own:
 a study of twelve episodes kept about 1,760 widgets open in the kernel and the browser."""
 
+import pytest
 from ipycanvas import Canvas
-from ipywidgets import HTML, VBox, Widget
+from ipywidgets import HTML, Button, VBox, Widget
 
 from mt_widgets import SKILLS
 from mt_widgets.widgets import EpisodeWidget, retire
@@ -39,3 +40,15 @@ def test_retire_closes_what_the_view_owns_and_keeps_what_the_page_shows_and_the_
     assert is_open(moved) and is_open(page)
     assert is_open(Canvas()._canvas_manager)
     Canvas()   # a new canvas still opens (its manager is open)
+
+
+def test_retiring_only_what_a_screen_shows_leaves_what_its_attributes_reach_open():
+    held = Button(description="held by an attribute, shown elsewhere")
+    text = HTML("a screen's text")
+    screen = VBox([text])
+    screen.page_part = held       # an attribute of the screen: not the screen's to close
+    retire(screen, shown_only=True)
+    assert not is_open(screen) and not is_open(text) and not is_open(text.style) and not is_open(screen.layout)
+    assert is_open(held) and is_open(held.layout)
+    with pytest.raises(TypeError, match="shown_only: expected a bool"):
+        retire(VBox(), shown_only=1)

@@ -6,7 +6,8 @@ A participant of a pool such as Prolific opens the page with their ID in the URL
 
 - refuses an unusable ID with a message meant for the participant, and writes nothing;
 - turns a new arrival away in words while the server is at its configured capacity
-  (``capacity.py``: participants taking part, free memory), and writes nothing;
+  (``capacity.py``: participants taking part, free memory), and writes nothing (both decided by
+  ``arrival.py``, which the shipped server also runs before any kernel starts);
 - calls ``Session.arrive``: a new ID is enrolled and randomised by the protocol's rule (no
   group can be chosen from a URL), an enrolled one resumes where their log stops (a reload is
   a new kernel, and the same URL), a returning one gets their next session in its window;
@@ -29,9 +30,10 @@ from urllib.parse import parse_qs
 
 from ipywidgets import HTML, VBox
 
-from mt_widgets.study import LogError, ParticipantIdError, Session, StudyFolder, load_protocol
+from mt_widgets.study import LogError, Session, StudyFolder, load_protocol
 from mt_widgets.study.online import outcome_of
 
+from .arrival import arrival_or_refusal, return_link_html, turned_away_html
 from .capacity import Capacity
 from .navigation import go_to
 from .participant import ParticipantView
@@ -86,19 +88,14 @@ class OnlineStudyPage(VBox):
             raise ValueError(f"protocol: expected a protocol with an [online] table (completion URLs and codes, "
                              f"which URL parameters identify a participant), got {protocol.name!r} without one")
         self.online = protocol.online
-        try:
-            arrival = self.online.participant_from_url(parse_query(query))
-        except ParticipantIdError as error:
-            # The participant's words say what is wrong; the parameter's name comes first.
-            words = str(error).split(": ", 1)[-1]
-            self.children = [_message(words[:1].upper() + words[1:])]
-            return
-        busy = (Capacity.from_environment() if capacity is None else capacity).busy(log_folder,
-                                                                                   arrival.participant_id)
-        if busy is not None:
-            # Full: a page that says so and when to come back, and nothing written for them.
-            self.children = [_message(busy, "status")]
-            self.add_class("mt-study-busy")
+        capacity = Capacity.from_environment() if capacity is None else capacity
+        arrival, turned = arrival_or_refusal(self.online, log_folder, parse_query(query), capacity)
+        if turned is not None:
+            # An unusable link, or a new arrival while the server is full: words, and nothing written.
+            # (The shipped server turns them away before this kernel even starts: arrival.py.)
+            self.children = [HTML(turned_away_html(turned))]
+            if turned.busy:
+                self.add_class("mt-study-busy")
             return
         study = StudyFolder.create(log_folder, protocol)
         try:
@@ -119,7 +116,8 @@ class OnlineStudyPage(VBox):
             self.completion = self.online.completion(left["outcome"])
             return [_message("You have already left this study; nothing more will be recorded.", "status"),
                     self._goodbye()]
-        return [_message(getattr(error, "message", None) or str(error).split(": ", 1)[-1])]
+        words = getattr(error, "message", None) or str(error).split(": ", 1)[-1]
+        return [_message(words), HTML(return_link_html(self.online.return_url))]
 
     def _ended(self, session: Session) -> None:
         self.completion = self.online.completion(outcome_of(session))

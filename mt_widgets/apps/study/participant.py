@@ -24,7 +24,7 @@ from ipywidgets import HTML, Button, HBox, Layout, VBox
 
 from mt_widgets.study import Session
 from mt_widgets.study.log import ContinuedElsewhereError
-from mt_widgets.widgets import EpisodeWidget, retire
+from mt_widgets.widgets import EpisodeWidget, TeachingCanvas, retire
 
 from .controls import Choice
 from .episode_step import EpisodeStep, build_episode
@@ -79,6 +79,11 @@ class ParticipantView(VBox):
         self.withdraw_button.on_click(self._withdraw_pressed)
         self.withdraw_box = VBox([self.withdraw_button])
         self.children = [self.heading, self.body, self.withdraw_box]
+        # What leaves the body or the withdraw box leaves the page for good (a screen's text and
+        # buttons, a form, a video, an episode's instructions, the practice's buttons): closed, or a
+        # one-hour protocol leaves nine widgets open per phase screen (tests/study/test_long_session.py).
+        self.body.observe(self._retire_left, names="children")
+        self.withdraw_box.observe(self._retire_left, names="children")
 
     def begin(self, session: Session) -> None:
         self.session = session
@@ -106,6 +111,17 @@ class ParticipantView(VBox):
         """
         if episode is not None and episode is not self.episode:
             retire(episode, keep=self)
+
+    def _retire_left(self, change) -> None:
+        staying = {id(child) for child in change["new"]}
+        for child in change["old"]:
+            if id(child) in staying or child is self.withdraw_button:  # it comes back after "No, continue"
+                continue
+            if isinstance(child, (EpisodeWidget, TeachingCanvas)):
+                continue  # a canvas view: ``retire_replaced`` closes it once its replacement is drawn
+            # Only what the screen shows (its children, layouts and styles), never what its
+            # attributes reach: a walk of those could reach parts the page still shows.
+            retire(child, keep=self, shown_only=True)
 
     def safely(self, action, reraise: bool = False) -> None:
         """Runs a participant action; any error stops the participant flow (``stop_for_experimenter``).
@@ -191,12 +207,7 @@ class ParticipantView(VBox):
         elif in_episode:
             key = (step.phase_index, step.episode)
             if self._episode_step is None or self._episode_step.key != key:
-                left = self._episode_step
                 self._episode_step = EpisodeStep(self, step)
-                if left is not None:
-                    # Its phase's instructions (a widget of their own beside the episode) leave
-                    # with it: kept open, three widgets stayed per episode.
-                    retire(left.instructions, keep=self)
             if self.session.current_step().kind == "reproduction":
                 self._episode_step.show_reproduction_controls()
         self.retire_replaced(shown)
