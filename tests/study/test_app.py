@@ -11,7 +11,7 @@ import pytest
 from ipywidgets import Button
 from ipywidgets.widgets.widget import _instances
 
-from blinding_support import participant_texts, without_scripts
+from blinding_support import participant_texts
 from mt_widgets import SKILLS
 from mt_widgets.apps import StudyApp
 from mt_widgets.study import LogError, SessionStateError, read_events
@@ -40,7 +40,7 @@ def test_nothing_the_participant_view_holds_names_a_group(tmp_path, protocol_fil
     assert app.children == (app.participant_view,)  # the experimenter panel has left the page
     guidance_seen = False
     while not app.session.finished:
-        texts = without_scripts(" ".join(participant_texts(app)))
+        texts = " ".join(participant_texts(app))
         assert not WORDS.search(texts), WORDS.search(texts).group(0)
         step = app.session.current_step()
         if GUIDANCE_WORDS.search(texts):
@@ -49,7 +49,7 @@ def test_nothing_the_participant_view_holds_names_a_group(tmp_path, protocol_fil
             guidance_seen = True
         act(app)
     assert guidance_seen == (group == "target")
-    assert not WORDS.search(without_scripts(" ".join(participant_texts(app))))
+    assert not WORDS.search(" ".join(participant_texts(app)))
     events, _ = read_events(tmp_path / "logs" / "P01.jsonl")
     assert events[-1]["type"] == "session_finished"
 
