@@ -214,7 +214,7 @@ def test_every_button_of_the_study_path_pressed_twice_acts_once(tmp_path):
         step = app.session.current_step()
         before = len(app.session.events)
         if step.kind == "video":
-            app.video.ended_button.click()
+            app.video.player._handle_custom_msg({"event": "ended", "whole": True}, [])
             double_press(app.video.continue_button)
         elif step.kind == "demographics":
             app.form.fields["age"].value = "30"
@@ -274,7 +274,7 @@ def test_form_problems_are_said_in_plain_words_and_nothing_is_logged(tmp_path):
     while app.session.current_step().kind != "demographics":
         step = app.session.current_step()
         if step.kind == "video":
-            app.video.ended_button.click()
+            app.video.player._handle_custom_msg({"event": "ended", "whole": True}, [])
             app.video.continue_button.click()
         else:
             [b for b in buttons_in(app.body) if b.button_style == "primary"][0].click()
@@ -299,11 +299,11 @@ def test_a_video_scrubbed_to_its_end_does_not_count_as_watched(tmp_path):
     app.start_participant("P01")
     click_primary(app)  # welcome
     video = app.video
-    video.played_button.click()
-    video.skipped_button.click()  # the player reached its end by seeking
+    video.player._handle_custom_msg({"event": "played"}, [])
+    video.player._handle_custom_msg({"event": "ended", "whole": False}, [])  # the player reached its end by seeking
     assert video.continue_button.disabled and not video.watched_to_end
     assert "skipped ahead" in video.note.value
-    video.ended_button.click()  # played through
+    video.player._handle_custom_msg({"event": "ended", "whole": True}, [])  # played through
     assert not video.continue_button.disabled
     video.continue_button.click()
     done = [e for e in app.session.events if e["type"] == "step_done"][-1]
