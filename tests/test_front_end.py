@@ -89,3 +89,13 @@ def test_no_widget_of_a_page_carries_a_script(pages):
     assert texts and any("Teaching effort" in text for text in texts)
     found = [text[:200] for text in texts if INJECTED.search(text)]
     assert not found, found
+
+
+def test_the_front_ends_name_no_study_word():
+    # A participant's browser receives every front end's source (the widgets' state): like the page's
+    # words, it names no group (tests/study/test_app.py checks the words).
+    words = re.compile(r"\b(target|control|group|groups|condition)\b", re.IGNORECASE)
+    sources = [path for path in (REPO / "mt_widgets").rglob("*") if path.suffix in (".js", ".css")]
+    assert len(sources) >= 4
+    found = {path.name: words.findall(path.read_text()) for path in sources if words.search(path.read_text())}
+    assert not found, found

@@ -56,7 +56,7 @@ function pageAccess() {
       if (!passing) event.stopImmediatePropagation();
     }, { capture: true, passive: true });
   }
-  // Tab and Shift+Tab move focus on, as on any control (ipycanvas would keep it on the canvas).
+  // Tab and Shift+Tab move focus on, as anywhere else (ipycanvas would keep it on the canvas).
   document.addEventListener("keydown", (event) => {
     if (event.key === "Tab" && ours(event)) event.stopImmediatePropagation();
   }, true);

@@ -1,6 +1,6 @@
 """The teaching canvas for fingers, the keyboard and screen readers: what the browser must do.
 
-(The script names no study word such as "target": a blinded participant's page is checked for
+(The front end names no study word such as "target": a blinded participant's page is checked for
 them, tests/study/test_app.py.)
 
 ipycanvas' front end (0.14, ``src/widget.ts``) makes its canvas element focusable and then, on

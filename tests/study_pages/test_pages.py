@@ -35,7 +35,7 @@ def page_addresses(page, action: str) -> list[str]:
 
     def walk(node):
         if isinstance(node, PageAddress) and node.action == action:
-            found.append(node.target)
+            found.append(node.address)
         for child in getattr(node, "children", ()) or ():
             walk(child)
 

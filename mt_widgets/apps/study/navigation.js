@@ -3,14 +3,14 @@
 
 function render({ model, el }) {
   el.replaceChildren();
-  const target = model.get("target");
+  const address = model.get("address");
   if (model.get("action") === "go") {
     // Send the page on (a completion URL), after the delay the goodbye text needs to be read.
-    const timer = setTimeout(() => window.location.assign(target), model.get("delay_ms"));
+    const timer = setTimeout(() => window.location.assign(address), model.get("delay_ms"));
     return () => clearTimeout(timer);
   }
   // Only record where the participant is: a reload asks the server for the same page with this query.
-  history.replaceState(null, "", window.location.pathname + target);
+  history.replaceState(null, "", window.location.pathname + address);
 }
 
 export default { render };

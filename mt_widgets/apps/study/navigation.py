@@ -20,15 +20,15 @@ class PageAddress(anywidget.AnyWidget):
     """A hidden widget that, once shown, changes the page's address (``go_to``, ``set_address_query``)."""
 
     _esm = Path(__file__).parent / "navigation.js"
-    #: "go": the page goes to ``target`` (a URL); "query": ``target`` (``?...``) replaces the
-    #: address's query, without navigating.
+    #: "go": the page goes to ``address`` (a URL); "query": ``address`` (``?...``) replaces the
+    #: page's query, without navigating.
     action = traitlets.Enum(("go", "query"), default_value="go").tag(sync=True)
-    target = traitlets.Unicode("").tag(sync=True)
+    address = traitlets.Unicode("").tag(sync=True)
     #: How long the page waits before it goes, in milliseconds.
     delay_ms = traitlets.Int(0, min=0).tag(sync=True)
 
-    def __init__(self, action: str, target: str, delay_ms: int = 0):
-        super().__init__(action=action, target=target, delay_ms=delay_ms, layout=Layout(display="none"))
+    def __init__(self, action: str, address: str, delay_ms: int = 0):
+        super().__init__(action=action, address=address, delay_ms=delay_ms, layout=Layout(display="none"))
 
 
 def go_to(url: str, delay_s: float = 0.0) -> PageAddress:
