@@ -31,7 +31,8 @@ def test_shipped_configuration_culls_idle_unconnected_kernels_and_preheats_only_
     # The widgets' extensions stay; the unused ones go.
     denied = config.VoilaConfiguration.extension_denylist
     assert "@jupyter/nbgrader" in denied and "@jupyter-notebook/lab-extension" in denied
-    assert not {"@jupyter-widgets/jupyterlab-manager", "ipycanvas", "@voila-dashboards/widgets-manager8"} & set(denied)
+    widgets = {"@jupyter-widgets/jupyterlab-manager", "ipycanvas", "anywidget", "@voila-dashboards/widgets-manager8"}
+    assert not widgets & set(denied)
     assert config.VoilaConfiguration.preheat_kernel is True
     # The server's own logger at INFO (its debug calls cost CPU on every relayed widget message),
     # under the name Voila's application logs with.

@@ -105,7 +105,8 @@ c.VoilaKernelManager.fill_delay = 3.0
 # manager: three of them have nothing to do on these pages (nbgrader's and Jupyter Notebook's
 # Lab extensions, the pygments theme for code, which Voila strips), about 12 requests and
 # 0.2 MB of scripts to fetch and run before the first widget. The widgets' own
-# (@jupyter-widgets/jupyterlab-manager, ipycanvas, Voila's widgets manager) stay.
+# (@jupyter-widgets/jupyterlab-manager, ipycanvas, anywidget: the canvas's accessibility layer and
+# the study pages' navigation, Voila's widgets manager) stay.
 c.VoilaConfiguration.extension_denylist = ["@jupyter/nbgrader", "@jupyter-notebook/lab-extension",
                                            "jupyterlab_pygments"]
 

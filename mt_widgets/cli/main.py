@@ -9,6 +9,7 @@ from pathlib import Path
 import mt_widgets
 from mt_widgets.classroom.progress import ClassFolderError
 from mt_widgets.classroom.roster import RosterError
+from mt_widgets.study.erasure import erase_participant
 from mt_widgets.study.jsonl import LogError
 
 from . import classroom, servers, study
@@ -78,6 +79,14 @@ def build_parser() -> argparse.ArgumentParser:
     withdraw.add_argument("folder", help="the study folder")
     withdraw.add_argument("participant", help="the participant's ID")
     withdraw.add_argument("--reason", default="", help="why, in the participant's words (optional)")
+    erase = study_commands.add_parser(
+        "erase", help="answer a participant's erasure request: remove their data, say what is kept",
+        description="Erases PARTICIPANT from the study folder (mt_widgets/study/erasure.py): their logs, "
+        "their ID in the enrolment and outcome records, their pseudonym and the tidy CSVs' rows; keeps "
+        "a keyed hash of the ID and how they ended (the pool's payment, the proof of the answer). "
+        "Prints the report to send back. Exits 1, changing nothing, on an ID the study does not hold.")
+    erase.add_argument("folder", help="the study folder")
+    erase.add_argument("participant", help="the ID the study knows them by (online: their Prolific ID), exactly")
 
     course = commands.add_parser("course", help="check a class folder", description="The course's checks.")
     course_commands = course.add_subparsers(dest="course_command", required=True, metavar="ACTION")
@@ -132,6 +141,8 @@ def run(args: argparse.Namespace, server_args: list[str]) -> int:
         elif args.study_command == "withdraw":
             record = study.withdraw(args.folder, args.participant, args.reason)
             print(f"{args.participant}: withdrawn (data: {record['data']})")
+        elif args.study_command == "erase":
+            print(erase_participant(args.folder, args.participant))
         return 0
     if args.command == "course":
         report, fine = classroom.course_check(args.class_folder, args.roster)

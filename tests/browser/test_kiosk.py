@@ -95,7 +95,8 @@ def test_voila_runs_the_shipped_culler_and_accepts_a_pages_shutdown_beacon(tmp_p
         config = json.loads(re.search(r'<script id="jupyter-config-data" type="application/json">(.*?)</script>',
                                       html, re.S).group(1))
         loaded = {extension["name"] for extension in config["federated_extensions"]}
-        assert {"@jupyter-widgets/jupyterlab-manager", "ipycanvas", "@voila-dashboards/widgets-manager8"} <= loaded
+        assert {"@jupyter-widgets/jupyterlab-manager", "ipycanvas", "anywidget",
+                "@voila-dashboards/widgets-manager8"} <= loaded
         assert not loaded & {"@jupyter/nbgrader", "@jupyter-notebook/lab-extension", "jupyterlab_pygments"}, loaded
     finally:
         server.stop()

@@ -3,7 +3,18 @@
 import numpy as np
 import pytest
 
-from .helpers import OKABE, ee_pixel, reference_episode, to_canvas, to_page, wait_for_color, wait_for_status
+from .helpers import (
+    OKABE,
+    ax_names,
+    ee_pixel,
+    reference_episode,
+    to_canvas,
+    to_page,
+    touch_context,
+    touch_drag,
+    wait_for_color,
+    wait_for_status,
+)
 
 pytestmark = pytest.mark.browser
 
@@ -85,3 +96,76 @@ def test_lab_keyboard_entry_draws_the_arrow_and_enter_confirms_it_without_lab_ta
     # Lab did not act on the keys: still one cell, in command mode, the notebook unchanged.
     assert page.locator(".jp-Notebook .jp-Cell").count() == 1
     assert page.locator(".jp-mod-editMode").count() == 0
+
+
+def canvas_access(page) -> dict:
+    """What the canvas's accessibility layer (widgets/canvas_access.js) set on the first canvas."""
+    return page.evaluate("""() => { const c = document.querySelector('canvas');
+        const words = [...document.querySelectorAll('[aria-live="polite"]')].map(e => e.textContent);
+        return {role: c.getAttribute('role'), label: c.getAttribute('aria-label') || '',
+                live: words.filter(w => w.startsWith('Teaching canvas')),
+                focused: document.activeElement === c}; }""")
+
+
+def test_lab_names_the_canvas_lets_tab_leave_it_and_scrolls_on_a_touch_away_from_the_hand(browser, lab_server,
+                                                                                          artifacts):
+    # The accessibility layer is an anywidget front end: in Lab as in Voila, and again after a reload.
+    context, page = touch_context(browser, 1280, 900)
+    try:
+        reference = reference_episode()
+        ee = ee_pixel(reference)
+        run_all(page, lab_server, ee)
+        page.locator("canvas").first.scroll_into_view_if_needed()
+        page.wait_for_function("() => document.querySelector('canvas').getAttribute('role') === 'application'")
+        access = canvas_access(page)
+        assert access["label"].startswith("Teaching canvas, state 1 of 5"), access
+        assert access["live"] == [access["label"]], access                   # the same words, read out on change
+        assert any(name.startswith("Teaching canvas, state 1 of 5") for name in ax_names(page))
+
+        # A finger from the hand draws; one away from it reaches neither ipycanvas nor the kernel.
+        page.evaluate("""() => { window.mtTouches = [];
+            window.addEventListener('touchstart', e => setTimeout(() => window.mtTouches.push(e.defaultPrevented)),
+                                    true); }""")
+        end = tuple(float(round(v)) for v in to_page(page, 0, ee[0] - 50, ee[1] + 35))
+        touch_drag(page, to_page(page, 0, *ee), end)
+        page.wait_for_function("() => window.mtTouches.length == 1")
+        assert page.evaluate("window.mtTouches") == [True]                    # ipycanvas took this one
+        origin = reference.skill.end_effector(reference.query_states[:1])[0][0]
+        view = reference.teaching.view
+        expected = view.transform.action_from_drag(origin, to_canvas(page, 0, *end))
+        one_pixel = 1.0 / view.transform.pixels_per_action
+        wait_for_status(page, f"s.pending !== null && Math.abs(s.pending[0] - {expected[0]}) < {one_pixel}"
+                              f" && Math.abs(s.pending[1] - {expected[1]}) < {one_pixel}")
+        far = to_page(page, 0, 40, 40)
+        touch_drag(page, far, (far[0] + 60, far[1] + 80))
+        page.wait_for_function("() => window.mtTouches.length == 2")
+        assert page.evaluate("window.mtTouches") == [True, False]
+        page.wait_for_function("() => (document.querySelector('canvas').getAttribute('aria-label') || '')"
+                               ".includes('Your arrow')")
+        assert "Your arrow" in canvas_access(page)["live"][0]
+        page.screenshot(path=artifacts("touched"))
+
+        # Tab onto the canvas and off it again: ipycanvas alone would keep the focus.
+        page.locator("canvas").first.focus()
+        assert canvas_access(page)["focused"]
+        page.keyboard.press("Tab")
+        assert not canvas_access(page)["focused"]
+        page.keyboard.press("Shift+Tab")
+        assert canvas_access(page)["focused"]
+
+        # A reload with the kernel running: the new page's views are named again.
+        page.locator(".lm-MenuBar-itemLabel", has_text="File").first.click()
+        page.get_by_text("Save Notebook", exact=True).first.click()
+        page.wait_for_function("() => !document.querySelector('.jp-mod-dirty')", timeout=10_000)
+        page.reload()
+        page.wait_for_selector("canvas", timeout=60_000)
+        page.wait_for_function("() => (document.querySelector('canvas').getAttribute('aria-label') || '')"
+                               ".includes('Your arrow')", timeout=60_000)
+        assert canvas_access(page)["role"] == "application"
+        page.screenshot(path=artifacts("reloaded"))
+    finally:
+        api = context.request
+        headers = {"Authorization": f"token {lab_server.token}"}
+        for session in api.get(lab_server.url("/api/sessions"), headers=headers).json():
+            api.delete(lab_server.url(f"/api/sessions/{session['id']}"), headers=headers)
+        context.close()

@@ -101,7 +101,7 @@ def steps_before_the_task(page, participant, replay: bool, shot):
         page.wait_for_function("v => v.currentTime > 0 && !v.paused", arg=video.element_handle(), timeout=10_000)
         video.evaluate("v => { v.playbackRate = 4; }")
         page.wait_for_function("v => v.ended", arg=video.element_handle(), timeout=30_000)
-        time.sleep(0.5)  # the "ended" click travels to the kernel
+        time.sleep(0.5)  # the player's "ended" message travels to the kernel
     button(page, "Continue").click()
     page.get_by_text("Information sheet").wait_for()
     if shot:

@@ -24,7 +24,7 @@ from tests.study.scripted import STEPS, run_to_end, run_to_end_one, steps_protoc
 
 REPO = Path(__file__).resolve().parents[2]
 SUBCOMMANDS = [[], ["lab"], ["demo"], ["study"], ["study", "serve"], ["study", "status"], ["study", "export"],
-               ["study", "withdraw"], ["course"], ["course", "check"], ["hub"], ["hub", "check"]]
+               ["study", "withdraw"], ["study", "erase"], ["course"], ["course", "check"], ["hub"], ["hub", "check"]]
 
 
 @pytest.mark.parametrize("words", SUBCOMMANDS, ids=lambda words: " ".join(words) or "mt-widgets")
@@ -49,6 +49,8 @@ def test_version(capsys):
     (["study"], "required: ACTION"),
     (["study", "status"], "required: folder"),
     (["study", "withdraw", "somewhere"], "required: participant"),
+    (["study", "erase", "somewhere"], "required: participant"),
+    (["study", "erase", "f", "P01", "P02"], "unrecognized arguments: P02"),
     (["demo", "--port", "eighty"], "expected a port number, got 'eighty'"),
     (["demo", "--port", "70000"], "expected a port from 1 to 65535, got 70000"),
     (["lab", "a", "b"], "unrecognized arguments: b"),
@@ -116,6 +118,23 @@ def test_study_withdraw_deletes_the_log_when_the_protocol_says_so(tmp_path, caps
     assert study.log_path("P01").exists()
     assert main(["study", "withdraw", str(study.folder), "P01"]) == 0
     assert not study.log_path("P01").exists() and study.outcomes()["P01"]["data"] == "delete"
+
+
+def test_study_erase_answers_the_request_and_refuses_an_unknown_id(study, capsys):
+    assert main(["study", "erase", str(study.folder), "p02"]) == 1  # IDs match exactly: nothing changed
+    err = capsys.readouterr().err
+    assert err.startswith("mt-widgets: participant_id: 'p02' is not enrolled") and "did you mean 'P02'?" in err
+    assert study.log_path("P02").exists()
+    assert main(["study", "erase", str(study.folder), "P02"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("Erased participant 'P02'.") and "Kept:" in out
+    assert not study.log_path("P02").exists()
+    assert "P02" not in {row["participant"] for row in study.status()}
+    assert "P02" not in (study.folder / "_enrolment.jsonl").read_text()
+    assert main(["study", "erase", str(study.folder), "P02"]) == 1  # once only
+    assert "was erased from study" in capsys.readouterr().err
+    assert main(["study", "erase", str(study.folder.parent / "elsewhere"), "P01"]) == 1
+    assert "holds no study.json" in capsys.readouterr().err
 
 
 @pytest.fixture

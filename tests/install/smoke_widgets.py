@@ -29,6 +29,11 @@ assert "fillCircle" in sent and "fillText" in sent, f"the canvas drew nothing re
 state = teach.get_state()
 assert state["children"], "the widget has its canvas and readouts"
 
+# The canvas's accessibility layer is an anywidget whose ES module and style sheet come from the wheel.
+front = teach.description.get_state()
+assert "export default" in front["_esm"] and ".mt-visually-hidden" in front["_css"], sorted(front)
+assert front["canvas_class"] in teach.view.canvas._dom_classes
+
 episode = EpisodeWidget("sim-point")
 assert episode._repr_mimebundle_()["application/vnd.jupyter.widget-view+json"]["model_id"] == episode.model_id
 print(f"widgets: {len(sent)} canvas commands, {len(state['children'])} children")

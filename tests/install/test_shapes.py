@@ -63,7 +63,10 @@ def test_the_sdist_and_the_wheel_hold_the_package_and_its_data(distributions):
     with tarfile.open(sdist) as archive:
         in_sdist = {name.split("/", 1)[1] for name in archive.getnames() if "/" in name}
     for path in ("mt_widgets/core/ridge_kernels.py", "mt_widgets/study/protocols/paper_sim.toml",
-                 "mt_widgets/analysis/data/synthetic-sim/study.json"):
+                 "mt_widgets/analysis/data/synthetic-sim/study.json",
+                 # The widgets' front ends (anywidget ES modules and a style sheet).
+                 "mt_widgets/widgets/canvas_access.js", "mt_widgets/widgets/canvas_access.css",
+                 "mt_widgets/apps/study/navigation.js"):
         assert path in in_wheel and path in in_sdist, path
     assert {"pyproject.toml", "LICENSE"} <= in_sdist
     assert not any(name.startswith(("tests/", "notebooks/")) for name in in_wheel)

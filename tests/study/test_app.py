@@ -10,7 +10,7 @@ import pytest
 from ipywidgets import Button
 from ipywidgets.widgets.widget import _instances
 
-from blinding_support import participant_texts, without_scripts
+from blinding_support import participant_texts
 from mt_widgets import SKILLS
 from mt_widgets.apps import StudyApp
 from mt_widgets.study import LogError, SessionStateError, read_events
@@ -39,7 +39,7 @@ def test_nothing_the_participant_view_holds_names_a_group(tmp_path, protocol_fil
     assert app.children == (app.participant_view,)  # the experimenter panel has left the page
     guidance_seen = False
     while not app.session.finished:
-        texts = without_scripts(" ".join(participant_texts(app)))
+        texts = " ".join(participant_texts(app))
         assert not WORDS.search(texts), WORDS.search(texts).group(0)
         step = app.session.current_step()
         if GUIDANCE_WORDS.search(texts):
@@ -48,7 +48,7 @@ def test_nothing_the_participant_view_holds_names_a_group(tmp_path, protocol_fil
             guidance_seen = True
         act(app)
     assert guidance_seen == (group == "target")
-    assert not WORDS.search(without_scripts(" ".join(participant_texts(app))))
+    assert not WORDS.search(" ".join(participant_texts(app)))
     events, _ = read_events(tmp_path / "logs" / "P01.jsonl")
     assert events[-1]["type"] == "session_finished"
 
@@ -213,7 +213,7 @@ def test_every_button_of_the_study_path_pressed_twice_acts_once(tmp_path):
         step = app.session.current_step()
         before = len(app.session.events)
         if step.kind == "video":
-            app.video.ended_button.click()
+            app.video.player._handle_custom_msg({"event": "ended", "whole": True}, [])
             double_press(app.video.continue_button)
         elif step.kind == "demographics":
             app.form.fields["age"].value = "30"
@@ -273,7 +273,7 @@ def test_form_problems_are_said_in_plain_words_and_nothing_is_logged(tmp_path):
     while app.session.current_step().kind != "demographics":
         step = app.session.current_step()
         if step.kind == "video":
-            app.video.ended_button.click()
+            app.video.player._handle_custom_msg({"event": "ended", "whole": True}, [])
             app.video.continue_button.click()
         else:
             [b for b in buttons_in(app.body) if b.button_style == "primary"][0].click()
@@ -298,11 +298,11 @@ def test_a_video_scrubbed_to_its_end_does_not_count_as_watched(tmp_path):
     app.start_participant("P01")
     click_primary(app)  # welcome
     video = app.video
-    video.played_button.click()
-    video.skipped_button.click()  # the player reached its end by seeking
+    video.player._handle_custom_msg({"event": "played"}, [])
+    video.player._handle_custom_msg({"event": "ended", "whole": False}, [])  # the player reached its end by seeking
     assert video.continue_button.disabled and not video.watched_to_end
     assert "skipped ahead" in video.note.value
-    video.ended_button.click()  # played through
+    video.player._handle_custom_msg({"event": "ended", "whole": True}, [])  # played through
     assert not video.continue_button.disabled
     video.continue_button.click()
     done = [e for e in app.session.events if e["type"] == "step_done"][-1]

@@ -48,7 +48,7 @@ def _act(view: ParticipantView) -> None:
     """One participant action through the page's widgets."""
     step = view.session.current_step()
     if step.kind == "video":
-        view.video.ended_button.click()
+        view.video.player._handle_custom_msg({"event": "ended", "whole": True}, [])
         view.video.continue_button.click()
     elif step.kind in ("eligibility", "demographics", "questionnaire"):
         for item in step.study_step.items:

@@ -71,10 +71,10 @@ def test_grab_zones_follow_the_hand_and_the_tip_and_vanish_when_locked(episode, 
     teaching.set_action([1.0, 0.5])
     assert len(teaching.description.grab_zones) == 2            # the tip can be dragged too
     teaching.confirm()                                          # guidance: locked
-    assert teaching.description.grab_zones == ()
-    assert 'data-mt-grab=""' in teaching.description.value
-    # The canvas element is linked to its description by a class.
+    assert teaching.description.grab_zones == []
+    # The canvas element is linked to its description by a class, which its front end is given.
     assert CANVAS_CLASS_PREFIX + teaching.description.token in teaching.view.canvas._dom_classes
+    assert teaching.description.canvas_class == CANVAS_CLASS_PREFIX + teaching.description.token
 
 
 def test_enter_on_the_canvas_confirms_then_goes_on_like_next_state(episode, recorder):

@@ -1,34 +1,42 @@
 """The page's address: send the participant on (a completion URL), or record where they are.
 
-A Voila page runs no code sent from the kernel, and ipywidgets have no navigation widget; an
-HTML widget's markup is inserted as it is, so an image that fails to load (``src="data:,"``)
-runs its ``onerror`` handler once, in the page, when the widget is shown (also when a page
-shows it again). That is the one browser action the study pages need, kept here.
+A Voila page runs no code sent from the kernel, and ipywidgets have no navigation widget: the one
+browser action the study pages need is this widget's front end (an anywidget ES module,
+``navigation.js`` beside this file). It acts once each time the widget is shown (also when a page
+shows it again), so a page shows it only when the address is to change.
 """
 
 from __future__ import annotations
 
-import html
-import json
+from pathlib import Path
 from urllib.parse import urlencode
 
-from ipywidgets import HTML, Layout
+import anywidget
+import traitlets
+from ipywidgets import Layout
 
 
-def _script(code: str) -> HTML:
-    handler = html.escape(f"this.remove();{code}", quote=True)
-    return HTML(f"<img src='data:,' alt='' style='display:none' onerror=\"{handler}\">",
-                layout=Layout(display="none"))
+class PageAddress(anywidget.AnyWidget):
+    """A hidden widget that, once shown, changes the page's address (``go_to``, ``set_address_query``)."""
+
+    _esm = Path(__file__).parent / "navigation.js"
+    #: "go": the page goes to ``address`` (a URL); "query": ``address`` (``?...``) replaces the
+    #: page's query, without navigating.
+    action = traitlets.Enum(("go", "query"), default_value="go").tag(sync=True)
+    address = traitlets.Unicode("").tag(sync=True)
+    #: How long the page waits before it goes, in milliseconds.
+    delay_ms = traitlets.Int(0, min=0).tag(sync=True)
+
+    def __init__(self, action: str, address: str, delay_ms: int = 0):
+        super().__init__(action=action, address=address, delay_ms=delay_ms, layout=Layout(display="none"))
 
 
-def go_to(url: str, delay_s: float = 0.0) -> HTML:
+def go_to(url: str, delay_s: float = 0.0) -> PageAddress:
     """A widget that, once shown, sends the page to ``url`` after ``delay_s`` seconds."""
-    return _script(f"setTimeout(function(){{window.location.assign({json.dumps(url)});}}, "
-                   f"{max(0, round(delay_s * 1000))});")
+    return PageAddress("go", url, max(0, round(delay_s * 1000)))
 
 
-def set_address_query(parameters: dict) -> HTML:
+def set_address_query(parameters: dict) -> PageAddress:
     """A widget that, once shown, puts ``parameters`` in the page's address (no navigation):
     a reload then asks the server for the same page with them (a participant resumed)."""
-    query = json.dumps("?" + urlencode(parameters))
-    return _script(f"history.replaceState(null, '', window.location.pathname + {query});")
+    return PageAddress("query", "?" + urlencode(parameters))

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import base64
-import html
 from pathlib import Path
 
-from ipywidgets import HTML, Button, Layout, VBox
+import anywidget
+import traitlets
+from ipywidgets import HTML, VBox
 
 from .controls import Choice
 
@@ -15,12 +16,22 @@ from .controls import Choice
 WATCHED_FRACTION = 0.95
 
 
+class VideoPlayer(anywidget.AnyWidget):
+    """The video, played in the browser (ipywidgets' Video widget reports no playback): its front end
+    (an anywidget ES module, ``video.js`` beside this file) sends ``{"event": "played"}`` on every
+    start and ``{"event": "ended", "whole": bool}`` at the end, ``whole`` when the ranges the browser
+    really played cover at least ``watched_fraction`` of the duration (not when it got there by
+    scrubbing); a "Play again from the start" button below it."""
+
+    _esm = Path(__file__).parent / "video.js"
+    src = traitlets.Unicode("").tag(sync=True)
+    watched_fraction = traitlets.Float(WATCHED_FRACTION).tag(sync=True)
+
+
 class VideoStep(VBox):
-    """The video plays in the browser; ipywidgets' Video widget reports no playback, so the
-    player's own events click hidden buttons: "played" on every start, and on "ended" either
-    "ended" (the ``played`` ranges cover at least ``WATCHED_FRACTION`` of the duration) or
-    "skipped" (it reached the end by scrubbing). A local file is sent inline (a data URL), so it
-    plays wherever the page is served from.
+    """The video plays in the browser (``VideoPlayer``); Continue once it has played to the end, if
+    the protocol requires it. A local file is sent inline (a data URL), so it plays wherever the page
+    is served from.
 
     Args:
         study_step: the protocol's video ``StudyStep``.
@@ -32,38 +43,24 @@ class VideoStep(VBox):
         self.watched_to_end = False
         self.plays = 0
         self._on_done = on_done
-        self.ended_button = self._hidden("video ended", "mt-video-ended", self.mark_ended)
-        self.skipped_button = self._hidden("video skipped", "mt-video-skipped", self.mark_skipped)
-        self.played_button = self._hidden("video played", "mt-video-played", self.mark_played)
         source = study_step.video if study_step.video_is_url else _data_url(study_step.video)
-        # The handlers look for the hidden buttons next to the player (in this step's box).
-        click = "this.closest('.mt-video-step').querySelector('.{0} button, button.{0}').click()"
-        # played: the ranges the browser really played (seeking skips them), in seconds.
-        ended = ("(function(v){let s=0;for(let i=0;i<v.played.length;i++){s+=v.played.end(i)-v.played.start(i);}"
-                 f"const whole=isFinite(v.duration)&&v.duration>0&&s>={WATCHED_FRACTION}*v.duration;"
-                 "v.closest('.mt-video-step').querySelector(whole?'.mt-video-ended button, button.mt-video-ended'"
-                 ":'.mt-video-skipped button, button.mt-video-skipped').click();})(this)")
-        self.player = HTML(
-            f"<video class='mt-video' src='{html.escape(source, quote=True)}' controls preload='auto' "
-            f"style='max-width:720px;width:100%' onplay=\"{click.format('mt-video-played')}\" "
-            f"onended=\"{ended}\"></video>"
-            f"<div><button class='mt-video-replay' onclick=\"const v=this.closest('.mt-video-step')"
-            f".querySelector('video'); v.currentTime=0; v.play();\">Play again from the start</button></div>")
+        self.player = VideoPlayer(src=source)
+        self.player.on_msg(self._on_player)
         self._choice = Choice()
         self.continue_button = self._choice.button("Continue", self._continue)
         self.continue_button.disabled = study_step.require_watched
         self.note = HTML("<small>Continue becomes available once the video has played to the end.</small>"
                          if study_step.require_watched else "")
-        super().__init__([self.player, self.continue_button, self.note, self.ended_button, self.skipped_button,
-                          self.played_button])
+        super().__init__([self.player, self.continue_button, self.note])
         self.add_class("mt-video-step")
 
-    @staticmethod
-    def _hidden(description: str, css_class: str, action) -> Button:
-        button = Button(description=description, layout=Layout(display="none"))
-        button.add_class(css_class)
-        button.on_click(lambda _: action())
-        return button
+    def _on_player(self, _, content, buffers) -> None:
+        if content.get("event") == "played":
+            self.mark_played()
+        elif content.get("event") == "ended" and content.get("whole") is True:
+            self.mark_ended()
+        elif content.get("event") == "ended":
+            self.mark_skipped()
 
     def mark_played(self) -> None:
         self.plays += 1
