@@ -6,6 +6,8 @@ The science lives in ``mt_widgets.core`` (no Jupyter dependency); the widgets in
 statistics, power, figures and the comparison with the paper in ``mt_widgets.analysis``; a
 class's progress files and checks in ``mt_widgets.classroom``; the uArm Swift Pro connector in
 ``mt_widgets.hardware``; the pages and kiosks built from them in ``mt_widgets.apps``.
+Kernels forked from an already-imported template (the class hub, the study pages) in
+``mt_widgets.kernels``.
 """
 
 from importlib.metadata import PackageNotFoundError, version

@@ -42,6 +42,17 @@ if len(f"{_connection_root}/voila_xxxxxxxx/kernel-{'0' * 36}-ipc-5") > 107:
 c.Voila.connection_dir_root = _connection_root
 c.KernelManager.transport = "ipc"
 
+# --- Kernels forked from a template, not started -----------------------------------------------
+# Every page's kernel is forked from one template process this server starts now, which has
+# imported numpy, numba, ipywidgets, ipycanvas and the widgets (mt_widgets/kernels/): a kernel
+# is there in milliseconds instead of importing them for about 2 s of CPU, and shares their
+# memory copy-on-write with the template and the other pages' kernels. What a page may do is
+# unchanged: Voila's server still relays no code from the page, and each kernel is its own
+# process with its own connection file and key. The template starts with the first kernel, which
+# the preheated pools below ask for at the server's start. MT_KERNEL_TEMPLATE=off in the server's
+# environment starts kernels the usual way.
+c.MultiKernelManager.kernel_manager_class = "mt_widgets.kernels.provisioner.ForkingKernelManager"
+
 # --- Idle-kernel culling: what the beacon cannot catch -----------------------------------------
 # A tab that vanishes without `beforeunload` (a crashed or killed browser, a phone that
 # discards a background tab, a lost network) leaves a kernel with no page. jupyter_server's

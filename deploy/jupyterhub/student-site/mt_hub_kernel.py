@@ -9,12 +9,17 @@ debugger, which no lesson uses. An entry of None in ``sys.modules`` makes that i
 missing package does, so ipykernel runs as it does where debugpy is absent; the spec's
 ``"debugger": false`` tells JupyterLab not to offer it. Instructors' kernels keep the debugger
 (their servers keep the usual spec).
+
+Students' kernels are forked from their server's kernel template (mt_widgets/kernels/), which
+imports this module before ipykernel: the None entry is set at import, so it holds in the
+template and in every kernel forked from it.
 """
 
 import sys
 
+sys.modules["debugpy"] = None
+
 if __name__ == "__main__":
-    sys.modules["debugpy"] = None
     from ipykernel import kernelapp
 
     kernelapp.launch_new_instance()

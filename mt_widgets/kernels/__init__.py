@@ -1,0 +1,7 @@
+"""Kernels that start in milliseconds: forked from a template that has imported the heavy modules.
+
+``template`` is the process (run as ``python -m mt_widgets.kernels.template``); ``provisioner``
+is the Jupyter side (a kernel provisioner and the kernel manager that uses it), shared by the
+class hub's students' servers and the study pages' Voila. Nothing here imports the rest of the
+package: the template imports what its server names, by name.
+"""
