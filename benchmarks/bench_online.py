@@ -16,6 +16,15 @@ practice, one action every ``--think`` seconds, as a person would. Measured:
 Target: every response within 1 s at p95 (what feels immediate for a page that changes screen),
 and memory bounded by the kernels of the open pages (about 200 MB each). The browser runs on the
 same 2 cores, so the figures are an upper bound of what a dedicated server gives.
+
+Burst mode (``--burst N --window W``, issue 29): N participants open their Prolific links at
+random moments (uniform, seeded) within W seconds, each a tab of one Chromium: time from the
+navigation to the welcome screen's text shown (the page notes it itself, so a page read late is
+timed right), p50 / p95 / worst, and PSS per
+participant (server, kernel template and kernels together, once all have arrived). ``--compare``
+runs the same burst with kernels started the usual way (``MT_KERNEL_TEMPLATE=off``) for the
+ratio. Targets: p95 <= 5 s, worst <= 10 s, <= 100 MiB PSS per participant (issue 29, idle
+machine). The load average is printed beside the figures.
 """
 
 from __future__ import annotations
@@ -111,11 +120,105 @@ def run(browser, n: int, think_s: float) -> dict:
             "kernels": kernels}
 
 
+WELCOME = "Welcome, and thank you for taking part."
+
+
+def pss_mib(server) -> tuple[float, int]:
+    """(PSS of the server and everything under it in MiB, number of processes)."""
+    root = psutil.Process(server.process.pid)
+    total, count = 0, 0
+    for process in [root, *root.children(recursive=True)]:
+        try:
+            total += process.memory_full_info().pss
+            count += 1
+        except (psutil.NoSuchProcess, psutil.AccessDenied):
+            pass
+    return total / 2**20, count
+
+
+#: Notes, in the page, the moment its welcome screen appears (ms since the navigation started).
+WATCH_WELCOME = """
+new MutationObserver((_, observer) => {
+  if (document.body && document.body.innerText.includes(WELCOME)) {
+    window.__welcome = performance.now();
+    observer.disconnect();
+  }
+}).observe(document, {subtree: true, childList: true, characterData: true});
+""".replace("WELCOME", repr(WELCOME))
+
+
+def burst(browser, n: int, window_s: float, template: bool, seed: int = 29) -> dict:
+    """N arrivals within ``window_s``: seconds from each one's navigation to its welcome screen, and PSS."""
+    import random
+
+    root = Path(tempfile.mkdtemp(prefix="bench-online-burst-"))
+    (root / "notebooks").mkdir()
+    for name in ("study_online.ipynb", "study_online_pilot.toml"):
+        shutil.copy(ROOT / "notebooks" / name, root / "notebooks" / name)
+    env = {"MT_WIDGETS_STUDY_LOGS": str(root / "logs"), "MT_KERNEL_TEMPLATE": "on" if template else "off"}
+    server = voila(root, f"--Voila.config_file_paths={ROOT / 'deploy' / 'voila'}", env=env)
+    offsets = sorted(random.Random(seed).uniform(0, window_s) for _ in range(n))
+    pages, times, errors = [], [], []
+    try:
+        time.sleep(8.0)  # the server's start and its preheated spare, before the study opens
+        start = time.monotonic()
+        for i, offset in enumerate(offsets):
+            time.sleep(max(0.0, start + offset - time.monotonic()))
+            context, page = local_page(browser, 1280, 1000)
+            page.add_init_script(WATCH_WELCOME)
+            query = urlencode({"PROLIFIC_PID": f"5f0a1b2c3d4e5f6a7b8c{i:04d}", "STUDY_ID": "BENCH",
+                               "SESSION_ID": f"S{i}"})
+            page.goto(f"{server.url('/voila/render/study_online.ipynb')}?{query}", wait_until="commit",
+                      timeout=300_000)
+            pages.append((context, page))
+        for i, (_, page) in enumerate(pages):
+            try:
+                page.wait_for_function("window.__welcome !== undefined", timeout=600_000)
+                times.append(page.evaluate("window.__welcome") / 1000)
+            except Exception as error:  # a lost arrival is reported, not retried
+                errors.append(f"arrival {i}: {error!r}"[:300])
+        pss, processes = pss_mib(server)
+    finally:
+        for context, _ in pages:
+            context.close()
+        server.stop()
+        shutil.rmtree(root, ignore_errors=True)
+    return {"times": times, "errors": errors, "pss_mib": pss, "processes": processes}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--participants", default="4,8", help="group sizes, comma-separated (default 4,8)")
     parser.add_argument("--think", type=float, default=3.0, help="seconds between a participant's actions")
+    parser.add_argument("--burst", type=int, default=0, help="burst mode: N arrivals (no browser)")
+    parser.add_argument("--window", type=float, default=60.0, help="burst mode: within this many seconds")
+    parser.add_argument("--compare", action="store_true", help="burst mode: also with kernels started the usual way")
     args = parser.parse_args()
+    if args.burst:
+        if args.burst < 1 or args.window < 0:
+            parser.error(f"--burst/--window: expected N >= 1 and W >= 0, got {args.burst} and {args.window}")
+        print(f"burst of {args.burst} within {args.window:.0f} s; load average {os.getloadavg()[0]:.1f} on "
+              f"{os.cpu_count()} cores at the start")
+        results = {}
+        with sync_playwright() as playwright:
+            browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            for template in ([True, False] if args.compare else [True]):
+                results[template] = burst(browser, args.burst, args.window, template)
+            browser.close()
+        for template, r in results.items():
+            label = "forked kernels" if template else "usual kernels"
+            t = r["times"] or [float("nan")]
+            print(f"{label:>15}: welcome p50 {statistics.median(t):.1f} s, p95 {percentile(t, 0.95):.1f} s, worst "
+                  f"{max(t):.1f} s ({len(r['times'])}/{args.burst} arrived); PSS {r['pss_mib']:.0f} MiB, "
+                  f"{r['pss_mib'] / args.burst:.0f} MiB per participant ({r['processes']} processes); "
+                  f"load average {os.getloadavg()[0]:.1f}   targets p95 <= 5 s, worst <= 10 s, <= 100 MiB", flush=True)
+            for error in r["errors"]:
+                print("   ", error)
+        if args.compare and results[True]["times"] and results[False]["times"]:
+            forked, usual = results[True], results[False]
+            ratio = percentile(forked["times"], 0.95) / percentile(usual["times"], 0.95)
+            print(f"ratio forked/usual: p95 {ratio:.2f}, PSS {forked['pss_mib'] / usual['pss_mib']:.2f}")
+        return
     try:
         sizes = [int(n) for n in args.participants.split(",")]
     except ValueError:

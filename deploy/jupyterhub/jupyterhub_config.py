@@ -202,7 +202,7 @@ c.Spawner.start_timeout = 300
 c.Spawner.http_timeout = 300
 
 # Passed on from the hub's environment: the class folder, the exchange, and (tests) the checkout.
-_passed_on = ("MT_WIDGETS_CLASS_FOLDER", "MT_WIDGETS_EXCHANGE")
+_passed_on = ("MT_WIDGETS_CLASS_FOLDER", "MT_WIDGETS_EXCHANGE", "MT_KERNEL_TEMPLATE")
 # student-site/ first: it leaves out a package that costs every server seconds at start (its docstring).
 _python_path = os.pathsep.join([str(HERE / "student-site"), *filter(None, [os.environ.get("PYTHONPATH")])])
 c.Spawner.environment = {
@@ -216,6 +216,8 @@ c.Spawner.environment = {
     "MT_HUB_ROLE": lambda spawner: "instructor" if spawner.user.admin else "student",
     # Students' "python3" kernel spec: ipykernel without its debugger (student-site/mt_hub_kernel.py).
     "JUPYTER_PATH": lambda spawner: "" if spawner.user.admin else str(HERE / "student-share"),
+    # ... which their kernel template (mt_widgets/kernels/) imports before ipykernel, and forks.
+    "MT_KERNEL_TEMPLATE_MODULES": lambda spawner: "" if spawner.user.admin else "mt_hub_kernel",
     "PYTHONPATH": _python_path,
     # Students' servers find no node: JupyterLab's import asks yarn (a node process, ~2 s) for the
     # npm registry at every start when node is on PATH, for building extensions no student builds.

@@ -33,6 +33,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import nbformat
+import psutil
 import pytest
 
 from browser_support import REPO, artifact_path, local_page
@@ -112,6 +113,8 @@ result = {{
     "write_stdlib": attempt(lambda: open(site / "planted.py", "w").write("x = 1")),
     "become_root": attempt(lambda: os.setuid(0)),
     "kernel_command": open("/proc/self/cmdline").read().split("\\0"),
+    "kernel_argv": sys.argv, "gid": os.getgid(), "egid": os.getegid(), "ppid": os.getppid(),
+    "cgroups": open("/proc/self/cgroup").read(), "cwd": os.getcwd(), "home": os.environ.get("HOME"),
     "debugger_loaded": "debugpy" in sys.modules and sys.modules["debugpy"] is not None,
 }}
 print(json.dumps(result))
@@ -243,8 +246,18 @@ def test_a_students_kernel_is_their_own_user_and_reaches_no_one_elses_work(hub):
     assert probe["uid"] == probe["euid"] == account.pw_uid != 0
     assert grp.getgrnam(TEST_INSTRUCTORS).gr_gid not in probe["groups"]
     assert probe["own_progress_lines"] >= 1  # the student's own progress is recorded
-    # A student's kernel is the students' spec: ipykernel without its debugger (mt_hub_kernel.py).
-    assert "mt_hub_kernel" in probe["kernel_command"] and probe["debugger_loaded"] is False, probe["kernel_command"]
+    assert probe["gid"] == probe["egid"] == account.pw_gid != 0
+    # A student's kernel is the students' spec: ipykernel without its debugger (mt_hub_kernel.py),
+    # forked from their server's kernel template (mt_widgets/kernels/), which runs as the student
+    # too: the kernel's parent is that template, in the student's cgroups like the kernel itself.
+    assert probe["kernel_argv"][0].endswith("mt_hub_kernel.py") and probe["debugger_loaded"] is False, probe
+    template = psutil.Process(probe["ppid"])
+    assert "mt_widgets.kernels.template" in template.cmdline() and template.uids().effective == account.pw_uid
+    assert template.gids().effective == account.pw_gid
+    kernel_groups = {line.split(":", 2)[1]: line.split(":", 2)[2] for line in probe["cgroups"].splitlines()}
+    assert kernel_groups["memory"].endswith(f"/{hub.cgroup}/{me}"), kernel_groups
+    assert any(path.endswith(f"/{hub.cgroup}/{me}") for key, path in kernel_groups.items() if "cpu" in key.split(","))
+    assert probe["home"] == str(hub.homes / me) and probe["cwd"].startswith(str(hub.homes / me))
     denied = ["read_classmate_home", "read_classmate_file", "list_class_folder", "read_classmate_progress",
               "append_classmate_progress", "take_classmate_lock", "list_course", "read_course_source",
               "write_package", "write_stdlib", "become_root"]

@@ -170,6 +170,8 @@ def test_each_students_caches_and_runtime_are_their_own_and_nothing_writes_into_
     assert environment["MT_WIDGETS_EXCHANGE"] == "/srv/exchange"
     assert environment["MT_HUB_ROLE"](spawner) == "student"
     assert environment["MT_HUB_ROLE"](_spawner(config, TEACHER, setting.tmp, admin=True)) == "instructor"
+    assert environment["MT_KERNEL_TEMPLATE_MODULES"](spawner) == "mt_hub_kernel"
+    assert environment["MT_KERNEL_TEMPLATE_MODULES"](_spawner(config, TEACHER, setting.tmp, admin=True)) == ""
     for name in ("nbgrader_config.py", "jupyter_server_config.py"):
         assert Path(environment["JUPYTER_CONFIG_PATH"], name).is_file()
 
@@ -198,6 +200,11 @@ def test_students_servers_use_ipc_kernels_and_leave_out_what_lessons_do_not_use(
     spec = json.loads((HUB / "student-share" / "kernels" / "python3" / "kernel.json").read_text())
     assert spec["argv"][:3] == ["{prefix}/bin/python", "-m", "mt_hub_kernel"] and spec["metadata"]["debugger"] is False
     assert (HUB / "student-site" / "mt_hub_kernel.py").is_file()
+    # ... forked from a template the server starts with it (mt_widgets/kernels/), which imports
+    # mt_hub_kernel first (the spawner's MT_KERNEL_TEMPLATE_MODULES, checked above).
+    assert student.MultiKernelManager.kernel_manager_class == "mt_widgets.kernels.provisioner.ForkingKernelManager"
+    assert student.ServerApp.jpserver_extensions["mt_hub_kernel_template"] is True
+    assert (HUB / "student-site" / "mt_hub_kernel_template.py").is_file()
     instructor = _server_config("instructor")
     assert instructor.KernelManager.transport == "ipc"
     assert "jpserver_extensions" not in instructor.ServerApp

@@ -20,14 +20,14 @@ import os
 c = get_config()  # noqa: F821 - provided by Jupyter's config loader
 
 c.KernelManager.transport = "ipc"
-# Kernels forked from a template this server starts now, as the member it runs as (their uid,
-# gid, groups and cgroups, which the hub set before the server ran anything; their environment):
-# mt_widgets/kernels/provisioner.py. A kernel starts in milliseconds with numpy, numba, ipycanvas
-# and the widgets already imported, sharing their memory with the template. MT_KERNEL_TEMPLATE=off
-# in the hub's environment starts kernels the usual way.
+# Kernels forked from a template of this server's, which runs as the member the server runs as
+# (their uid, gid, groups and cgroups, which the hub set before the server ran anything; their
+# environment): mt_widgets/kernels/provisioner.py. A kernel starts in milliseconds with numpy,
+# numba, ipycanvas and the widgets already imported, sharing their memory with the template.
+# Students' servers start the template with the server (student-site/mt_hub_kernel_template.py);
+# instructors' at their first kernel. MT_KERNEL_TEMPLATE=off in the hub's environment starts
+# kernels the usual way.
 c.MultiKernelManager.kernel_manager_class = "mt_widgets.kernels.provisioner.ForkingKernelManager"
-if os.environ.get("MT_HUB_ROLE") != "instructor":
-    os.environ.setdefault("MT_KERNEL_TEMPLATE_MODULES", "mt_hub_kernel")
 # Files a member's server and kernels create are readable by their own group at most (on the
 # class folder, that group is the instructors'): deploy/jupyterhub/class_hub.py.
 os.umask(0o027)
@@ -46,11 +46,8 @@ if os.environ.get("MT_HUB_ROLE") != "instructor":
         # Voila's pages, from student-site/mt_hub_voila.py at the first page a student opens.
         "voila.server_extension": False,
         "mt_hub_voila": True,
+        "mt_hub_kernel_template": True,
         "notebook": False,
     }
     # Students' kernels run without JupyterLab's debugger: the hub puts student-share/ first on
     # their JUPYTER_PATH, whose kernels/python3 spec starts student-site/mt_hub_kernel.py.
-if os.environ.get("MT_KERNEL_TEMPLATE", "on") != "off":
-    from mt_widgets.kernels.provisioner import start_template
-
-    start_template()
