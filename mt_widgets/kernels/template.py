@@ -23,12 +23,16 @@ names to import; the kernel modules a request may name are ``ipykernel_launcher`
   configuration from that environment, reseeds numpy's global generator (a fork copies it, and
   sibling kernels would otherwise draw the same numbers) and runs the kernel module as
   ``__main__``. ZeroMQ contexts, sockets and threads are all made by the kernel after the fork:
-  the template never creates one (it checks, below, that it has no other thread when it forks);
+  the template never creates one (it checks, below, that it has no other thread when it forks).
+  Functions numba compiles with ``cache=True`` that the template imported keep the cache folder
+  of the template's environment, which is the server's and so the kernel's in both deployments
+  (on the hub, the student's own ``NUMBA_CACHE_DIR``);
 - answers ``{"pid": N}``, keeps the connection and writes ``{"status": CODE}`` when that kernel
   ends (its exit code, or minus the signal that ended it), so the server learns a kernel's end
   as it does from a child process;
-- ends when its standard input closes (the server that started it went away); kernels it forked
-  run on until their server shuts them down.
+- ends when its standard input closes (the server that started it went away); the kernels it
+  forked end with it (ipykernel's parent poller watches the template), as launched kernels end
+  with their server.
 """
 
 from __future__ import annotations
@@ -93,9 +97,9 @@ def _become_kernel(request: dict, closing: list) -> None:
     """In the forked child: the kernel of ``request``. Never returns."""
     code = 1
     try:
+        signal.set_wakeup_fd(-1)  # before its pipe closes: a signal must not write to a closed socket
         for fileobj in closing:
             fileobj.close()
-        signal.set_wakeup_fd(-1)
         for signum in (signal.SIGCHLD, signal.SIGINT, signal.SIGTERM, signal.SIGPIPE):
             signal.signal(signum, signal.SIG_DFL)
         os.setsid()
