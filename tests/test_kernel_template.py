@@ -14,6 +14,7 @@ import signal
 import stat
 import time
 
+import psutil
 import pytest
 
 from mt_widgets.kernels import provisioner
@@ -67,6 +68,9 @@ def test_a_forked_kernel_teaches_an_episode_and_interrupt_restart_shutdown_work(
         status, out = await _run(client, "import os\nprint(os.getppid(), os.getpgid(0), os.getpid())")
         parent, group, pid = map(int, out.split())
         assert (status, parent, group, pid) == ("ok", template.process.pid, first_pid, first_pid)
+        # It shows its own command (with its connection file) in ps, not the template's.
+        shown = " ".join(psutil.Process(pid).cmdline()).split()
+        assert shown[1:3] == ["-m", "ipykernel_launcher"] and shown[shown.index("-f") + 1] == manager.connection_file
         status, out = await _run(client, EPISODE, timeout=120)
         word, arrows, latency = out.split()
         assert (status, word) == ("ok", "episode") and int(arrows) > 0 and float(latency) > 0, out

@@ -103,6 +103,14 @@ def _become_kernel(request: dict, closing: list) -> None:
         for signum in (signal.SIGCHLD, signal.SIGINT, signal.SIGTERM, signal.SIGPIPE):
             signal.signal(signum, signal.SIG_DFL)
         os.setsid()
+        # The kernel's command as its process title (ps, psutil): what the server asked for, with
+        # its connection file, instead of the template's (tools find kernels by that file).
+        try:
+            import setproctitle
+        except ImportError:
+            pass
+        else:
+            setproctitle.setproctitle(" ".join(request["argv"]))
         # The template's standard input is the pipe whose end tells it its server went away.
         devnull = os.open(os.devnull, os.O_RDONLY)
         os.dup2(devnull, 0)
