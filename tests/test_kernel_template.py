@@ -71,6 +71,11 @@ def test_a_forked_kernel_teaches_an_episode_and_interrupt_restart_shutdown_work(
         # It shows its own command (with its connection file) in ps, not the template's.
         shown = " ".join(psutil.Process(pid).cmdline()).split()
         assert shown[1:3] == ["-m", "ipykernel_launcher"] and shown[shown.index("-f") + 1] == manager.connection_file
+        # Widgets talk to this kernel's front end: none was made in the template with a dummy comm
+        # (ipycanvas makes its canvas manager at import; made in the template, no canvas would draw).
+        status, out = await _run(client, "import ipycanvas, ipywidgets.widgets.widget as w\n"
+                                         "print(sorted({type(x.comm).__module__ for x in w._instances.values()}))")
+        assert (status, out.strip()) == ("ok", "['ipykernel.comm.comm']"), out
         status, out = await _run(client, EPISODE, timeout=120)
         word, arrows, latency = out.split()
         assert (status, word) == ("ok", "episode") and int(arrows) > 0 and float(latency) > 0, out
@@ -188,6 +193,23 @@ def test_a_template_not_ready_in_time_means_a_usual_start_logged(template, caplo
         assert status == "ok" and out.split() == ["42", str(os.getpid())]
         client.stop_channels()
         await manager.shutdown_kernel()
+
+    asyncio.run(scenario())
+
+
+def test_a_template_whose_imports_make_a_widget_refuses_and_kernels_start_the_usual_way(template, monkeypatch,
+                                                                                        caplog):
+    async def scenario():
+        template.stop()
+        monkeypatch.setattr(KernelTemplate, "_shared", None)
+        monkeypatch.setenv("MT_KERNEL_TEMPLATE_PRELOAD", "numpy,ipycanvas")
+        with caplog.at_level(logging.WARNING, logger=provisioner.__name__):
+            manager, client = await _started()
+        assert not manager.provisioner.forked
+        assert any("ended (1) before it was ready" in r.getMessage() for r in caplog.records), caplog.text
+        client.stop_channels()
+        await manager.shutdown_kernel()
+        KernelTemplate._shared.stop()
 
     asyncio.run(scenario())
 

@@ -23,7 +23,8 @@ template, which reaps it. A restart asks for a fresh fork.
 
 Settings (environment of the server): ``MT_KERNEL_TEMPLATE`` (``on``; ``off`` starts every
 kernel the usual way), ``MT_KERNEL_TEMPLATE_PRELOAD`` (modules the template imports; by default
-numpy, numba, ipywidgets, ipycanvas and ``mt_widgets.widgets``).
+numpy, numba, ipywidgets, ``mt_widgets`` and ``mt_widgets.study``: no module whose import
+makes a widget).
 """
 
 from __future__ import annotations
@@ -44,7 +45,11 @@ from pathlib import Path
 from jupyter_client.provisioning import LocalProvisioner
 from jupyter_server.services.kernels.kernelmanager import ServerKernelManager
 
-DEFAULT_PRELOAD = ("numpy", "numba", "ipywidgets", "ipycanvas", "mt_widgets", "mt_widgets.widgets")
+# Not ipycanvas, nor what imports it (mt_widgets.widgets): its import makes a widget (the canvas
+# manager every canvas draws through), and a widget made in the template has no kernel to talk
+# to; forked, it would stay mute and no canvas would ever draw. The template refuses to serve
+# when a preloaded module made a widget (template.py).
+DEFAULT_PRELOAD = ("numpy", "numba", "ipywidgets", "mt_widgets", "mt_widgets.study")
 #: The exit code reported for a kernel whose end the template could not report (it died first).
 UNKNOWN_EXIT = -1
 

@@ -68,6 +68,14 @@ def preload(modules: list[str]) -> list[str]:
     return failed
 
 
+def _widgets_made() -> list[str]:
+    """The classes of the ipywidgets widgets that exist in this process."""
+    # ipywidgets 8's registry of live widgets (``Widget.widgets``, deprecated, reads the same).
+    module = sys.modules.get("ipywidgets.widgets.widget")
+    registry = getattr(module, "_instances", {}) if module is not None else {}
+    return sorted({type(instance).__name__ for instance in registry.values()})
+
+
 def _peer_uid(conn: socket.socket) -> int:
     creds = conn.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, struct.calcsize("3i"))
     return struct.unpack("3i", creds)[1]
@@ -236,6 +244,13 @@ def main(argv: list[str] | None = None) -> None:
         raise SystemExit("usage: python -m mt_widgets.kernels.template SOCKET MODULE[,MODULE...]")
     path, modules = args[0], [name for name in args[1].split(",") if name]
     preload(modules)
+    made = _widgets_made()
+    if made:
+        # A widget made here has no kernel (its comm is a dummy): in every kernel forked from here
+        # it would be mute, and a page drawing through it (ipycanvas's canvas manager) would
+        # never draw. Refusing makes the server start its kernels the usual way, logged.
+        raise SystemExit(f"kernel template: importing {modules} made widgets ({made}); preload modules "
+                         "that make none (MT_KERNEL_TEMPLATE_PRELOAD)")
     serve(path, tuple(dict.fromkeys([*KERNEL_MODULES, *modules])))
 
 
