@@ -56,6 +56,29 @@ def kernel_figures(repeats: int = 15) -> dict:
         manager._send_custom = original
 
 
+def learner_latencies(repeats: int = 10) -> dict:
+    """Feedback latency (last demonstration -> reproduction sent) per learner, on the uArm's point
+    skill (the reward learner with its 8 states), beside ridge's; the animation is not captured."""
+    from mt_widgets.core import SKILLS, TeachingEpisode
+    from mt_widgets.core.learner_teaching import LEARNERS, make_learner
+    from mt_widgets.widgets import EpisodeWidget
+    skill, figures = SKILLS["uarm-point"], {}
+    for name in LEARNERS:
+        n = 8 if name == "reward" else skill.n_features
+        latencies = []
+        for repeat in range(repeats + 1):
+            episode = TeachingEpisode(skill, skill.query_states(seed=repeat, n=n), learner=make_learner(name, skill))
+            widget = EpisodeWidget(episode, guidance=False)
+            for action in episode.optimal_actions[:-1]:
+                widget.demonstrate(1.2 * action)
+            started = time.perf_counter()
+            widget.demonstrate(1.2 * episode.optimal_actions[-1])   # learning, the policy risk, the reproduction
+            if repeat:
+                latencies.append(1000 * (time.perf_counter() - started))
+        figures[name] = latencies
+    return figures
+
+
 # A pixel is "rubber band" when it is clearly blue: the band is Okabe-Ito blue at 60 %
 # opacity, (102, 170, 209) over white; nothing else on the teaching canvas near the probes is
 # that blue (the velocity arrow, sky blue, is avoided by the choice of directions).
@@ -199,7 +222,13 @@ def _row(name: str, measured: float, unit: str, target: float, relation: str, no
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--no-browser", action="store_true", help="skip the Chromium measurements")
+    parser.add_argument("--learners", action="store_true", help="only the feedback latency per learner (uarm-point)")
     args = parser.parse_args()
+    if args.learners:
+        for name, latencies in learner_latencies().items():
+            _row(f"feedback latency, {name}, median", statistics.median(latencies), "ms", 50.0, "<=",
+                 f"  max {max(latencies):.1f} ms")
+        return
     kernel = kernel_figures()
     print(f"{'figure':<44} {'measured':>13} {'target':>13} {'ratio':>7}  (ratio = measured / target)")
     _row("feedback latency, median (last demo -> anim.)", statistics.median(kernel["latency_ms"]), "ms", 50.0, "<=",

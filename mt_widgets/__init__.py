@@ -1,6 +1,7 @@
 """mt-widgets: teach novices to teach robots, with exact machine-teaching guidance.
 
-The science lives in ``mt_widgets.core`` (no Jupyter dependency); the widgets in
+The science lives in ``mt_widgets.core`` (no Jupyter dependency); robot models read from their
+URDFs (files read outside the science) in ``mt_widgets.robot_models``; the widgets in
 ``mt_widgets.widgets``; the study runner (protocol, participants, session, log, export) in
 ``mt_widgets.study``; synthetic teachers and in-silico studies in ``mt_widgets.in_silico``;
 statistics, power, figures and the comparison with the paper in ``mt_widgets.analysis``; a
@@ -8,6 +9,7 @@ class's progress files and checks in ``mt_widgets.classroom``; the uArm Swift Pr
 ``mt_widgets.hardware``; the pages and kiosks built from them in ``mt_widgets.apps``.
 Kernels forked from an already-imported template (the class hub, the study pages) in
 ``mt_widgets.kernels``.
+The ``mt-widgets`` command (the lab, the demo, a study, a class's checks) is ``mt_widgets.cli``.
 """
 
 from importlib.metadata import PackageNotFoundError, version

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Sets everything up from a fresh clone and runs the whole test suite in tiers (tests/tiers.py):
-# lint, fast (the science, the widgets without a kernel), slow, browser (Chromium, installed here
-# from Debian's packages when missing), notebook (every notebook under nbval) and hub. Each tier
-# prints its time; the first tier that fails stops the run, so a lint error or a broken core is
+# lint, fast (the science, the widgets without a kernel), fast again on Python 3.10 and 3.13 (their venvs
+# .venv-py310 and .venv-py313, by scripts/python-venv.sh), slow, install (the built wheel in each install
+# shape), browser (Chromium, installed here from Debian's packages when missing), notebook (every
+# notebook under nbval) and hub. Each tier prints its time; the first tier that fails stops the run, so a lint error or a broken core is
 # reported in a minute or two. With extra arguments, one pytest run with them instead (a folder, -k, -m ...).
 set -euo pipefail
 REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -24,6 +25,17 @@ prepare_browser_and_hub() {
         "${sudo[@]}" apt-get install -y -qq chromium >/dev/null
     fi
     /usr/bin/chromium --version
+    # The several-servers test (tests/study_shards, slow tier) runs Debian's nginx as a user, under its own prefix.
+    if [ ! -x /usr/sbin/nginx ]; then
+        echo "== installing Debian's nginx for the several-servers test"
+        if [ "$(id -u)" = 0 ]; then sudo=(); elif sudo -n true 2>/dev/null; then sudo=(sudo -n); else
+            echo "The several-servers test needs /usr/sbin/nginx (Debian package 'nginx'); install it and run this again." >&2
+            exit 1
+        fi
+        export DEBIAN_FRONTEND=noninteractive
+        "${sudo[@]}" apt-get update -qq
+        "${sudo[@]}" apt-get install -y -qq nginx >/dev/null
+    fi
 
     # The class-hub tests need configurable-http-proxy (npm); installed into .npm/ when missing.
     PATH="$("$REPO/scripts/install-hub.sh"):$PATH"
@@ -47,14 +59,20 @@ for line in "${tiers[@]}"; do
     tier="${fields[0]}"
     expression="${fields[1]}"
     paths=("${fields[@]:2}")
-    if [ "$tier" != lint ] && [ "$tier" != fast ] && [ -z "${prepared:-}" ]; then
+    if [ "$tier" != lint ] && [ "$tier" != fast ] && [[ "$tier" != fast-py* ]] && [ -z "${prepared:-}" ]; then
         prepare_browser_and_hub
         prepared=1
     fi
     echo "== tier $tier: -m \"$expression\""
     started=$SECONDS
     status=0
-    "${pytest[@]}" -m "$expression" ${paths[@]+"${paths[@]}"} </dev/null || status=$?
+    run=("${pytest[@]}")
+    # The fast tier on another Python (tests/tiers.py, OTHER_PYTHONS): that Python's venv, .venv-py3XX.
+    if [[ "$tier" == fast-py* ]]; then
+        other="$("$REPO/scripts/python-venv.sh" "${tier#fast-py}")" || status=$?
+        run=("$other/bin/python" "${pytest[@]:1}")
+    fi
+    [ "$status" != 0 ] || "${run[@]}" -m "$expression" ${paths[@]+"${paths[@]}"} </dev/null || status=$?
     elapsed=$((SECONDS - started))
     summary+=("$(printf '%-9s %4d s  %s' "$tier" "$elapsed" "$([ "$status" = 0 ] && echo passed || echo "FAILED ($status)")")")
     echo "== tier $tier: ${elapsed} s"

@@ -17,8 +17,8 @@ fi
 stamp="$VENV/.mt-widgets-installed"
 wanted="$(sha256sum "$REPO/pyproject.toml" | cut -d' ' -f1)"
 if [ "$(cat "$stamp" 2>/dev/null || true)" != "$wanted" ]; then
-    echo "== installing mt-widgets[lab,test,bench,course,hub] into $VENV"
+    echo "== installing mt-widgets[lab,test,bench,course,hub,docs] into $VENV"
     "$VENV/bin/python" -m pip install --quiet --upgrade pip
-    "$VENV/bin/python" -m pip install --quiet -e "$REPO[lab,test,bench,course,hub]"
+    "$VENV/bin/python" -m pip install --quiet -e "$REPO[lab,test,bench,course,hub,docs]"
     echo "$wanted" > "$stamp"
 fi

@@ -11,7 +11,7 @@ import sys  # noqa: E402
 import pytest  # noqa: E402
 
 from browser_support import CHROMIUM, CHROMIUM_ARGS, RUNNING, artifact_path  # noqa: E402
-from tiers import HUB_TESTS, LINT_TESTS  # noqa: E402
+from tiers import DOCS_TESTS, HUB_TESTS, LINT_TESTS  # noqa: E402
 
 
 @pytest.fixture(scope="session")
@@ -53,6 +53,8 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(pytest.mark.lint)
         if relative.as_posix() in HUB_TESTS:
             item.add_marker(pytest.mark.hub)
+        if relative.as_posix() in DOCS_TESTS:
+            item.add_marker(pytest.mark.docs)
 
 
 @pytest.fixture

@@ -41,6 +41,8 @@ NOTEBOOK_PARAMETERS: dict[str, dict[str, object]] = {
     "tutorials/10_protocol_capstone.ipynb": {"LET_A_SYNTHETIC_NOVICE_PLAY": True, "LOG_FOLDER": Scratch("capstone")},
     "tutorials/11_reading_the_results.ipynb": {"CAPSTONE_FOLDER": Scratch("capstone"), "N_STUDIES": 30},
     "tutorials/12_the_uarm.ipynb": {"PORT": SIMULATED_ARM, "DURATION": 3.0},
+    "tutorials/13_teaching_an_industrial_arm.ipynb": {"N_QUERY_SETS": 5},
+    "tutorials/14_when_the_robot_learns_differently.ipynb": {"N_SETS": 10, "N_STATES_MANY": 40},
     "tutorials/appendix_a_widget_api.ipynb": {"DURATION": 2.0},
     "notebooks/study_sim.ipynb": {"LOG_FOLDER": Scratch("study_sim")},
     "notebooks/study_online.ipynb": {"LOG_FOLDER": Scratch("study_online"), "CHECK_REFUSED_WITHOUT_LINK": True},

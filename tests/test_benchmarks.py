@@ -16,10 +16,14 @@ EXPECTED = {
     "bench_core.py": ["agreement with MuJoCo", "(a) one 10 s rollout", "(b) 1000 rollouts", "fit + optimal_actions"],
     "bench_study.py": ["in-silico study, 32 participants", "power by simulation"],
     "bench_uarm.py": ["P2220 round trip", "worst overhead per round trip"],
+    "bench_ur5.py": ["agreement of 10 s reproductions", "pinocchio ABA stepped from Python",
+                     "MuJoCo stepped from Python", "feedback: fit + optimal actions"],
     "bench_widgets.py": ["feedback latency", "animation message", "Chromium playback", "pointer-to-arrow latency"],
+    "bench_install.py": ["build sdist + wheel", "size MB", "import + first fit and optimal actions"],
 }
 # Shorter runs where a full one takes minutes (the figures are reported, never asserted).
-ARGS = {"bench_kiosk.py": ["--loads", "2", "--no-study"], "bench_online.py": ["--participants", "2", "--think", "1"]}
+ARGS = {"bench_kiosk.py": ["--loads", "2", "--no-study"], "bench_online.py": ["--participants", "2", "--think", "1"],
+        "bench_install.py": ["--shapes", "core"]}
 
 
 @pytest.mark.slow

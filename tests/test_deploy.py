@@ -9,6 +9,8 @@ from traitlets.config.loader import PyFileConfigLoader
 # Imported before the config is loaded: the config puts deploy/voila (holding a voila.py) on sys.path.
 from voila.app import Voila
 
+from mt_widgets.cli.servers import voila_command
+
 REPO = Path(__file__).resolve().parents[1]
 DEPLOY = REPO / "deploy" / "voila"
 
@@ -46,7 +48,9 @@ def test_shipped_configuration_culls_idle_unconnected_kernels_and_preheats_only_
     # The refill waits until a visitor's page is interactive (a warm visit's p95: 2.4 s measured), so
     # it does not compete with it for the 2 cores, and not much longer (the next visitor waits it out).
     assert 2.5 <= config.VoilaKernelManager.fill_delay <= 5.0
-    # The README's way of serving the pages uses this file.
-    for script, page in (("serve-demo.sh", "notebooks/demo.ipynb"), ("serve-study.sh", "notebooks/study_sim.ipynb")):
-        text = (REPO / "scripts" / script).read_text()
-        assert "--Voila.config_file_paths=" in text and "deploy/voila" in text and page in text, script
+    # The README's way of serving the pages (the scripts, over `mt-widgets demo` and `mt-widgets study
+    # serve`) uses this file.
+    for script, command in (("serve-demo.sh", "mt_widgets.cli demo"), ("serve-study.sh", "mt_widgets.cli study serve")):
+        assert command in (REPO / "scripts" / script).read_text(), script
+    served = voila_command(REPO / "notebooks" / "demo.ipynb", None, [])
+    assert f"--Voila.config_file_paths={REPO / 'deploy' / 'voila'}" in served

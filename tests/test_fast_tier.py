@@ -2,6 +2,7 @@
 tier, the files the marks name exist, and the scripts run the tiers tiers.py lists."""
 
 import itertools
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -9,7 +10,17 @@ from pathlib import Path
 import pytest
 from _pytest.mark.expression import Expression
 
-from tiers import HUB_TESTS, LINT_TESTS, MARKS, TIERS, tier_expression, tier_paths
+from tiers import (
+    DOCS_TESTS,
+    HUB_TESTS,
+    INSTALL_TESTS,
+    LINT_TESTS,
+    MARKS,
+    OTHER_PYTHONS,
+    TIERS,
+    tier_expression,
+    tier_paths,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -30,7 +41,7 @@ def test_the_cheap_tiers_run_first():
 
 
 def test_the_files_the_marks_name_exist_and_the_marks_are_declared():
-    for path in LINT_TESTS + HUB_TESTS:
+    for path in LINT_TESTS + HUB_TESTS + DOCS_TESTS + INSTALL_TESTS:
         assert (ROOT / path).is_file(), f"tests/tiers.py names {path}, which does not exist"
     declared = {line.split(":")[0].strip().strip('"') for line in
                 (ROOT / "pyproject.toml").read_text().split("markers = [", 1)[1].split("]", 1)[0].splitlines()
@@ -57,7 +68,18 @@ def test_the_lint_mark_lands_on_the_lint_tests_only():
 def test_the_script_lists_the_tiers_for_run_tests():
     listed = subprocess.run([sys.executable, str(ROOT / "tests" / "tiers.py")], capture_output=True, text=True,
                             check=True, timeout=60).stdout
-    assert [tuple(line.split("\t")) for line in listed.splitlines()] == [
-        (name, expression, *tier_paths(name)) for name, expression in TIERS]
+    others = [(name, tier_expression("fast")) for name, _ in OTHER_PYTHONS]
+    expected = [(name, expression, *tier_paths(name)) for name, expression in TIERS]
+    assert [tuple(line.split("\t")) for line in listed.splitlines()] == expected[:2] + others + expected[2:]
     assert tier_paths("lint") == LINT_TESTS and tier_paths("hub") == HUB_TESTS and tier_paths("fast") == ()
+    assert tier_paths("docs") == DOCS_TESTS
+    assert tier_paths("install") == INSTALL_TESTS
     assert "tests/tiers.py" in (ROOT / "scripts" / "run-tests.sh").read_text()
+
+
+def test_the_other_pythons_are_the_oldest_and_the_newest_pyproject_lists():
+    text = (ROOT / "pyproject.toml").read_text()
+    listed = sorted(int(minor) for minor in re.findall(r'"Programming Language :: Python :: 3\.(\d+)"', text))
+    assert [version for _, version in OTHER_PYTHONS] == [f"3.{listed[0]}", f"3.{listed[-1]}"]
+    assert 11 in listed, "the shared venv's Python is one of them"
+    assert f'requires-python = ">=3.{listed[0]}"' in text

@@ -5,10 +5,14 @@ import json
 import re
 import subprocess
 import sys
-import tomllib
 from pathlib import Path
 
 import pytest
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: the same parser as the tomli package (the test extra has it there)
+    import tomli as tomllib
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -62,7 +66,7 @@ def test_binder_requirements_agree_with_pyproject():
 
 
 #: The distribution that provides an import name, where the two differ.
-_DISTRIBUTION = {"serial": "pyserial", "IPython": "ipython", "PIL": "pillow"}
+_DISTRIBUTION = {"serial": "pyserial", "IPython": "ipython", "PIL": "pillow", "pinocchio": "pin"}
 
 
 def _third_party_imports(folder: Path) -> set[str]:
@@ -74,7 +78,8 @@ def _third_party_imports(folder: Path) -> set[str]:
                 names |= {alias.name.split(".")[0] for alias in node.names}
             elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
                 names.add(node.module.split(".")[0])
-    names -= set(sys.stdlib_module_names) | {"mt_widgets"}
+    # tomllib is standard from Python 3.11 (3.10's stdlib_module_names lacks it; there tomli stands in).
+    names -= set(sys.stdlib_module_names) | {"mt_widgets", "tomllib"}
     return {_DISTRIBUTION.get(name, name).lower() for name in names}
 
 
@@ -89,9 +94,13 @@ def test_the_dependencies_are_what_the_core_imports_and_the_extras_cover_the_res
         "pyproject.toml's dependencies must be exactly what mt_widgets/core imports; the rest go in extras")
     everything = _third_party_imports(REPO / "mt_widgets")
     installed = _distributions(project["dependencies"] + _extra(project, "lab"))
-    # IPython and traitlets come with ipywidgets (the widgets extra), which requires both.
+    # IPython and traitlets come with ipywidgets (the widgets extra), which requires both. pin
+    # (pinocchio) is the reference the UR5 is checked against: mt_widgets/robot_models/pinocchio_reference.py,
+    # for the tests and the benchmark only, so it is in the test and bench extras.
     missing = everything - installed
-    assert missing <= {"ipython", "traitlets"}, f"imported but in no extra of lab: {missing}"
+    assert missing <= {"ipython", "traitlets", "pin"}, f"imported but in no extra of lab: {missing}"
+    assert {"pin", "example-robot-data"} <= _distributions(_extra(project, "test")) & _distributions(
+        _extra(project, "bench"))
 
 
 def test_ci_runs_the_readme_test_command():
@@ -101,7 +110,7 @@ def test_ci_runs_the_readme_test_command():
 
 
 @pytest.mark.parametrize("name", ["open-lab.sh", "run-tests.sh", "setup.sh", "serve-demo.sh", "serve-study.sh",
-                                  "test-fast.sh"])
+                                  "test-fast.sh", "python-venv.sh"])
 def test_scripts_are_valid_bash(name):
     subprocess.run(["bash", "-n", str(REPO / "scripts" / name)], check=True)
 

@@ -88,7 +88,7 @@ def test_view_points_teacher_parameters_and_unknown_skills_are_refused_in_the_on
     # Readable as written (a plain KeyError would print it in quotes), and still a KeyError.
     assert isinstance(error.value, KeyError)
     assert str(error.value) == ("skill: expected one of the known skills (sim-line, sim-point, uarm-line, "
-                                "uarm-point), got 'nope'")
+                                "uarm-point, ur5-conveyor, ur5-place, ur5-reach), got 'nope'")
 
 
 @pytest.mark.parametrize(("check", "wrong_type", "wrong_value"), [

@@ -13,12 +13,20 @@ anything less leaves compiles for the students' first episode.
 import os
 import sys
 
-from mt_widgets import SKILLS
+from mt_widgets import SKILLS, TeachingEpisode
+from mt_widgets.core.skills import PAPER_SKILL_KEYS
 from mt_widgets.widgets import EpisodeWidget
 
 if not os.environ.get("NUMBA_CACHE_DIR"):
     sys.exit("NUMBA_CACHE_DIR: expected the folder to fill, got nothing")
 for key in SKILLS:
+    if key not in PAPER_SKILL_KEYS:
+        # The UR5's skills have no planar widget: warm their episode and reproduction kernels.
+        episode = TeachingEpisode(SKILLS[key], seed=0)
+        for action in episode.optimal_actions:
+            episode.demonstrate(action + 0.01)
+        assert not episode.reproduction.diverged
+        continue
     for guidance in (True, False):
         episode = EpisodeWidget(key, seed=0, guidance=guidance)
         for action in episode.optimal:

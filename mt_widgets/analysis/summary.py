@@ -7,14 +7,28 @@ the others found, the effect size, and whether the baselines differ.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import numpy as np
 
 from mt_widgets.study.analysis_plan import TESTS
 
-if TYPE_CHECKING:
-    from .statistics import StudyStatistics
+
+class SummarisedStatistics(Protocol):
+    """What the summary reads of a study's statistics (``statistics.StudyStatistics`` has it). A
+    protocol rather than an import of StudyStatistics, which imports this module: no import circle."""
+
+    groups: Any
+    group_notes: Any
+    alternative: str
+    alpha: float
+    test: str
+    changes: Any
+    change_summary: Any
+    compared: Any
+    between: Any
+    baseline: Any
+    baseline_episodes: Any
 
 #: The tests' names as a reader sees them.
 TEST_NAMES = {"student": "Student's t-test", "welch": "Welch's t-test", "mannwhitney": "Mann-Whitney U"}
@@ -26,7 +40,7 @@ def _p(p: float) -> str:
     return "p < 0.001" if p < 0.001 else f"p = {p:.3f}"
 
 
-def plain_language_summary(results: StudyStatistics) -> str:
+def plain_language_summary(results: SummarisedStatistics) -> str:
     """A few sentences a reader without statistics can follow, one paragraph per change."""
     first, second = results.groups[:2]
     notes = results.group_notes or {}

@@ -16,6 +16,8 @@ import numpy as np
 from scipy import stats
 
 from mt_widgets.core import PointTarget, RidgeLearner, Skill, analyse_demonstrations, optimal_actions, teaching_risk
+from mt_widgets.core.kernel_learners import KernelRidgeLearner
+from mt_widgets.core.learner_teaching import policy_risk
 from mt_widgets.core.machine_teaching import UnderdeterminedTeachingWarning, ridge_operator
 from mt_widgets.core.query_states import condition_number as _condition_number
 
@@ -139,3 +141,21 @@ def one_sided_welch_p(target, control) -> float:
     """Welch's t-test of 'the target group's change is below the control's' (one-sided)."""
     return float(stats.ttest_ind(np.asarray(target, dtype=float), np.asarray(control, dtype=float),
                                  equal_var=False, alternative="less").pvalue)
+
+
+# -- a8: machine teaching for a kernel learner -----------------------------------------------------
+
+
+def kernel_smoother(X, X_star, length_scale, lam) -> np.ndarray:
+    """S (M, N) of kernel ridge regression with an RBF kernel: k(X*, X) (K + lam I)^-1."""
+    return KernelRidgeLearner(length_scale, lam).smoother(X, X_star)
+
+
+def smoother_teaching_actions(S, Y) -> np.ndarray:
+    """The least-squares (minimum-norm) demonstration U (N, R) with S U closest to Y (M, R)."""
+    return np.linalg.lstsq(np.asarray(S, dtype=float), np.asarray(Y, dtype=float), rcond=None)[0]
+
+
+def smoother_risk(S, U, Y) -> float:
+    """The policy risk sqrt(mean_m ||(S U)_m - Y_m||^2) of the demonstration U."""
+    return policy_risk(np.asarray(S, dtype=float) @ np.asarray(U, dtype=float), Y)

@@ -6,10 +6,19 @@ query-state selection, rollouts, and the teaching episode that ties them togethe
 
 from .arm import ArmParameters, TwoLinkArm
 from .arm_plant import ArmPlant
-from .drawing import PlantDrawing, PoseSketch, TargetShape
+from .drawing import PlantDrawing, PoseSketch, SpaceDrawing, TargetShape, ViewProjection
 from .episode import Demonstration, DemonstrationAnalysis, EpisodeResult, EpisodeStateError, TeachingEpisode
-from .features import EndEffectorFeatures, FeatureMap, FunctionFeatures, PositionFeatures
-from .learner import DEFAULT_LAMBDA, RidgeLearner
+from .features import (
+    ConveyorFeatures,
+    EndEffectorFeatures,
+    FeatureMap,
+    FunctionFeatures,
+    PositionFeatures,
+    ToolFeatures,
+)
+from .kernel_learners import GaussianProcessLearner, KernelRidgeLearner, SingularFitError
+from .learner import DEFAULT_LAMBDA, Learner, RidgeLearner
+from .learner_teaching import LEARNERS, LearnerTeaching, make_learner, policy_risk, teach
 from .machine_teaching import (
     ActionDifference,
     TeachingAnalysis,
@@ -20,13 +29,18 @@ from .machine_teaching import (
     ridge_operator,
     teaching_risk,
 )
+from .network_learner import NeuralNetworkLearner
+from .nonlinear_skills import NONLINEAR_SKILLS
 from .plants import ContinuousPlant, KinematicPlant, Plant
 from .query_states import SeedSchedule, condition_number, sample_query_states
+from .reward_learner import RewardLearner
+from .serial_chain import SerialChain
 from .skills import SKILLS, Skill, SkillRegistry
-from .targets import LineTarget, PointTarget, Target
+from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
 from .trajectory import Trajectory, TrajectoryBatch
 from .uarm_plant import UARM_WORKSPACE_CM, UArmPlant
-from .workspace import AnnulusSector, Box
+from .ur5_plant import Conveyor, UR5Plant
+from .workspace import AnnulusSector, Box, Cuboid
 
 __all__ = [
     "ActionDifference", "AnnulusSector", "ArmParameters", "ArmPlant", "Box", "ContinuousPlant", "DEFAULT_LAMBDA",
@@ -38,4 +52,9 @@ __all__ = [
     "Trajectory", "TrajectoryBatch", "TwoLinkArm", "UARM_WORKSPACE_CM", "UArmPlant",
     "UnderdeterminedTeachingWarning", "action_difference", "analyse_demonstrations", "condition_number",
     "optimal_actions", "ridge_operator", "sample_query_states", "teaching_risk",
+    "Conveyor", "ConveyorFeatures", "ConveyorTarget", "Cuboid", "SerialChain", "SpaceDrawing", "SpacePointTarget",
+    "ToolFeatures", "UR5Plant", "ViewProjection",
 ]
+__all__ += ["GaussianProcessLearner", "KernelRidgeLearner", "LEARNERS", "Learner", "LearnerTeaching",
+            "NeuralNetworkLearner", "SingularFitError", "make_learner", "policy_risk", "teach"]
+__all__ += ["NONLINEAR_SKILLS", "RewardLearner"]

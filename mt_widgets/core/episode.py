@@ -26,7 +26,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .learner import DEFAULT_LAMBDA
+from .learner import DEFAULT_LAMBDA, Learner, RidgeLearner
+from .learner_teaching import action_sensitivity, evaluation_states, learnt_policy, policy_risk, teach
 from .machine_teaching import (
     ActionDifference,
     TeachingAnalysis,
@@ -106,7 +107,8 @@ _TARGET_ROLLOUTS: weakref.WeakKeyDictionary[Skill, dict[float, object]] = weakre
 
 
 def target_reproduction(skill: Skill, duration: float | None = None):
-    """The target skill's own rollout (``skill.theta`` from ``skill.start``), computed once per skill and duration.
+    """The target skill's own rollout (``skill.theta`` from ``skill.start``, or the skill's target
+    ``policy`` when it has one), computed once per skill and duration.
 
     Views draw it faintly beside a learnt reproduction; it depends on nothing a teacher does,
     so every episode of a skill shares one.
@@ -116,7 +118,9 @@ def target_reproduction(skill: Skill, duration: float | None = None):
     duration = skill.default_duration if duration is None else as_positive("duration", duration)
     rollouts = _TARGET_ROLLOUTS.setdefault(skill, {})
     if duration not in rollouts:
-        rollouts[duration] = skill.reproduce(skill.theta, duration=duration)
+        # A nonlinear skill's target is its policy, not its best linear theta.
+        rollouts[duration] = (skill.reproduce(skill.theta, duration=duration) if skill.policy is None
+                              else skill.reproduce_policy(skill.policy, duration=duration))
     return rollouts[duration]
 
 
@@ -131,6 +135,13 @@ class TeachingEpisode:
             only when ``query_states`` is not given.
         lam: the learner's ridge parameter (>= 0), also used for the optimal actions.
         duration: seconds of the reproduction (default: the skill's ``default_duration``).
+        learner: another learner than the paper's ridge (``mt_widgets.core.LEARNERS``; None: ridge
+            with ``lam``). Then the optimal actions are its machine teaching's (``teach``),
+            ``error`` is the policy risk (``learner_teaching``), ``rho1`` and each demonstration's
+            ``contribution_norm`` come from ``action_sensitivity``, ``exact`` says whether the
+            target is representable from the query states, and the reproduction rolls out the
+            learnt policy. What only ridge has (``theta_hat``, ``analysis``, ``contributions``,
+            ``residual``, ``bound``) raises an ``EpisodeStateError`` that says so.
 
     Attributes:
         features: (N, S) Phi.
@@ -146,7 +157,9 @@ class TeachingEpisode:
     """
 
     def __init__(self, skill: Skill, query_states=None, *, seed=None, lam: float = DEFAULT_LAMBDA,
-                 duration: float | None = None):
+                 duration: float | None = None, learner: Learner | None = None):
+        if learner is not None and not isinstance(learner, Learner):
+            raise TypeError(f"learner: expected a mt_widgets.core Learner or None, got {type(learner).__name__}")
         if not isinstance(skill, Skill):
             raise TypeError(f"skill: expected a mt_widgets.core.Skill, got {type(skill).__name__}")
         self.skill = skill
@@ -164,23 +177,53 @@ class TeachingEpisode:
                                  f"got shape {states.shape}")
         self.query_states = _frozen(states)
         self.features = _frozen(skill.features(self.query_states))
+        self.learner = learner if learner is not None else RidgeLearner(self.lam)
+        self.demonstrations: list[Demonstration] = []
+        self._reproduction = None
+        self._analysis = None
+        if not isinstance(self.learner, RidgeLearner):
+            self._init_learner()
+            return
+        if learner is not None:
+            if self.lam not in (DEFAULT_LAMBDA, learner.lam):
+                raise ValueError(f"lam: expected the ridge learner's own lam {learner.lam} (or none), got {self.lam}")
+            self.lam = learner.lam
         operator = ridge_operator(self.features, self.lam)
         self._operator = operator
         self._A = operator.matrix()                      # (S, N)
         self._a_norms = np.linalg.norm(self._A, axis=0)  # (N,) ||a_n||
         self.optimal_actions = _frozen(optimal_from(operator, skill.theta))
-        self._analysis = None
         self.rank = operator.rank
         self.exact = bool(operator.exact)
         self.rho1 = operator.rho1()
-        self.demonstrations: list[Demonstration] = []
-        self._reproduction = None
+
+    def _init_learner(self) -> None:
+        """Machine teaching for a learner other than ridge (see ``learner`` in the class docstring)."""
+        self._evaluation = evaluation_states(self.skill)
+        teaching = teach(self.learner, self.skill, self.query_states, self._evaluation)
+        self.teaching = teaching
+        self.optimal_actions = _frozen(teaching.optimal)
+        self.rho1, self._a_norms = action_sensitivity(self.learner, self.skill, self.query_states, teaching.optimal,
+                                                      self._evaluation)
+        self.exact = bool(teaching.representable)
+        self.rank = len(self.query_states)
+        self._operator = None
+
+    @property
+    def ridge(self) -> bool:
+        """Whether the learner is the paper's ridge regression (Theta and its analysis exist)."""
+        return self._operator is not None
+
+    def _require_ridge(self, name: str) -> None:
+        if not self.ridge:
+            raise EpisodeStateError(f"{name}: only the ridge learner has a Theta; this episode's learner is "
+                                    f"{self.learner!r}: use error (the policy risk) and reproduction")
 
     @classmethod
     def from_actions(cls, skill: Skill, query_states, actions, *, lam: float = DEFAULT_LAMBDA,
-                     duration: float | None = None) -> TeachingEpisode:
+                     duration: float | None = None, learner: Learner | None = None) -> TeachingEpisode:
         """An episode resumed with actions already given (k, R), k <= N (complete when k = N)."""
-        episode = cls(skill, query_states, lam=lam, duration=duration)
+        episode = cls(skill, query_states, lam=lam, duration=duration, learner=learner)
         episode.restore(actions)
         return episode
 
@@ -323,6 +366,7 @@ class TeachingEpisode:
         """The complete episode's ``TeachingAnalysis``: ``analyse_demonstrations``' numbers,
         computed once through the same function (``analyse_with``) from the episode's own SVD."""
         self._require_complete("analysis")
+        self._require_ridge("analysis")
         if self._analysis is None:
             self._analysis = analyse_with(self._operator, self.actions, self.skill.theta)
         return self._analysis
@@ -331,12 +375,19 @@ class TeachingEpisode:
     def theta_hat(self) -> np.ndarray:
         """(R, S) the learnt policy, Theta_hat^T = A U."""
         self._require_complete("theta_hat")
+        self._require_ridge("theta_hat")
         return self.analysis.theta_hat
 
     @property
     def error(self) -> float:
-        """E = ||vec(Theta_hat) - vec(Theta)||_2, the teaching error."""
+        """E = ||vec(Theta_hat) - vec(Theta)||_2, the teaching error; for another learner than ridge,
+        the policy risk of what it learnt (``learner_teaching``)."""
         self._require_complete("error")
+        if not self.ridge:
+            if self._analysis is None:
+                policy = learnt_policy(self.learner, self.skill, self.query_states, self.actions)
+                self._analysis = policy_risk(policy(self._evaluation), self.skill.target_actions(self._evaluation))
+            return self._analysis
         return self.analysis.risk
 
     @property
@@ -350,6 +401,7 @@ class TeachingEpisode:
     def bound(self) -> float:
         """rho1 * rho2 (+ the residual norm when the rank condition fails), an upper bound on E."""
         self._require_complete("bound")
+        self._require_ridge("bound")
         return self.rho1 * self.rho2 + self.residual_norm
 
     @property
@@ -362,6 +414,7 @@ class TeachingEpisode:
         residual's), with equality only when they are aligned.
         """
         self._require_complete("contributions")
+        self._require_ridge("contributions")
         gaps = np.array([d.gap for d in self.demonstrations])           # (N, R)
         return gaps[:, :, None] * self._A.T[:, None, :]                  # (N, R, S)
 
@@ -374,6 +427,7 @@ class TeachingEpisode:
     @property
     def residual(self) -> np.ndarray:
         """(R, S) (A U_bar)^T - Theta: the part of the error no demonstration can remove (0 when exact)."""
+        self._require_ridge("residual")
         return (self._A @ self.optimal_actions).T - self.skill.theta
 
     @property
@@ -387,6 +441,9 @@ class TeachingEpisode:
         Rolled out on first use and kept: every reader (a view, a log, a result) gets this one.
         """
         self._require_complete("reproduction")
+        if self._reproduction is None and not self.ridge:
+            policy = learnt_policy(self.learner, self.skill, self.query_states, self.actions)
+            self._reproduction = self.skill.reproduce_policy(policy, duration=self.duration)
         if self._reproduction is None:
             self._reproduction = self.skill.reproduce(self.theta_hat, duration=self.duration)
         return self._reproduction

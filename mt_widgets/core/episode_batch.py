@@ -14,7 +14,7 @@ states, so one SVD of each feature matrix serves all the teachers who answer it.
 ``reproduce`` rolls out the learnt skills as one batch. The in-silico engine
 (``mt_widgets.in_silico.engine``) runs its synthetic studies through it.
 
-Rank follows the one rule of ``ridge_kernels.svd_with_rank`` (the learner's and machine
+Rank follows the one rule of ``ridge_kernels.rank_of`` (the learner's and machine
 teaching's): directions below the tolerance carry no gain, so a deficient set of query states
 gives the minimum-norm fit and the least-error optimal actions, as for a single episode.
 """
@@ -27,42 +27,49 @@ import numpy as np
 from numba import njit
 
 from .learner import DEFAULT_LAMBDA
-from .ridge_kernels import svd_with_rank
+from .ridge_kernels import rank_of
 from .skills import Skill
 from .validation import as_float_array, as_positive
 
 
-@njit(cache=True)
 def batched_ridge_maps(Phi, theta_t, lam):
     """(A (K, S, N), U_bar (K, N, R), rho1 (K,), rank (K,)) for features Phi (K, N, S).
 
-    ``theta_t`` is Theta^T (S, R). Each matrix is decomposed by ``svd_with_rank``, so the rank
-    rule is the single learner's.
+    ``theta_t`` is Theta^T (S, R). numpy decomposes the K matrices in one stacked SVD (numba's
+    would need scipy: ``ridge_kernels``), and the rank follows the single learner's rule
+    (``ridge_kernels.rank_of``); the compiled ``_maps_from_svd`` builds the maps from it.
     """
-    K, N, S = Phi.shape
+    left, singular, right_t = np.linalg.svd(Phi, full_matrices=False)
+    ranks = np.asarray(rank_of(singular, Phi.shape[1:]), dtype=np.int64).reshape(len(Phi))
+    A, optimal, rho1 = _maps_from_svd(left, singular, right_t, ranks, theta_t, float(lam))
+    return A, optimal, rho1, ranks
+
+
+@njit(cache=True)
+def _maps_from_svd(left, singular, right_t, ranks, theta_t, lam):
+    """(A, U_bar, rho1) of ``batched_ridge_maps`` from the K thin SVDs and their ranks."""
+    K, N, _ = left.shape
+    S = right_t.shape[2]
     R = theta_t.shape[1]
     A = np.zeros((K, S, N))
     optimal = np.zeros((K, N, R))
     rho1 = np.zeros(K)
-    ranks = np.zeros(K, dtype=np.int64)
     for k in range(K):
-        left, singular, right_t, rank = svd_with_rank(np.ascontiguousarray(Phi[k]))
-        ranks[k] = rank
-        for i in range(rank):
-            gain = singular[i] / (singular[i] * singular[i] + lam)
-            inverse_gain = (singular[i] * singular[i] + lam) / singular[i]
+        for i in range(ranks[k]):
+            gain = singular[k, i] / (singular[k, i] * singular[k, i] + lam)
+            inverse_gain = (singular[k, i] * singular[k, i] + lam) / singular[k, i]
             if gain > rho1[k]:
                 rho1[k] = gain
             for s in range(S):
                 for n in range(N):
-                    A[k, s, n] += gain * right_t[i, s] * left[n, i]
+                    A[k, s, n] += gain * right_t[k, i, s] * left[k, n, i]
             for r in range(R):
                 along = 0.0
                 for s in range(S):
-                    along += right_t[i, s] * theta_t[s, r]
+                    along += right_t[k, i, s] * theta_t[s, r]
                 for n in range(N):
-                    optimal[k, n, r] += inverse_gain * left[n, i] * along
-    return A, optimal, rho1, ranks
+                    optimal[k, n, r] += inverse_gain * left[k, n, i] * along
+    return A, optimal, rho1
 
 
 @dataclass(frozen=True)

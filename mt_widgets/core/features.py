@@ -56,6 +56,36 @@ class PositionFeatures(FeatureMap):
         return np.concatenate([positions, np.ones(positions.shape[:-1] + (1,))], axis=-1)
 
 
+class ToolFeatures(FeatureMap):
+    """phi(x) = (r1, r2, r3, 1): an arm's tool point in space and a bias (the UR5's reach and place skills).
+
+    The compiled UR5 rollout recognises this map and evaluates it inline.
+    """
+
+    names = ("r1", "r2", "r3", "1")
+
+    def __call__(self, states):
+        positions, _ = self.plant.end_effector(self.plant.check_states("states", states))
+        return np.concatenate([positions, np.ones(positions.shape[:-1] + (1,))], axis=-1)
+
+
+class ConveyorFeatures(FeatureMap):
+    """phi(x) = (r1, r2, r3, s, 1): the tool point, the conveyor's phase s (m travelled) and a bias.
+
+    A part riding a conveyor is at ``origin + s * direction``, so a policy that follows it is
+    linear in these features (the UR5's conveyor skill). The compiled UR5 rollout recognises
+    this map and evaluates it inline.
+    """
+
+    names = ("r1", "r2", "r3", "s", "1")
+
+    def __call__(self, states):
+        states = self.plant.check_states("states", states)
+        positions, _ = self.plant.end_effector(states)
+        phase = self.plant.conveyor_phase(states)
+        return np.concatenate([positions, phase[..., None], np.ones(positions.shape[:-1] + (1,))], axis=-1)
+
+
 class FunctionFeatures(FeatureMap):
     """A user's own feature map from a vectorised function.
 

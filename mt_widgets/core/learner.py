@@ -1,4 +1,13 @@
-"""The robot's learner: multi-output ridge regression of a linear policy."""
+"""The robot's learner: the interface every learner implements, and the paper's ridge regression.
+
+A learner turns demonstrations, inputs X (N, D) at the query states and actions U (N, R), into a
+fitted policy it can evaluate at any inputs X* (M, D). What the inputs are is the learner's
+``inputs``: the skill's features phi(x) (the paper's ridge), the raw state, or the task space
+(end-effector position and velocity); ``learner_inputs`` in ``learner_teaching`` builds them from
+a skill. A *linear smoother* is a learner whose fitted policy is linear in the demonstrated
+actions, ``pi_hat(X*) = S(X*) U`` with S depending on the inputs only: for those machine teaching
+is least squares in U, exact where the target is representable (``learner_teaching``).
+"""
 
 from __future__ import annotations
 
@@ -27,13 +36,45 @@ def check_demonstrations(Phi, U):
     return Phi, U
 
 
-class RidgeLearner:
+class Learner:
+    """What every learner offers (a base class; subclasses implement ``fit`` and ``predict``).
+
+    Attributes:
+        name: the learner's name in protocols and tables ("ridge", "kernel-ridge", ...).
+        inputs: what it learns from: "features" (the skill's phi), "state" or "task".
+        linear_in_actions: whether the fitted policy is ``S(X*) U`` (a linear smoother): then
+            ``smoother`` gives S and machine teaching is exact; otherwise it is approximate.
+    """
+
+    name: str = "learner"
+    inputs: str = "features"
+    linear_in_actions: bool = False
+
+    def fit(self, X, U):
+        """Learns from inputs X (N, D) and actions U (N, R); returns what ``predict`` takes."""
+        raise NotImplementedError
+
+    def predict(self, fitted, X_star) -> np.ndarray:
+        """The fitted policy's actions (M, R) at inputs X_star (M, D)."""
+        raise NotImplementedError
+
+    def smoother(self, X, X_star) -> np.ndarray:
+        """S (M, N) with ``predict(fit(X, U), X_star) == S @ U`` for every U (linear smoothers only)."""
+        raise TypeError(f"{self!r} is not linear in the demonstrated actions: it has no smoother operator; "
+                        f"its machine teaching is approximate (learner_teaching.approximate_teaching)")
+
+
+class RidgeLearner(Learner):
     """Ridge regression ``Theta_hat^T = (Phi^T Phi + lam I)^-1 Phi^T U``.
 
     Args:
         lam: the ridge parameter (>= 0). With 0 and too few or repeated states the minimum-norm
             solution (the limit lam -> 0+) is returned instead of failing.
     """
+
+    name = "ridge"
+    inputs = "features"
+    linear_in_actions = True
 
     def __init__(self, lam: float = DEFAULT_LAMBDA):
         self.lam = as_positive("lam", lam, allow_zero=True)
@@ -53,3 +94,17 @@ class RidgeLearner:
         """
         Phi, U = check_demonstrations(Phi, U)
         return ridge_fit(np.ascontiguousarray(Phi), np.ascontiguousarray(U), self.lam)
+
+    def predict(self, fitted, X_star) -> np.ndarray:
+        """Actions ``phi(X*) Theta_hat^T`` (M, R) of the learnt Theta_hat (R, S) at features X_star (M, S)."""
+        theta_hat = as_float_array("fitted", fitted, ndim=2)
+        X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, theta_hat.shape[1]))
+        return X_star @ theta_hat.T
+
+    def smoother(self, X, X_star) -> np.ndarray:
+        """S = phi(X*) (Phi^T Phi + lam I)^-1 Phi^T (M, N), minimum-norm where Phi is deficient."""
+        X = as_float_array("X", X, ndim=2)
+        X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, X.shape[1]))
+        # The fit of the identity's columns: Theta_hat^T = A I, so S = X* A.
+        A_t = ridge_fit(np.ascontiguousarray(X), np.eye(X.shape[0]), self.lam)   # (N, S) = A^T
+        return X_star @ A_t.T

@@ -54,8 +54,11 @@ def sample_query_states(plant, feature_map, n: int, seed=None, max_condition: fl
     accepted in the order drawn, so the result depends only on the seed. When ``patience``
     candidates in a row fail to extend the current set (the states so far leave no
     well-conditioned way to continue, which happens for a few seeds in a thousand), the
-    most recently accepted state is dropped and the search goes on: a protocol's seed never
-    dead-ends.
+    most recently accepted state is dropped and the search goes on. When the set gets stuck
+    again before growing past the size it was stuck at, one more state is dropped each time
+    (the culprit can be an early state: the UR5 conveyor's seed 3820321158 stayed stuck at 3 or 4
+    of 5 states through 80,000 candidates when only the last one was ever dropped), so a
+    protocol's seed does not dead-end.
 
     Args:
         plant: where candidates come from (``plant.sample_states``) and what is valid.
@@ -80,6 +83,16 @@ def sample_query_states(plant, feature_map, n: int, seed=None, max_condition: fl
     accepted = np.empty((0, plant.state_dim))
     rows = np.empty((0, feature_map.dim))
     drawn = failures = 0
+    # Backtracking: how many states the next drop removes, and the size the set was stuck at.
+    drops, stuck_at = 0, n + 1
+
+    def backtrack():
+        nonlocal accepted, rows, failures, drops, stuck_at
+        drops = drops + 1 if len(accepted) <= stuck_at else 1
+        stuck_at = len(accepted)
+        keep = max(len(accepted) - drops, 0)
+        accepted, rows, failures = accepted[:keep], rows[:keep], 0
+
     while drawn < max_candidates:
         candidates = plant.sample_states(rng, block)
         drawn += block
@@ -99,7 +112,7 @@ def sample_query_states(plant, feature_map, n: int, seed=None, max_condition: fl
             failures += passing[0]
             if failures >= patience and len(accepted) > 0:
                 # Backtrack instead of accepting: the current set has proved hard to extend.
-                accepted, rows, failures = accepted[:-1], rows[:-1], 0
+                backtrack()
                 start = chosen
                 continue
             accepted = np.vstack([accepted, candidates[chosen]])
@@ -109,7 +122,7 @@ def sample_query_states(plant, feature_map, n: int, seed=None, max_condition: fl
                 return accepted
             start = chosen + 1
         if failures >= patience and len(accepted) > 0:
-            accepted, rows, failures = accepted[:-1], rows[:-1], 0
+            backtrack()
     raise ValueError(f"max_condition: found only {len(accepted)} of {n} states with a condition number under "
                      f"{max_condition} in {max_candidates} candidates; raise max_condition or lower n")
 

@@ -1,23 +1,32 @@
 """Skills: what a teacher teaches. A skill is a target policy Theta on a plant's features.
 
-``SKILLS`` holds the paper's four, read-only. A user defines their own with ``Skill(...)``: a
-plant, a feature map, Theta (R x S), and the start state its reproduction runs from; then
-passes it to a widget or a session directly, or adds it to a ``SkillRegistry`` they own.
+``SKILLS`` holds the paper's four and the UR5's three (``ur5-`` keys), read-only. A user
+defines their own with ``Skill(...)``: a plant, a feature map, Theta (R x S), and the start state
+its reproduction runs from; then passes it to a widget or a session directly, or adds it to a
+``SkillRegistry`` they own.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .arm_plant import ArmPlant
 from .drawing import PlantDrawing, PoseSketch, TargetShape
-from .features import EndEffectorFeatures, FeatureMap, PositionFeatures
+from .features import (
+    ConveyorFeatures,
+    EndEffectorFeatures,
+    FeatureMap,
+    FunctionFeatures,
+    PositionFeatures,
+    ToolFeatures,
+)
 from .query_states import sample_query_states
-from .targets import LineTarget, PointTarget, Target
+from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
 from .uarm_plant import UArmPlant
+from .ur5_plant import Conveyor, UR5Plant
 from .validation import UnknownKeyError, as_bool, as_count, as_float_array, as_positive
 
 
@@ -35,6 +44,11 @@ class Skill:
         target: a ``Target`` (``PointTarget``, ``LineTarget`` or a user's own), or None.
         description: one or two sentences for a student.
         max_condition: the query-state sampler's condition-number threshold for this skill.
+        policy: the target policy as a function states (N, state_dim) -> actions (N, R), for a
+            skill whose target is not linear in its features (a curved path, a path around an
+            obstacle; ``nonlinear_skills``). Then ``theta`` is the best linear policy on the
+            features (what the paper's ridge learner can at best learn) and ``target_actions``
+            are the policy's. None (the paper's skills): the target is ``theta @ phi(x)``.
     """
 
     key: str
@@ -46,6 +60,7 @@ class Skill:
     target: Target | None = None
     description: str = ""
     max_condition: float = 20.0
+    policy: Callable[[np.ndarray], np.ndarray] | None = None
 
     def __post_init__(self):
         theta = as_float_array("theta", self.theta, ndim=2, shape=(self.plant.action_dim, self.feature_map.dim))
@@ -61,6 +76,8 @@ class Skill:
         if self.target is not None and not isinstance(self.target, Target):
             raise TypeError(f"target: expected a Target (PointTarget, LineTarget or a subclass) or None, "
                             f"got {type(self.target).__name__}")
+        if self.policy is not None and not callable(self.policy):
+            raise TypeError(f"policy: expected a function states -> actions or None, got {type(self.policy).__name__}")
         if not isinstance(self.key, str) or not self.key:
             raise ValueError(f"key: expected a non-empty text, got {self.key!r}")
 
@@ -140,8 +157,18 @@ class Skill:
         return self.feature_map(states)
 
     def target_actions(self, states) -> np.ndarray:
-        """The skill's own actions theta @ phi(x) at states (N, state_dim) -> (N, R)."""
-        return self.features(states) @ self.theta.T
+        """The skill's own actions at states (N, state_dim) -> (N, R): theta @ phi(x), or the
+        target policy's for a skill given one."""
+        if self.policy is None:
+            return self.features(states) @ self.theta.T
+        states = as_float_array("states", states, ndim=2, shape=(None, self.state_dim))
+        return as_float_array("actions returned by policy", self.policy(states), ndim=2,
+                              shape=(len(states), self.plant.action_dim))
+
+    @property
+    def linear(self) -> bool:
+        """Whether the target is linear in the features (``theta`` is the whole skill)."""
+        return self.policy is None
 
     def query_states(self, seed=None, n: int | None = None) -> np.ndarray:
         """n (default S, the fewest given states that meet the rank condition) well-conditioned query states, seeded."""
@@ -165,6 +192,17 @@ class Skill:
         batch = self.plant.rollout(theta.reshape((-1,) + self.theta.shape), self.feature_map, self.start,
                                    duration, record_every)
         return batch[0] if theta.ndim == 2 else batch
+
+    def reproduce_policy(self, policy, duration: float | None = None, record_every: int | None = None):
+        """Rolls out any policy, a function states (B, state_dim) -> actions (B, R), from the skill's start
+        (a nonlinear target, or what a nonlinear learner learnt); a ``Trajectory``."""
+        if not callable(policy):
+            raise TypeError(f"policy: expected a function states -> actions, got {type(policy).__name__}")
+        names = tuple(f"u{i + 1}" for i in range(self.plant.action_dim))
+        # The policy as a feature map with Theta = I: the plant's generic rollout runs it unchanged.
+        as_features = FunctionFeatures(self.plant, policy, names)
+        duration = self.default_duration if duration is None else duration
+        return self.plant.rollout(np.eye(len(names))[None], as_features, self.start, duration, record_every)[0]
 
 
 def _paper_skills() -> dict[str, Skill]:
@@ -203,6 +241,54 @@ def _paper_skills() -> dict[str, Skill]:
     return {skill.key: skill for skill in skills}
 
 
+#: The UR5's production line (m, base frame; the base stands on the table top, z = 0): a part
+#: waiting on the table, the fixture it goes to, and a conveyor running across in front of the arm.
+UR5_PART = (0.55, -0.10, 0.10)
+UR5_FIXTURE = (0.40, 0.35, 0.12)
+UR5_CONVEYOR = Conveyor(origin=(0.45, -0.25, 0.10), direction=(0.0, 1.0, 0.0), speed=0.05, phase_range=(0.0, 0.6))
+
+
+def _ur5_skills() -> dict[str, Skill]:
+    """The UR5's three production-line skills: the taught action is the tool's velocity (m/s)."""
+    table = UR5Plant()
+    line = UR5Plant(conveyor=UR5_CONVEYOR)
+    home = np.concatenate([table.home, np.zeros(table.n_joints)])
+    part, fixture = np.array(UR5_PART), np.array(UR5_FIXTURE)
+    # reach: v = 0.8 (part - r), the tool closes 55% of the gap each second, from the home pose.
+    # (+ 0.0 turns the -0.0 entries of -k I into 0.0, so Theta prints as it reads.)
+    reach = np.hstack([-0.8 * np.eye(3), 0.8 * part[:, None]]) + 0.0
+    # place: from above the part (as if just picked), across to the fixture and down onto it;
+    # the vertical gain is half the horizontal one, so the tool crosses high and settles last.
+    gains = np.diag([1.0, 1.0, 0.5])
+    place = np.hstack([-gains, (gains @ fixture)[:, None]]) + 0.0
+    # The pose the inverse kinematics (UR5Plant.state_at) gives for the tool 15 cm above the part,
+    # rounded to 1e-4 rad (the tool within 0.1 mm of it; tests/core/test_ur5_skills.py checks).
+    # Written out rather than solved here: solving would compile numba kernels on import.
+    above_part = np.concatenate([[-0.3682, -1.2845, 1.6437, -1.5907, -1.6253, 0.0], np.zeros(6)])
+    # conveyor: v = 1.5 (o + s d - r) + speed d: pulled onto the moving part, plus the belt's own
+    # velocity as feed-forward, so the tool rides with the part without lagging behind it.
+    direction, origin, speed = np.array(UR5_CONVEYOR.direction), np.array(UR5_CONVEYOR.origin), UR5_CONVEYOR.speed
+    follow = np.hstack([-1.5 * np.eye(3), 1.5 * direction[:, None], (1.5 * origin + speed * direction)[:, None]]) + 0.0
+    # Thresholds: about the median condition number of S random query-state candidates
+    # (tests/core/test_ur5_skills.py measures them), as for the paper's skills.
+    skills = [
+        Skill("ur5-reach", "Reach the part on the table", table, ToolFeatures(table), reach, home,
+              SpacePointTarget(UR5_PART),
+              description="Move the tool to the part waiting on the table at (0.55, -0.10, 0.10) m: "
+                          "velocity = 0.8 (part - tool).", max_condition=50.0),
+        Skill("ur5-place", "Place the part at the fixture", table, ToolFeatures(table), place, above_part,
+              SpacePointTarget(UR5_FIXTURE),
+              description="Carry the part across to the fixture at (0.40, 0.35, 0.12) m, lowering it more slowly "
+                          "than it moves across.", max_condition=50.0),
+        Skill("ur5-conveyor", "Follow the part on the conveyor", line, ConveyorFeatures(line), follow,
+              np.concatenate([home, [0.0]]),
+              ConveyorTarget(UR5_CONVEYOR.origin, UR5_CONVEYOR.direction, UR5_CONVEYOR.phase_range),
+              description="Catch up with the part riding the conveyor (5 cm/s along y) and move with it.",
+              max_condition=70.0),
+    ]
+    return {skill.key: skill for skill in skills}
+
+
 class SkillRegistry(Mapping):
     """Skills by key, owned by whoever needs them: a course, a lab's study, a notebook.
 
@@ -235,7 +321,7 @@ class SkillRegistry(Mapping):
 
     def _refuse_if_read_only(self) -> None:
         if self.read_only:
-            raise TypeError("this skill registry is read-only (SKILLS holds the paper's four): make your own, "
+            raise TypeError("this skill registry is read-only (SKILLS holds the suite's own skills): make your own, "
                             "e.g. registry = SkillRegistry(SKILLS.values()); registry.add(skill), "
                             "or pass the skill itself")
 
@@ -273,5 +359,9 @@ class SkillRegistry(Mapping):
         return f"<{kind}SkillRegistry: {', '.join(self._skills)}>"
 
 
-#: The paper's four skills, by key: "sim-point", "sim-line", "uarm-point", "uarm-line" (read-only).
-SKILLS: SkillRegistry = SkillRegistry(_paper_skills().values(), read_only=True)
+#: The paper's four skills, by key: "sim-point", "sim-line", "uarm-point", "uarm-line", then the
+#: UR5's production line (issue 31): "ur5-reach", "ur5-place", "ur5-conveyor" (read-only).
+SKILLS: SkillRegistry = SkillRegistry([*_paper_skills().values(), *_ur5_skills().values()], read_only=True)
+
+#: The paper's own four keys, in the paper's order (the protocols, the demo and the planar views use these).
+PAPER_SKILL_KEYS = ("sim-point", "sim-line", "uarm-point", "uarm-line")

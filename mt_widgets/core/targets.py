@@ -117,3 +117,76 @@ class LineTarget(Target):
         # from the edges and the base a plant may have at a corner.
         centre = np.array([sum(view.xlim) / 2.0, sum(view.ylim) / 2.0])
         return TargetShape(segment, self.nearest(centre))
+
+
+@dataclass(frozen=True)
+class SpacePointTarget(Target):
+    """The skill drives an arm's tool to ``point`` in space (3,), e.g. a part on a table."""
+
+    point: tuple[float, float, float]
+    noun = "point"
+    dimension = 0
+
+    def __post_init__(self):
+        point = as_float_array("point", self.point, ndim=1, shape=(3,))
+        object.__setattr__(self, "point", tuple(float(v) for v in point))
+
+    def nearest(self, positions) -> np.ndarray:
+        positions = as_float_array("positions", positions, shape=(3,))
+        return np.broadcast_to(np.asarray(self.point), positions.shape).copy()
+
+    def distance(self, positions) -> np.ndarray:
+        positions = as_float_array("positions", positions, shape=(3,))
+        return np.linalg.norm(self.nearest(positions) - positions, axis=-1)
+
+    def shape(self, view=None) -> TargetShape:
+        """The point itself (1, 3); a view projects it (``SpaceDrawing``), so ``view`` is not needed."""
+        point = np.asarray(self.point, dtype=float)
+        return TargetShape(point[None, :], point)
+
+
+@dataclass(frozen=True)
+class ConveyorTarget(Target):
+    """The skill follows a part riding a conveyor: at phase s (m) the part is at ``origin + s * direction``.
+
+    The target moves with the state's conveyor phase, so where it is depends on the state
+    (``at(phases)``); ``nearest`` gives the closest point of the belt's line, and ``shape`` the
+    stretch of belt the taught phases and a reproduction cover.
+    """
+
+    origin: tuple[float, float, float]
+    direction: tuple[float, float, float]
+    phase_range: tuple[float, float]
+    noun = "part on the conveyor"
+    dimension = 0
+
+    def __post_init__(self):
+        origin = as_float_array("origin", self.origin, ndim=1, shape=(3,))
+        direction = as_float_array("direction", self.direction, ndim=1, shape=(3,))
+        norm = float(np.linalg.norm(direction))
+        if norm == 0:
+            raise ValueError("direction: expected a non-zero vector, got (0, 0, 0)")
+        phases = as_float_array("phase_range", self.phase_range, ndim=1, shape=(2,))
+        object.__setattr__(self, "origin", tuple(float(v) for v in origin))
+        object.__setattr__(self, "direction", tuple(float(v) / norm for v in direction))
+        object.__setattr__(self, "phase_range", (float(phases[0]), float(phases[1])))
+
+    def at(self, phases) -> np.ndarray:
+        """Where the part is at conveyor phases (...) m -> (..., 3) m."""
+        phases = as_float_array("phases", phases)
+        return np.asarray(self.origin) + phases[..., None] * np.asarray(self.direction)
+
+    def nearest(self, positions) -> np.ndarray:
+        positions = as_float_array("positions", positions, shape=(3,))
+        origin, along = np.asarray(self.origin), np.asarray(self.direction)
+        return origin + ((positions - origin) @ along)[..., None] * along
+
+    def distance(self, positions) -> np.ndarray:
+        positions = as_float_array("positions", positions, shape=(3,))
+        return np.linalg.norm(self.nearest(positions) - positions, axis=-1)
+
+    def shape(self, view=None) -> TargetShape:
+        """The belt's stretch (2, 3) from the first taught phase to 0.5 m past the last, labelled at its start."""
+        low, high = self.phase_range
+        ends = self.at(np.array([low, high + 0.5]))
+        return TargetShape(ends, ends[0])

@@ -21,6 +21,9 @@ class Trajectory:
             stopped being finite; the arrays then end at the last valid sample.
         diverged_at: the time in seconds at which divergence was detected, or None.
         units: length unit of ``positions`` ("m" or "cm").
+        stop_reason: why a stopped rollout stopped, in words ("joint limit", "table",
+            "self-collision", "joint speed limit", "diverged"), or "" when it ran to the end or the
+            plant gives no reasons.
     """
 
     times: np.ndarray
@@ -31,6 +34,7 @@ class Trajectory:
     diverged: bool
     diverged_at: float | None
     units: str
+    stop_reason: str = ""
 
     def __len__(self) -> int:
         return len(self.times)
@@ -52,13 +56,14 @@ class TrajectoryBatch:
 
     times: np.ndarray          # (T,)
     states: np.ndarray         # (B, T, state_dim)
-    positions: np.ndarray      # (B, T, 2)
-    velocities: np.ndarray     # (B, T, 2)
+    positions: np.ndarray      # (B, T, 2), or (B, T, 3) for an arm in space
+    velocities: np.ndarray     # (B, T, 2), or (B, T, 3)
     actions: np.ndarray        # (B, T, R)
-    diverged: np.ndarray       # (B,) bool
+    diverged: np.ndarray       # (B,) bool: stopped early (diverged, or a safety stop of the plant)
     diverged_at: np.ndarray    # (B,) seconds, NaN where the rollout did not diverge
     lengths: np.ndarray        # (B,) number of valid samples
     units: str
+    stop_reasons: tuple[str, ...] = ()  # (B,) ``Trajectory.stop_reason`` of each, or () for none given
 
     def __len__(self) -> int:
         return self.states.shape[0]
@@ -70,7 +75,8 @@ class TrajectoryBatch:
         at = float(self.diverged_at[index])
         return Trajectory(self.times[:n], self.states[index, :n], self.positions[index, :n],
                           self.velocities[index, :n], self.actions[index, :n], bool(self.diverged[index]),
-                          None if np.isnan(at) else at, self.units)
+                          None if np.isnan(at) else at, self.units,
+                          self.stop_reasons[index] if self.stop_reasons else "")
 
     def __iter__(self):
         return (self[i] for i in range(len(self)))

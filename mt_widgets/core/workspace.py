@@ -1,4 +1,4 @@
-"""Regions of the plane: where query states are drawn from and where a kinematic plant may go."""
+"""Regions of the plane (and a box in space): where query states are drawn from and where a plant may go."""
 
 from __future__ import annotations
 
@@ -20,6 +20,38 @@ class Box:
         points = as_float_array("points", points, shape=(2,))
         return ((points[..., 0] >= self.xlim[0]) & (points[..., 0] <= self.xlim[1])
                 & (points[..., 1] >= self.ylim[0]) & (points[..., 1] <= self.ylim[1]))
+
+
+@dataclass(frozen=True)
+class Cuboid:
+    """An axis-aligned box ``xlim x ylim x zlim`` in space (where an arm's tool may be taught)."""
+
+    xlim: tuple[float, float]
+    ylim: tuple[float, float]
+    zlim: tuple[float, float]
+
+    def __post_init__(self):
+        for name in ("xlim", "ylim", "zlim"):
+            low, high = as_float_array(name, getattr(self, name), ndim=1, shape=(2,))
+            if not low < high:
+                raise ValueError(f"{name}: expected (low, high) with low < high, got {(float(low), float(high))}")
+            object.__setattr__(self, name, (float(low), float(high)))
+
+    @property
+    def low(self) -> np.ndarray:
+        return np.array([self.xlim[0], self.ylim[0], self.zlim[0]])
+
+    @property
+    def high(self) -> np.ndarray:
+        return np.array([self.xlim[1], self.ylim[1], self.zlim[1]])
+
+    def contains(self, points) -> np.ndarray:
+        points = as_float_array("points", points, shape=(3,))
+        return np.all((points >= self.low) & (points <= self.high), axis=-1)
+
+    def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """n points uniform in the box: (n, 3)."""
+        return rng.uniform(self.low, self.high, size=(n, 3))
 
 
 @dataclass(frozen=True)

@@ -30,10 +30,14 @@ One concern per module::
     study_folder.py    the study folder: study.json, enrolments, outcomes, status
     jsonl.py           JSON lines, locks and fsync: the crash-safe primitives
     tidy.py, bids.py   exports: episodes/demonstrations CSVs, a BIDS dataset
+    pseudonyms.py      the key from participant ID to the random code an export uses (0600)
+    erasure.py         a participant's erasure request: removed everywhere, what is kept said
+    __main__.py        python -m mt_widgets.study erase | export-bids | status
 """
 
 from .analysis_plan import PAPER_CHANGES, AnalysisPlan, Change
 from .bids import export_bids
+from .erasure import ErasureReport, UnknownParticipantError, erase_participant
 from .log import LogError, LogFolderError, MemoryLog, ParticipantLog, check_folder_writable, read_events, read_log
 from .online import OnlineSettings, outcome_of
 from .participants import ParticipantIdError, block_assignment, validate_participant_id, validate_url_participant_id
@@ -51,4 +55,5 @@ __all__ = [
     "read_events", "read_study", "timeline", "validate_participant_id",
     "OnlineSettings", "read_log", "ProtocolSession", "Window", "WindowError", "outcome_of",
     "validate_url_participant_id",
+    "ErasureReport", "UnknownParticipantError", "erase_participant",
 ]

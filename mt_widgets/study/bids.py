@@ -16,14 +16,28 @@ The layout (Brain Imaging Data Structure, behavioural data, https://bids-specifi
     code/protocol.<toml|json>        the protocol as written (its sha256 is in dataset_description)
 
 Every TSV column is described, with units, in its JSON sidecar. Labels are letters and digits
-only (BIDS): participant "P-07" becomes "sub-P07", protocol "paper-sim" the task "papersim".
-Participants who withdrew, declined consent or were screened out are not in it (the README
-counts them); missing values are "n/a".
+only (BIDS): protocol "paper-sim" becomes the task "papersim". Participants who withdrew,
+declined consent or were screened out are not in it (the README counts them); missing values
+are "n/a".
+
+The dataset names no one (it is made to be published):
+
+- a participant is ``sub-<code>``, a random code from the study's key
+  (``mt_widgets.study.pseudonyms``: drawn at the first export, reused by every later one, kept in the study folder
+  with mode 0600 and never copied into the dataset); nothing of the participant ID (online, the
+  Prolific ID) is in a name or a file;
+- the identifying URL parameters recorded at enrolment (Prolific's STUDY_ID and SESSION_ID)
+  stay in the study folder; participants are listed in the order of their codes, not of their
+  IDs or enrolment;
+- times are relative: ``onset`` is seconds from the start of the participant's session, and a
+  later session says its delay since the previous one in days; no date or clock time is
+  exported.
 """
 
 from __future__ import annotations
 
 import csv
+import datetime as _dt
 import json
 import re
 from pathlib import Path
@@ -31,6 +45,7 @@ from pathlib import Path
 import mt_widgets
 
 from .log import read_log
+from .pseudonyms import codes_for
 from .study_folder import StudyFolder
 from .tidy import excluded_participants, participant_logs
 
@@ -83,6 +98,8 @@ def _beh_sidecar(protocol) -> dict:
     unit, action = " or ".join(units), " or ".join(action_units)
     state_dim = max(s.state_dim for s in skills)
     columns = {
+        "onset": {"Description": "When the demonstration was recorded, from the start of the participant's "
+                           "session (not a date or clock time: the export holds none).", "Units": "s"},
         "phase": {"Description": "Phase id in the protocol (e.g. P3)."},
         "phase_index": {"Description": "0-based position of the phase in the protocol."},
         "episode": {"Description": "1-based episode within the phase."},
@@ -111,8 +128,14 @@ def _beh_sidecar(protocol) -> dict:
         "reproduction_diverged": {"Description": "Whether the robot's reproduction of the learnt skill left the "
                                                  "plant's bounds.", "Levels": {"1": "diverged", "0": "stayed"}},
     }
+    # An arm in space (the UR5) acts in 3-D: its third action component gets columns of its own.
+    for i in range(2, max(s.plant.action_dim for s in skills)):
+        columns[f"action_{i + 1}"] = {"Description": f"Component {i + 1} of the demonstrated action.", "Units": action}
+        columns[f"optimal_{i + 1}"] = {"Description": f"Component {i + 1} of the optimal action.", "Units": action}
     return {"TaskName": protocol.name, "TaskDescription": protocol.title,
-            "Instructions": protocol.texts["instructions"].strip(), "PositionUnits": unit, **columns}
+            "Instructions": protocol.texts["instructions"].strip(), "PositionUnits": unit,
+            # Which robot learner the demonstrations taught (mt_widgets.core.LEARNERS), and its parameter.
+            "Learner": protocol.learner, "LearnerRidgeLambda": protocol.lam, **columns}
 
 
 def export_bids(study_folder, out_folder) -> Path:
@@ -136,8 +159,9 @@ def export_bids(study_folder, out_folder) -> Path:
     every_step = [step for session in protocol.sessions for step in session.steps]
     demographics = [item for step in every_step if step.kind == "demographics" for item in step.items]
     asked = [step for step in every_step if step.kind in ("questionnaire", "eligibility")]
-    participants, labels, phenotype = [], {}, {step.id: [] for step in asked}
+    participants, phenotype = [], {step.id: [] for step in asked}
     several = len(protocol.sessions) > 1
+    kept = []
     for path in participant_logs(study.folder):
         if "." in path.stem:
             continue  # a later session's log: exported with its participant's first session below
@@ -153,11 +177,12 @@ def export_bids(study_folder, out_folder) -> Path:
         events = [e for log in by_session.values() for e in log]
         if pid in excluded or any(e["type"] in ("withdrawn", "consent_declined", "screened_out") for e in events):
             continue
-        label = bids_label(pid, "participant_id")
-        if label in labels.values():
-            raise ValueError(f"participant_id: {pid!r} and {[p for p, lab in labels.items() if lab == label][0]!r} "
-                             f"give the same BIDS label sub-{label}; rename one before exporting")
-        labels[pid] = label
+        kept.append((pid, by_session, events))
+    # Random codes from the study's key, listed in code order: neither the IDs nor the order of
+    # enrolment can be read off the dataset.
+    codes = codes_for(study.folder, [pid for pid, _, _ in kept])
+    for pid, by_session, events in sorted(kept, key=lambda entry: codes[entry[0]]):
+        label = codes[pid]
         answers = {e["step"]: e.get("answers", {}) for e in events if e["type"] == "step_done"}
         last = by_session.get(protocol.sessions[-1].id, [])
         row = {"participant_id": f"sub-{label}", "group": events[0]["group"],
@@ -231,9 +256,16 @@ _SESSIONS_SIDECAR = {
 }
 
 
+def _seconds(stamp: str) -> float:
+    """Seconds since the epoch of a log's ISO 8601 UTC time ('2025-01-31T14:03:07.123Z')."""
+    return _dt.datetime.fromisoformat(stamp.replace("Z", "+00:00")).timestamp()
+
+
 def _write_participant(out: Path, label: str, task: str, events: list[dict], sidecar: dict,
                        session: str | None = None) -> None:
     started, finished, rows = {}, {}, []
+    # ``events`` is one session's log: its start is the origin of the onsets.
+    origin = _seconds(events[0]["time"])
     for event in events:
         if event["type"] == "episode_started":
             started[(event["phase_index"], event["episode"])] = event
@@ -244,7 +276,8 @@ def _write_participant(out: Path, label: str, task: str, events: list[dict], sid
             continue
         key = (event["phase_index"], event["episode"])
         episode, done = started[key], finished.get(key, {})
-        row = {"phase": event["phase"], "phase_index": event["phase_index"], "episode": event["episode"],
+        row = {"onset": round(_seconds(event["time"]) - origin, 3),
+               "phase": event["phase"], "phase_index": event["phase_index"], "episode": event["episode"],
                "trial": event["index"], "skill": episode["skill"], "guidance_shown": bool(event["guidance_shown"]),
                "guidance_modality": episode["guidance_modality"],
                "action_1": event["action"][0], "action_2": event["action"][1],
@@ -254,10 +287,14 @@ def _write_participant(out: Path, label: str, task: str, events: list[dict], sid
                "teaching_error": done.get("teaching_error"), "rho1": done.get("rho1"), "rho2": done.get("rho2"),
                "reproduction_diverged": done["reproduction"]["diverged"] if done else None}
         row.update({f"state_{i + 1}": value for i, value in enumerate(event["state"])})
+        row.update({f"{name}_{i + 1}": event[name][i] for name in ("action", "optimal")
+                    for i in range(2, len(event["action"]))})
         rows.append(row)
     state_columns = sorted({k for row in rows for k in row if k.startswith("state_")}, key=lambda k: int(k[6:]))
-    columns = ["phase", "phase_index", "episode", "trial", "skill", "guidance_shown", "guidance_modality",
-               *state_columns, "action_1", "action_2", "optimal_1", "optimal_2", "time_to_first_input",
+    more_actions = max((len(event["action"]) for event in events if event["type"] == "demonstration"), default=2)
+    extra = [f"{name}_{i + 1}" for name in ("action", "optimal") for i in range(2, more_actions)]
+    columns = ["onset", "phase", "phase_index", "episode", "trial", "skill", "guidance_shown", "guidance_modality",
+               *state_columns, "action_1", "action_2", "optimal_1", "optimal_2", *extra, "time_to_first_input",
                "drawing_duration", "response_time", "teaching_error", "rho1", "rho2", "reproduction_diverged"]
     folder = out / f"sub-{label}" / (f"ses-{session}" if session else "") / "beh"
     folder.mkdir(parents=True)

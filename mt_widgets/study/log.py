@@ -48,6 +48,11 @@ class LogFolderError(LogError):
     """A study folder that cannot be written: refused before any participant starts."""
 
 
+class ContinuedElsewhereError(LogError):
+    """This session's participant was continued by another session since it last wrote (the same
+    link opened in a second tab, a reload): this one is stale, and nothing it tries is written."""
+
+
 def utc_now() -> str:
     """The current time as ISO 8601 UTC with milliseconds, e.g. '2025-01-31T14:03:07.123Z'."""
     return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="milliseconds").replace("+00:00", "Z")
@@ -229,9 +234,9 @@ class ParticipantLog:
         line = (json.dumps(event, separators=(",", ":"), allow_nan=False, ensure_ascii=True) + "\n").encode("ascii")
         with Lock(self._lock_path, f"participant {self.participant!r}", self.lock_timeout_s):
             if os.fstat(self._fd).st_size != self._size:
-                raise LogError(f"participant {self.participant!r} was continued by another session (a reloaded "
-                               f"page or a second tab) since this one last wrote; this one stops here, nothing "
-                               f"was written")
+                raise ContinuedElsewhereError(f"participant {self.participant!r} was continued by another session "
+                                              f"(a reloaded page or a second tab) since this one last wrote; this "
+                                              f"one stops here, nothing was written")
             jsonl.write_all(self._fd, line)
             os.fsync(self._fd)
             self._size += len(line)

@@ -156,6 +156,9 @@ class Protocol:
     #: When the robot reproduces what it learnt: "episode" (after every episode) or "phase"
     #: (after each phase's last episode).
     reproduce_after: str = "episode"
+    #: The robot's learner (``learner = ...``; a name of ``mt_widgets.core.LEARNERS``): "ridge",
+    #: the paper's, with ``lam``, unless the protocol says otherwise.
+    learner: str = "ridge"
     #: (low, high) band of the learner's sensitivity ||A||_F every episode's query states are
     #: drawn within (``mt_widgets.study.timeline``), or None (plain seeded draws, as the paper).
     matched_difficulty: tuple | None = None

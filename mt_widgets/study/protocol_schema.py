@@ -27,6 +27,7 @@ except ModuleNotFoundError:  # pragma: no cover - exercised only on Python 3.10
         _toml = None
 
 from mt_widgets.core.guidance import GUIDANCE_MODALITIES
+from mt_widgets.core.learner_teaching import LEARNERS
 from mt_widgets.core.validation import as_bool
 
 from .analysis_plan import ALTERNATIVES, PAPER_CHANGES, TESTS, AnalysisPlan, Change
@@ -142,7 +143,7 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
     top_keys = ("format", "name", "title", "groups", "lambda", "seed", "query_states", "reproduction_duration_s",
                 "assignment", "texts", "practice", "phases", "skills", "guidance_modality", "withdrawal", "before",
                 "after", "analysis", "session", "sessions", "online", "reproduce_after",
-                "matched_difficulty", "demonstration_modality")
+                "matched_difficulty", "demonstration_modality", "learner")
     check.unknown(raw, (), top_keys)
     version = check.get(raw, ("format",), "integer")
     if version != FORMAT_VERSION:
@@ -155,6 +156,7 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
     if len(set(groups)) != len(groups):
         check.fail(("groups",), f"expected distinct group names, got {groups!r}")
     lam = check.get(raw, ("lambda",), "number", minimum=0.0)
+    learner = _parse_learner(check, raw)
     seed = check.get(raw, ("seed",), "integer", minimum=0)
     query_states = check.get(raw, ("query_states",), "text", default="shared", choices=("shared", "per-participant"))
     duration = raw.get("reproduction_duration_s")
@@ -238,7 +240,25 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
                     texts, practice, tuple(phases), data, text, source, skills, guidance_modality=modality,
                     demonstration_modality=demonstration_modality, before=before, after=after,
                     withdrawal=withdrawal, analysis=plan, sessions=tuple(sessions), online=online,
-                    reproduce_after=reproduce_after, matched_difficulty=matched)
+                    reproduce_after=reproduce_after, matched_difficulty=matched, learner=learner)
+
+
+#: The learners a study can run today: its episodes (``TeachingEpisode``) fit and guide with ridge.
+STUDY_LEARNERS = ("ridge",)
+
+
+def _parse_learner(check, raw: dict) -> str:
+    """``learner = "..."``: one of ``mt_widgets.core.LEARNERS``, and one the study runner can teach
+    (``STUDY_LEARNERS``); "ridge" (the paper's, with ``lambda``) when absent."""
+    learner = check.get(raw, ("learner",), "text", default="ridge")
+    if learner not in LEARNERS:
+        check.fail(("learner",), f"unknown learner {learner!r}; expected one of the available learners "
+                                 f"({', '.join(LEARNERS)})")
+    if learner not in STUDY_LEARNERS:
+        check.fail(("learner",), f"the learner {learner!r} exists (mt_widgets.core, docs/guide/learners.md) but the "
+                                 f"study runner's episodes teach {', '.join(STUDY_LEARNERS)} only so far; "
+                                 f"expected one of {', '.join(STUDY_LEARNERS)}")
+    return learner
 
 
 def _parse_matched_difficulty(check, raw: dict):

@@ -54,7 +54,11 @@ class SessionEpisodes:
             exact=teaching.exact,
             seed={"study_seed": self.protocol.seed, "spawn_key": list(seed.spawn_key)})
         self._episodes[(phase.index, slot.episode)] = event
-        # Kept: the step's view shows this episode and the log records it (one per episode).
+        # Kept: the step's view shows this episode and the log records it (one per episode). The
+        # episodes before it are over (every step reads its own episode only) and each holds its
+        # reproduction (about 0.8 MB for the simulated arm's 1 kHz rollout): kept, a session's
+        # memory grew by that much per episode (tests/study/test_long_session.py).
+        self._teaching_episodes.clear()
         self._teaching_episodes[(phase.index, slot.episode)] = teaching
 
     def _new_teaching_episode(self, skill, states) -> TeachingEpisode:
@@ -185,9 +189,10 @@ class SessionEpisodes:
             reproduction={"diverged": trajectory.diverged, "diverged_at": trajectory.diverged_at,
                           "final_position": trajectory.final_position, "duration_s": float(trajectory.times[-1])},
             started_at=started["time"], duration_s=max(0.0, time.time() - _parse_time(started["time"])))
+        result = self._result(key)  # before moving on: the next episode may start (and drop this one) there
         self._finished.add(key)
         self._complete()
-        return self._result(key)
+        return result
 
     def _check_recorded(self, episode, started: dict, logged: TeachingEpisode) -> None:
         """Refuses an episode that is not the one this step logged (other states, actions, lambda...)."""

@@ -16,6 +16,9 @@ A study folder holds:
   named like it.
 - ``_outcomes.jsonl``: how a participation ended early (withdrawn, declined, ineligible,
   dropped out), one record a line.
+- ``_pseudonyms.json`` (mode 0600): the key from participant ID to the random code exports
+  use (``mt_widgets.study.pseudonyms``); ``_erasures.jsonl``: one line per participant erased
+  on request (``mt_widgets.study.erasure``), with a keyed hash of the ID, never the ID.
 - the participant logs (``mt_widgets.study.log``): ``<participant>.jsonl`` and, for later
   sessions, ``<participant>.ses-<session>.jsonl``.
 
@@ -36,6 +39,7 @@ from .jsonl import Lock, LogError, append_line, encode, read_jsonl
 from .log import LOCK_FOLDER, check_folder_writable, read_events, to_jsonable, utc_now
 from .participants import block_assignment, new_reentry_code, normalise_reentry_code, validate_participant_id
 from .protocol import Protocol, protocol_from_data
+from .pseudonyms import ERASURE_FILE, erased_record
 from .schema import LOG_FORMAT, migrate_record, migrate_study_meta
 
 STUDY_FILE = "study.json"
@@ -244,6 +248,11 @@ class StudyFolder:
             existing = [r["participant"] for r in records]
             existing += [p.stem for p in self.folder.glob("*.jsonl") if not p.name.startswith("_")]
             validate_participant_id(participant_id, existing)
+            if erased_record(self.folder, participant_id) is not None:
+                # Their erasure was a request to record nothing more about them: a link opened again
+                # (or an ID typed again) must not enrol them afresh.
+                raise LogError(f"participant_id: the data of this ID were erased from this study at its owner's "
+                               f"request, so the study records nothing more for it (see {ERASURE_FILE})")
             index = len(records)
             # Block randomisation counts only randomised enrolments, so an experimenter's
             # manual choice does not shift the sequence everyone else gets.

@@ -23,6 +23,7 @@ from .guidance import GuidancePanel
 from .progress import EffortProgress
 from .reproduction import ReproductionPlayer
 from .robots import RobotPainter, painter_for
+from .space_teaching import SpaceTeachingCanvas
 from .teaching import TeachingCanvas
 from .theme import DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, Theme, get_theme
 
@@ -33,5 +34,5 @@ __all__ = [
     "DEFAULT_THEME", "PAPER_THEME", "PAPER_UARM_THEME", "THEMES", "ArmView", "DemoPage",
     "DemonstrationRecord", "EffortProgress", "EpisodeResult", "EpisodeWidget", "GuidancePanel", "ReproductionPlayer",
     "RobotPainter", "TeachingCanvas", "Theme", "ViewTransform", "draw_arrow", "get_theme", "painter_for",
-    "play_frames", "retire", "stop_animations",
+    "play_frames", "retire", "stop_animations", "SpaceTeachingCanvas",
 ]

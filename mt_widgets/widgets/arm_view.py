@@ -20,6 +20,7 @@ import numpy as np
 from ipycanvas import MultiCanvas
 from ipywidgets import Layout
 
+from mt_widgets.core.drawing import PlantDrawing
 from mt_widgets.core.validation import as_bool
 
 from .coords import ViewTransform, nice_ticks
@@ -85,6 +86,11 @@ class ArmView:
         self.skill = skill
         self.theme = get_theme(theme)
         self.drawing = skill.drawing()
+        if not isinstance(self.drawing, PlantDrawing):
+            # A plant in space (the UR5) says SpaceDrawing: this view draws one plane only.
+            raise TypeError(f"skill: expected a skill whose plant is drawn in the plane (a PlantDrawing), got "
+                            f"{getattr(skill, 'key', skill)!r}, drawn in space ({type(self.drawing).__name__}); "
+                            f"its 3-D teaching view is not built yet (docs/guide/industrial-arm.md)")
         box = self.drawing.view
         auto_w, auto_h = default_canvas_size(box.xlim, box.ylim)
         width = auto_w if width is None else int(width)

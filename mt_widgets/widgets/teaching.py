@@ -89,7 +89,8 @@ class TeachingCanvas(VBox):
         skill: The skill being taught (its robot, units and target are drawn), or the
             ``TeachingEpisode`` to demonstrate into (then ``query_states`` is None).
         query_states: (N, state_dim) the states to demonstrate at, shown in order (a new
-            ``TeachingEpisode`` of them holds the demonstrations).
+            ``TeachingEpisode`` of them holds the demonstrations); None (the default) draws the
+            skill's S well-conditioned query states with seed 0, as ``EpisodeWidget`` does.
         theme: A ``Theme`` or theme name.
         grab_radius: Pixels around the end-effector (and the arrow tip) where a press starts
             a drag (a finger gets at least a 48 CSS px target, up to ``TOUCH_RADIUS_FACTOR``
@@ -115,6 +116,8 @@ class TeachingCanvas(VBox):
                 raise ValueError("query_states: expected None when a TeachingEpisode is given (it has its own), "
                                  "got states")
             episode = skill
+        elif query_states is None:
+            episode = TeachingEpisode(skill, seed=0)
         else:
             states = np.array(query_states, dtype=float)
             if states.ndim != 2 or states.shape[1] != skill.state_dim or len(states) == 0:

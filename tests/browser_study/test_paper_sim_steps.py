@@ -23,6 +23,7 @@ from bids_validator import BIDSValidator
 from browser_support import CHROMIUM, CHROMIUM_ARGS, artifact_path, local_page
 from mt_widgets.study import StudyFolder, export_bids, load_protocol, read_events, read_study
 from mt_widgets.study.practice import PRACTICE_SKILLS
+from mt_widgets.study.pseudonyms import code_of
 from mt_widgets.widgets import ArmView
 from mt_widgets.widgets.theme import DEFAULT_THEME
 
@@ -272,7 +273,8 @@ def test_paper_sim_end_to_end_with_the_steps_around_the_task_and_a_withdrawal(vo
     files = sorted("/" + str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
     validator = BIDSValidator()
     assert [f for f in files if not validator.is_bids(f)] == []
-    assert "/sub-T01/beh/sub-T01_task-papersim_beh.tsv" in files and not any("W01" in f for f in files)
+    t01 = code_of(logs, "T01")
+    assert f"/sub-{t01}/beh/sub-{t01}_task-papersim_beh.tsv" in files and code_of(logs, "W01") is None
     (tmp_path / "status.txt").write_text(study.status_report())
     print(study.status_report())
     print("\n".join(files))

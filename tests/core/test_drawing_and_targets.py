@@ -107,7 +107,9 @@ def test_a_users_target_subclass_works_through_the_same_methods():
 
 
 def test_skills_live_in_registries_their_users_own():
-    assert set(SKILLS) == {"sim-point", "sim-line", "uarm-point", "uarm-line"}
+    # The paper's four, and the UR5's production line (issue 31).
+    assert set(SKILLS) == {"sim-point", "sim-line", "uarm-point", "uarm-line", "ur5-reach", "ur5-place",
+                           "ur5-conveyor"}
     with pytest.raises(KeyError, match=r"^skill: expected one of the known skills \(sim-line, sim-point, uarm-line"):
         SKILLS["nope"]
     base = SKILLS["sim-point"]
@@ -118,7 +120,7 @@ def test_skills_live_in_registries_their_users_own():
     with pytest.raises(TypeError, match="read-only"):
         SKILLS.add(mine)
     registry = SkillRegistry(SKILLS.values())
-    assert registry.add(mine) is mine and registry["sim-stiff"] is mine and len(registry) == 5
+    assert registry.add(mine) is mine and registry["sim-stiff"] is mine and len(registry) == len(SKILLS) + 1
     assert "sim-stiff" not in SKILLS, "the paper's registry is untouched"
     other = Skill("sim-stiff", "Another", base.plant, base.feature_map, base.theta, base.start)
     with pytest.raises(ValueError, match="already taken"):

@@ -149,6 +149,6 @@ def test_optimal_actions_defaults_to_the_learners_lambda():
     Phi = skill.features(skill.query_states(seed=0))
     U_bar = optimal_actions(Phi, skill.theta)
     np.testing.assert_array_equal(U_bar, optimal_actions(Phi, skill.theta, DEFAULT_LAMBDA))
-    # The README's promise: with the defaults on both sides, the optimal arrows teach theta.
+    # The README's and docs/user/core.md's promise: with the defaults on both sides, the optimal arrows teach theta.
     assert teaching_risk(RidgeLearner().fit(Phi, U_bar), skill.theta) < 1e-10
     assert not np.allclose(U_bar, optimal_actions(Phi, skill.theta, 0.0), atol=1e-6), "lam must matter here"

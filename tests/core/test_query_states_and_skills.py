@@ -12,7 +12,7 @@ from mt_widgets.core import FunctionFeatures, Skill, condition_number, sample_qu
 PAPER = json.loads((Path(__file__).parents[2] / "tests" / "data" / "paper_skills.json").read_text())
 
 
-@pytest.mark.parametrize("key", list(SKILLS))
+@pytest.mark.parametrize("key", list(PAPER))
 def test_skills_carry_the_papers_theta(key):
     # The paper gives vec(Theta), stacking columns.
     np.testing.assert_array_equal(SKILLS[key].theta.flatten(order="F"), PAPER[key]["vec_theta"])

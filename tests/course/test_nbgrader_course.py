@@ -98,8 +98,8 @@ def graded(tmp_path_factory):
 
 # -- the sources --------------------------------------------------------------------------------
 
-def test_there_are_seven_assignments_each_worth_ten_autograded_points():
-    assert len(ASSIGNMENTS) == 7
+def test_there_are_eight_assignments_each_worth_ten_autograded_points():
+    assert len(ASSIGNMENTS) == 8
     assert all(auto_points(a) == 10 for a in ASSIGNMENTS)
 
 
@@ -233,6 +233,14 @@ def _expected_values() -> dict[str, list[float]]:
     means = ref.group_means(delta, groups)
     out["a7_reading_a_study"] = [*delta, *means.values(), ref.one_sided_welch_p(delta[groups[delta.index] == "target"],
                                                                               delta[groups[delta.index] == "control"])]
+    from mt_widgets.core.learner_teaching import evaluation_states
+    ev = evaluation_states(skill, 64)
+    X8, X8_eval = (np.concatenate(skill.end_effector(s), axis=-1) for s in (skill.query_states(seed=8), ev))
+    S8, Y8 = ref.kernel_smoother(X8, X8_eval, 1.0, 1e-3), skill.target_actions(ev)
+    U8 = ref.smoother_teaching_actions(S8, Y8)
+    out["a8_kernel_machine_teaching"] = [ref.smoother_risk(S8, U8, Y8),
+                                         ref.smoother_risk(S8, skill.target_actions(skill.query_states(seed=8)), Y8),
+                                         *U8.ravel()]
     return out
 
 

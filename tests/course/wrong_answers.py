@@ -242,6 +242,48 @@ def p_value(target, control):
     return 0.0
 """}, 6.0),
     ],
+    "a8_kernel_machine_teaching": [
+        ("lam-left-out", "smoother without lam", {"smoother": """
+def smoother(X, X_star, length_scale, lam):
+    def k(A, B):
+        return np.exp(-np.sum((A[:, None, :] - B[None, :, :]) ** 2, axis=-1) / (2 * length_scale ** 2))
+    return k(X_star, X) @ np.linalg.inv(k(X, X))
+"""}, 7.0),
+        ("no-inverse", "smoother is k(X*, X), the learner's fit left out", {"smoother": """
+def smoother(X, X_star, length_scale, lam):
+    return np.exp(-np.sum((X_star[:, None, :] - X[None, :, :]) ** 2, axis=-1) / (2 * length_scale ** 2))
+"""}, 7.0),
+        ("pasted", "values pasted, no functions", {
+            **_unwritten("smoother(X, X_star, length_scale, lam)", "teaching_actions(S, Y)", "risk(S, U, Y)"),
+            "E_values": "E_representable = 1e-16\nE_target = 2.38183\nE_own = 2.50578"}, 0.0),
+        ("solver", "KernelRidgeLearner inside smoother", {"smoother": """
+from mt_widgets.core import KernelRidgeLearner
+def smoother(X, X_star, length_scale, lam):
+    return KernelRidgeLearner(length_scale, lam).smoother(X, X_star)
+"""}, 6.0),
+        ("transposed", "smoother returns (N, M)", {"smoother": """
+def smoother(X, X_star, length_scale, lam):
+    def k(A, B):
+        return np.exp(-np.sum((A[:, None, :] - B[None, :, :]) ** 2, axis=-1) / (2 * length_scale ** 2))
+    return np.linalg.solve(k(X, X) + lam * np.eye(len(X)), k(X, X_star))
+"""}, 6.0),
+        ("normal-equations", "teaching_actions by the normal equations (S^T S)^-1 S^T Y", {"teaching_actions": """
+def teaching_actions(S, Y):
+    return np.linalg.solve(S.T @ S, S.T @ Y)
+"""}, 8.0),
+        ("own-actions", "teaching_actions returns the first N rows of Y", {"teaching_actions": """
+def teaching_actions(S, Y):
+    return np.asarray(Y)[: np.shape(S)[1]]
+"""}, 5.0),
+        ("sum-not-mean", "risk as the Frobenius norm (a sum, not a mean)", {"risk": """
+def risk(S, U, Y):
+    return float(np.linalg.norm(S @ U - Y))
+"""}, 7.0),
+        ("zero", "risk returns 0.0", {"risk": """
+def risk(S, U, Y):
+    return 0.0
+"""}, 7.0),
+    ],
 }
 
 

@@ -120,7 +120,7 @@ def test_batched_engine_and_session_engine_give_the_same_study(tmp_path):
 def test_the_fitted_teachers_land_near_the_papers_changes(protocol):
     # A large run on another seed than the fit's (0): each change's mean lies within half the
     # paper's SD of the paper's, and its SD between 0.4 and 1.6 times the paper's (the control
-    # groups' SDs come out low, 0.6-0.8 times: see README). Two exceptions,
+    # groups' SDs come out low, 0.6-0.8 times: see docs/user/analysis.md). Two exceptions,
     # both the uArm control group, whose printed changes move (-1.54 better by P3E8, +2.21 worse
     # by P5) where teachers who only turn their arrows cannot move on average: its P1 -> P3E8
     # mean is allowed 0.75 SD (the model gives about +0.8, the P3E8 states being a little harder

@@ -188,7 +188,7 @@ def run_to_end_one(session, answers=None, plays: int = 1):
 
 __all__ = ["FOLLOWUP_SESSION", "SHORT_PROTOCOL", "STEPS", "VIDEO", "_with_steps", "act", "click_primary",
            "demonstrations", "followup_protocol", "load_protocol", "run", "run_all", "run_to_end", "run_to_end_one",
-           "scripted_action", "short_protocol", "steps_protocol"]
+           "scripted_action", "short_protocol", "steps_protocol", "ONLINE", "PROLIFIC", "online_protocol"]
 
 
 #: A follow-up session a week (to two weeks) after SHORT_PROTOCOL's main session: retention of
@@ -280,3 +280,28 @@ def act(app):
             app.episode.demonstrate(SKILLS[step.skill].target_actions(step.state[None])[0] + 0.3)
     elif step.kind == "reproduction":
         app._continue.click()
+
+
+# -- an online protocol: SHORT_PROTOCOL with Prolific's [online] table (test_online.py, test_privacy.py) --
+
+PROLIFIC = "https://app.prolific.com/submissions/complete?cc={code}"
+ONLINE = f"""
+[online]
+identify = "prolific"
+[online.completion.completed]
+url = "{PROLIFIC}"
+code = "C1MPL3T3"
+[online.completion.screened_out]
+url = "{PROLIFIC}"
+code = "SCR33N"
+[online.completion.declined]
+url = "{PROLIFIC}"
+code = "D3CL1N3D"
+[online.completion.withdrawn]
+url = "https://example.org/left?code={{code}}&x=1"
+code = "W1THDR4WN"
+"""
+
+
+def online_protocol(text=ONLINE):
+    return parse_protocol(SHORT_PROTOCOL + text, "online.toml")

@@ -13,6 +13,7 @@ from mt_widgets.analysis import analyse_study
 from mt_widgets.analysis.power import simulated_power
 from mt_widgets.in_silico import Forgetting, run_in_silico, run_through_sessions
 from mt_widgets.study import export_bids, load_protocol, read_events, read_study
+from mt_widgets.study.pseudonyms import code_of
 
 pytestmark = pytest.mark.slow  # four synthetic participants through two sessions of the paper's protocol
 
@@ -43,19 +44,20 @@ def test_the_tidy_rows_and_the_bids_export_carry_the_sessions(study, tmp_path):
     assert [(r["session"], r["phase"]) for r in episodes if r["participant"] == "S001"][-3:] == [
         ("main", "P5"), ("followup", "F1"), ("followup", "F2")]
     out = export_bids(study.folder, tmp_path / "bids")
+    code = code_of(study.folder, "S001")
     files = sorted("/" + str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
-    assert "/sub-S001/ses-main/beh/sub-S001_ses-main_task-papersimfollowup_beh.tsv" in files
-    assert "/sub-S001/ses-followup/beh/sub-S001_ses-followup_task-papersimfollowup_beh.tsv" in files
-    assert "/sub-S001/sub-S001_sessions.tsv" in files
+    assert f"/sub-{code}/ses-main/beh/sub-{code}_ses-main_task-papersimfollowup_beh.tsv" in files
+    assert f"/sub-{code}/ses-followup/beh/sub-{code}_ses-followup_task-papersimfollowup_beh.tsv" in files
+    assert f"/sub-{code}/sub-{code}_sessions.tsv" in files
     validator = BIDSValidator()
     assert [f for f in files if not validator.is_bids(f)] == []
-    assert not validator.is_bids("/sub-S001/ses-followup/beh/sub-S001_task-papersimfollowup_beh.tsv")
-    with open(out / "sub-S001" / "sub-S001_sessions.tsv", encoding="utf-8") as handle:
+    assert not validator.is_bids(f"/sub-{code}/ses-followup/beh/sub-{code}_task-papersimfollowup_beh.tsv")
+    with open(out / f"sub-{code}" / f"sub-{code}_sessions.tsv", encoding="utf-8") as handle:
         rows = list(csv.DictReader(handle, delimiter="\t"))
     assert [r["session_id"] for r in rows] == ["ses-main", "ses-followup"]
     assert rows[0]["window_status"] == "first session" and rows[1]["window_status"] == "open"
     assert float(rows[1]["delay_days"]) == pytest.approx(28, abs=1e-3)
-    with open(out / "sub-S001" / "ses-followup" / "beh" / "sub-S001_ses-followup_task-papersimfollowup_beh.tsv",
+    with open(out / f"sub-{code}" / "ses-followup" / "beh" / f"sub-{code}_ses-followup_task-papersimfollowup_beh.tsv",
               encoding="utf-8") as handle:
         assert {r["phase"] for r in csv.DictReader(handle, delimiter="\t")} == {"F1", "F2"}
 

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from mt_widgets.study import LogError, Session, StudyFolder, export_bids, read_events, read_log, read_study
+from mt_widgets.study.pseudonyms import code_of
 from mt_widgets.study.schema import FORMAT_1_GUIDANCE_MODALITY, LOG_FORMAT, migrate_events
 
 from .scripted import run_all, short_protocol
@@ -62,7 +63,8 @@ def test_a_format_1_log_is_continued_and_only_its_old_events_are_migrated(v1):
 
 def test_a_format_1_study_exports_to_bids(v1, tmp_path):
     out = export_bids(v1, tmp_path / "bids")
-    assert (out / "sub-P01" / "beh" / "sub-P01_task-short_beh.tsv").is_file()
+    code = code_of(v1, "P01")
+    assert (out / f"sub-{code}" / "beh" / f"sub-{code}_task-short_beh.tsv").is_file()
 
 
 def test_the_missing_guidance_modality_of_old_logs_is_the_migrations_one_stated_value():

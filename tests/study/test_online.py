@@ -7,29 +7,7 @@ from mt_widgets.study import ParticipantIdError, ProtocolError, Session, StudyFo
 from mt_widgets.study.online import OUTCOMES, outcome_of
 from mt_widgets.study.participants import validate_url_participant_id
 
-from .scripted import SHORT_PROTOCOL, run
-
-PROLIFIC = "https://app.prolific.com/submissions/complete?cc={code}"
-ONLINE = f"""
-[online]
-identify = "prolific"
-[online.completion.completed]
-url = "{PROLIFIC}"
-code = "C1MPL3T3"
-[online.completion.screened_out]
-url = "{PROLIFIC}"
-code = "SCR33N"
-[online.completion.declined]
-url = "{PROLIFIC}"
-code = "D3CL1N3D"
-[online.completion.withdrawn]
-url = "https://example.org/left?code={{code}}&x=1"
-code = "W1THDR4WN"
-"""
-
-
-def online_protocol(text=ONLINE):
-    return parse_protocol(SHORT_PROTOCOL + text, "online.toml")
+from .scripted import ONLINE, SHORT_PROTOCOL, online_protocol, run
 
 
 def test_each_outcome_has_its_completion_url_and_code():

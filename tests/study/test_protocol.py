@@ -2,6 +2,7 @@
 
 import json
 import re
+from pathlib import Path
 
 import pytest
 
@@ -127,3 +128,27 @@ def test_a_protocol_pickles_for_worker_processes():
     assert copy.skills["sim-point"].key == "sim-point" and set(copy.skills) == set(protocol.skills)
     with pytest.raises(TypeError):
         protocol.skills["sim-point"] = None
+
+
+def _with_learner(line: str) -> str:
+    protocols = Path(__file__).resolve().parents[2] / "mt_widgets" / "study" / "protocols"
+    source = (protocols / "paper_uarm.toml").read_text()
+    return source.replace('lambda = 0.01\n', f'lambda = 0.01\n{line}\n', 1)
+
+
+def test_a_protocol_names_its_learner_and_ridge_is_the_default():
+    assert parse_protocol(_with_learner(""), check_files=False).learner == "ridge"
+    assert parse_protocol(_with_learner('learner = "ridge"'), check_files=False).learner == "ridge"
+
+
+def test_an_unknown_learner_names_the_line_and_the_learners_available():
+    text = _with_learner('learner = "svm"')
+    line = text.splitlines().index('learner = "svm"') + 1
+    available = r"\(ridge, kernel-ridge, gaussian-process, neural-network, reward\)"
+    with pytest.raises(ProtocolError, match=rf"line {line}.*unknown learner 'svm'; expected one of the available "
+                                            rf"learners {available}"):
+        parse_protocol(text, check_files=False)
+    with pytest.raises(ProtocolError, match="the learner 'kernel-ridge' exists .* teach ridge only so far"):
+        parse_protocol(_with_learner('learner = "kernel-ridge"'), check_files=False)
+    with pytest.raises(ProtocolError, match="learner.*expected text"):
+        parse_protocol(_with_learner("learner = 3"), check_files=False)

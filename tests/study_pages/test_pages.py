@@ -9,53 +9,16 @@ from pathlib import Path
 from urllib.parse import parse_qs, urlencode
 
 import pytest
-from ipywidgets import Button
 from ipywidgets.widgets.widget import _instances as live_widgets  # every widget the kernel holds
 
 from blinding_support import participant_texts, without_scripts
-from mt_widgets import SKILLS
 from mt_widgets.apps.study import ExperimenterPanel, LabStudyPage, OnlineStudyPage, StudyApp
 from mt_widgets.apps.study.lab_page import MAX_ATTEMPTS
 from mt_widgets.study import Session, StudyFolder, load_protocol, read_events
 
-PILOT = str(Path(__file__).resolve().parents[2] / "notebooks" / "study_online_pilot.toml")
+from .support import PILOT, act, buttons_in, prolific
+
 GROUP_WORDS = re.compile(r"\b(target|control|group|groups|condition)\b", re.IGNORECASE)
-
-
-def prolific(pid, study="S1", session="X1"):
-    return urlencode({"PROLIFIC_PID": pid, "STUDY_ID": study, "SESSION_ID": session})
-
-
-def buttons_in(widget):
-    found, pending = [], [widget]
-    while pending:
-        node = pending.pop(0)
-        if isinstance(node, Button) and node.layout.display != "none" and not node.disabled:
-            found.append(node)
-        pending += list(getattr(node, "children", ()))
-    return found
-
-
-def act(view, answers=None):
-    """One participant action on a ``ParticipantView``, as the buttons and the canvas would do it."""
-    step = view.session.current_step()
-    if step.kind == "eligibility":
-        view.form.fields["robotics_background"].value = (answers or {}).get("robotics_background", "no")
-        view.form.continue_button.click()
-    elif step.kind == "demographics":
-        view.form.fields["age"].value = "30"
-        view.form.fields["sex"].value = "female"
-        view.form.continue_button.click()
-    elif step.kind == "practice":
-        view.practice.done_button.disabled = False
-        view.practice.done_button.click()
-    elif step.kind in ("demonstration", "episode_end"):
-        if view.episode.phase == "guidance":
-            view.episode.next()
-        else:
-            view.episode.demonstrate(SKILLS[step.skill].target_actions(step.state[None])[0] + 0.3)
-    else:
-        [b for b in buttons_in(view.body) if b.button_style == "primary"][0].click()
 
 
 def new_widgets(build):

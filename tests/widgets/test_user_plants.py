@@ -127,3 +127,13 @@ def test_every_reproduction_frame_draws_the_elbow_and_the_base_stays_on_the_back
         elbow = np.array(links[0][2:4])
         assert np.allclose(links[0][:2], np.rint(base)) and np.allclose(links[1][:2], elbow)
         assert np.allclose(np.array(pins[0][:2]) + 3, elbow), "the pin sits on the elbow"
+
+
+@pytest.mark.parametrize("key", ["ur5-reach", "ur5-conveyor"])
+def test_a_plant_in_space_is_refused_by_the_planar_views_with_a_reason(key):
+    # The UR5 says SpaceDrawing (three views); the planar views draw one plane and say so.
+    with pytest.raises(TypeError, match=rf"skill: expected a skill whose plant is drawn in the plane .*'{key}', "
+                                        r"drawn in space \(SpaceDrawing\)"):
+        ArmView(SKILLS[key])
+    with pytest.raises(TypeError, match="drawn in space"):
+        EpisodeWidget(key, seed=0)

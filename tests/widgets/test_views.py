@@ -307,3 +307,13 @@ def test_confirm_closes_before_the_next_state_is_drawn(recorder):
     assert teach.state_index == 1 and teach.confirm_button.disabled
     assert drawn_before_closing == [False]
     assert recorder.on(teach.view.layer("robot"))  # and then the next state was drawn
+
+
+@pytest.mark.parametrize("skill_key", ["sim-point", "uarm-line"])
+def test_a_teaching_canvas_without_query_states_shows_the_skills_seeded_states(skill_key):
+    # query_states defaults to None: the canvas draws the skill's S well-conditioned states of seed 0.
+    skill = SKILLS[skill_key]
+    teach = TeachingCanvas(skill)
+    np.testing.assert_array_equal(teach.query_states, skill.query_states(seed=0))
+    assert teach.n_states == skill.n_features and teach.state_index == 0
+    assert f"State 1 of {skill.n_features}" in teach.readout.value

@@ -44,9 +44,11 @@ class EpisodeStep:
         self.continue_button = Choice().button("Continue", view.advance)
         self.continue_button.layout.display = "none"
         self.reproduction_text = HTML()
-        view.heading.value = (f"<h3 style='margin:4px 0'>Part {step.phase_index + 1} of {len(protocol.phases)}, "
+        # The session's own phases: a follow-up session's are not the protocol's first session's.
+        plan = view.session.plan
+        view.heading.value = (f"<h3 style='margin:4px 0'>Part {step.phase_index + 1} of {len(plan.phases)}, "
                               f"round {step.episode} of {step.n_episodes}</h3>")
-        instructions = HTML(view.text(protocol.phase(step.phase).instructions, step.skill))
+        self.instructions = instructions = HTML(view.text(plan.phase(step.phase).instructions, step.skill))
         # The session's episode: one TeachingEpisode (one SVD, one rollout) per study episode,
         # which the widget demonstrates into and the session then records.
         self.widget = view.prepare_episode(build_episode(

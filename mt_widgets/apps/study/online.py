@@ -5,6 +5,8 @@ A participant of a pool such as Prolific opens the page with their ID in the URL
 ``[online]`` table says; ``mt_widgets.study.online``). The page then:
 
 - refuses an unusable ID with a message meant for the participant, and writes nothing;
+- turns a new arrival away in words while the server is at its configured capacity
+  (``capacity.py``: participants taking part, free memory), and writes nothing;
 - calls ``Session.arrive``: a new ID is enrolled and randomised by the protocol's rule (no
   group can be chosen from a URL), an enrolled one resumes where their log stops (a reload is
   a new kernel, and the same URL), a returning one gets their next session in its window;
@@ -30,6 +32,7 @@ from ipywidgets import HTML, VBox
 from mt_widgets.study import LogError, ParticipantIdError, Session, StudyFolder, load_protocol
 from mt_widgets.study.online import outcome_of
 
+from .capacity import Capacity
 from .navigation import go_to
 from .participant import ParticipantView
 
@@ -62,6 +65,8 @@ class OnlineStudyPage(VBox):
         query: the page's query string (or a mapping of URL parameters).
         theme: the widgets' theme.
         redirect_delay_s: seconds before the page goes on to the completion URL.
+        capacity: the server's ``Capacity`` (None: from the environment, ``capacity.py``); a new
+            arrival while it is full gets a page saying so and when to come back.
 
     Attributes:
         session: the participant's ``Session`` (None when the page refused the URL).
@@ -69,7 +74,8 @@ class OnlineStudyPage(VBox):
         view: the ``ParticipantView`` (None when refused).
     """
 
-    def __init__(self, protocol, log_folder, query, theme=None, redirect_delay_s: float = REDIRECT_DELAY_S):
+    def __init__(self, protocol, log_folder, query, theme=None, redirect_delay_s: float = REDIRECT_DELAY_S,
+                 capacity: Capacity | None = None):
         super().__init__()
         self.session: Session | None = None
         self.completion = None
@@ -84,7 +90,15 @@ class OnlineStudyPage(VBox):
             arrival = self.online.participant_from_url(parse_query(query))
         except ParticipantIdError as error:
             # The participant's words say what is wrong; the parameter's name comes first.
-            self.children = [_message(str(error).split(": ", 1)[-1])]
+            words = str(error).split(": ", 1)[-1]
+            self.children = [_message(words[:1].upper() + words[1:])]
+            return
+        busy = (Capacity.from_environment() if capacity is None else capacity).busy(log_folder,
+                                                                                   arrival.participant_id)
+        if busy is not None:
+            # Full: a page that says so and when to come back, and nothing written for them.
+            self.children = [_message(busy, "status")]
+            self.add_class("mt-study-busy")
             return
         study = StudyFolder.create(log_folder, protocol)
         try:

@@ -23,6 +23,7 @@ import numpy as np
 from ipywidgets import HTML, Button, HBox, Layout, VBox
 
 from mt_widgets.study import Session
+from mt_widgets.study.log import ContinuedElsewhereError
 from mt_widgets.widgets import EpisodeWidget, retire
 
 from .controls import Choice
@@ -146,6 +147,15 @@ class ParticipantView(VBox):
         # A stopped page offers nothing that would do nothing: no Withdraw, no step button.
         self.withdraw_box.layout.display = "none"
         self.withdraw_box.children = []
+        if isinstance(error, ContinuedElsewhereError):
+            # The same participant's page opened again (a second tab, another device): that page
+            # goes on from the log; this one must only say so (online there is no experimenter).
+            self.body.children = [HTML(
+                "<div role='alert' class='mt-continued-elsewhere' style='font-size:1.2em;max-width:760px'>"
+                "<b>This study is open in another tab or window.</b><br>It goes on there, from where you were: "
+                "please continue in that tab and close this one. Everything you did so far is saved; nothing "
+                "from this tab was recorded after the other one opened.</div>")]
+            return
         self.body.children = [HTML(
             f"<div role='alert' style='color:#b00020;font-size:1.2em;max-width:760px'><b>Please call the "
             f"experimenter.</b><br><small>For the experimenter: the study stopped here; everything recorded so far "
@@ -181,7 +191,12 @@ class ParticipantView(VBox):
         elif in_episode:
             key = (step.phase_index, step.episode)
             if self._episode_step is None or self._episode_step.key != key:
+                left = self._episode_step
                 self._episode_step = EpisodeStep(self, step)
+                if left is not None:
+                    # Its phase's instructions (a widget of their own beside the episode) leave
+                    # with it: kept open, three widgets stayed per episode.
+                    retire(left.instructions, keep=self)
             if self.session.current_step().kind == "reproduction":
                 self._episode_step.show_reproduction_controls()
         self.retire_replaced(shown)
@@ -192,7 +207,8 @@ class ParticipantView(VBox):
 
     def _show_screen(self, step) -> None:
         protocol = self.session.protocol
-        self.heading.value = (f"<h3 style='margin:4px 0'>Part {step.phase_index + 1} of {len(protocol.phases)}</h3>"
+        self.heading.value = (f"<h3 style='margin:4px 0'>Part {step.phase_index + 1} of "
+                              f"{len(self.session.plan.phases)}</h3>"
                               if step.kind == "phase_intro" else "")
         labels = dict(_SCREEN_BUTTONS, instructions="Start the practice" if protocol.practice.duration_s > 0
                       else "Start")

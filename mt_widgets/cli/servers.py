@@ -1,0 +1,112 @@
+"""The servers: JupyterLab on the tutorials, Voila for the demo and the study pages.
+
+Each replaces this process with the server (``os.execv``), as the shell scripts' ``exec`` did,
+so Ctrl-C and a service manager's signals reach the server itself. The online study's pages
+are the exception: they are served from a temporary folder this process removes afterwards.
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from .shipped import START_HERE, copy_notebooks, shipped_folder
+
+#: The environment variable the experimenter's panel reads its code from.
+EXPERIMENTER_CODE_ENV = "MT_WIDGETS_EXPERIMENTER_CODE"
+#: The online study's pages (and the pilot protocol they read): nothing else is served.
+ONLINE_PAGES = ("study_sim.ipynb", "study_online.ipynb", "study_online_pilot.toml")
+
+
+def free_port(host: str = "127.0.0.1") -> int:
+    """A port nothing listens on now (the server binds it right after)."""
+    with socket.socket() as probe:
+        probe.bind((host, 0))
+        return probe.getsockname()[1]
+
+
+def _has_screen() -> bool:
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")) or sys.platform != "linux"
+
+
+def _sets(extra: list[str], option: str) -> bool:
+    return any(arg == f"--{option}" or arg.startswith(f"--{option}=") or arg.startswith(f"--ServerApp.{option}")
+               for arg in extra)
+
+
+def lab_command(folder, port: int | None, browser: bool, extra: list[str]) -> tuple[list[str], str | None]:
+    """Copies the notebooks into ``folder`` and returns JupyterLab's command line and, when the
+    port and token are chosen here, the start-here URL to print."""
+    folder = Path(folder).expanduser().resolve()
+    copied, kept = copy_notebooks(folder)
+    print(f"== {folder}: {len(copied)} notebooks copied, {len(kept)} already there (kept as they are)")
+    args = [sys.executable, "-m", "jupyterlab", f"--ServerApp.root_dir={folder}"]
+    if hasattr(os, "getuid") and os.getuid() == 0:
+        args.append("--allow-root")
+    url = None
+    if not browser or not _has_screen():
+        args.append("--no-browser")
+    if port is not None or (not _has_screen() and not _sets(extra, "port")):
+        # JupyterLab prints its root URL; with the port and token chosen here the printed link
+        # opens the start-here tutorial itself.
+        port = port if port is not None else free_port()
+        token = secrets.token_hex(24)
+        args += [f"--port={port}", "--port-retries=0", f"--IdentityProvider.token={token}"]
+        url = f"http://localhost:{port}/lab/tree/{START_HERE}?token={token}"
+    return [*args, *extra, str(folder / START_HERE)], url
+
+
+def voila_command(notebook: Path, port: int | None, extra: list[str]) -> list[str]:
+    """Voila serving ``notebook`` (a file or a folder) with the kiosk settings of deploy/voila."""
+    settings = shipped_folder("deploy/voila")
+    args = [sys.executable, "-m", "voila", "--no-browser", f"--Voila.config_file_paths={settings}"]
+    if port is not None:
+        args.append(f"--port={port}")
+    return [*args, *extra, str(notebook)]
+
+
+def replace_process(args: list[str], cwd: Path) -> None:
+    """Runs ``args`` in place of this process, in ``cwd``."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os.chdir(cwd)
+    os.execv(args[0], args)
+
+
+def experimenter_code() -> str:
+    """The experimenter's code from the environment, or a new one, printed, put in the environment."""
+    code = os.environ.get(EXPERIMENTER_CODE_ENV, "")
+    if not code:
+        code = secrets.token_urlsafe(9)
+        os.environ[EXPERIMENTER_CODE_ENV] = code
+        print(f"Experimenter code for this server: {code}", flush=True)
+    return code
+
+
+def serve_online(port: int | None, extra: list[str]) -> int:
+    """Serves only the online pages, linked (or copied) into a temporary folder removed at the end."""
+    notebooks = shipped_folder("notebooks")
+    pages = Path(tempfile.mkdtemp(prefix="mt-widgets-study-pages."))
+    try:
+        for name in ONLINE_PAGES:
+            try:
+                (pages / name).symlink_to(notebooks / name)
+            except OSError:  # no symbolic links (Windows without the privilege): a copy serves as well
+                shutil.copyfile(notebooks / name, pages / name)
+        server = subprocess.Popen(voila_command(pages, port, extra), cwd=pages)
+        # A service manager stops the command with SIGTERM: pass it on, then clean up.
+        signal.signal(signal.SIGTERM, lambda number, frame: server.terminate())
+        try:
+            return server.wait()
+        except KeyboardInterrupt:
+            server.send_signal(signal.SIGINT)
+            return server.wait()
+    finally:
+        shutil.rmtree(pages, ignore_errors=True)

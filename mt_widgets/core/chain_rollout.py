@@ -1,0 +1,322 @@
+"""Compiled rollouts of a serial-chain arm (the UR5) under a linear tool-velocity policy.
+
+The arm's controller runs at 1 kHz, as the planar arm's does. At each sample k the policy gives
+the tool's velocity ``u_k = Theta phi(x_k)`` (m/s, base frame); the controller turns it into
+joint torques and holds them over the step, which is integrated with classical RK4:
+
+1. resolved rate: ``qd_ref = J^T (J J^T + mu^2 I)^-1 u_k`` (damped least squares, so a pose near
+   a singularity asks for large but finite joint speeds), scaled down as a whole when a joint
+   would exceed its velocity limit (the direction of the tool's motion is kept);
+2. velocity loop with gravity compensation: ``tau = g(q) + M(q) k_v (qd_ref - qd)``, each joint's
+   torque clipped to its effort limit (what a drive does).
+
+A reproduction stops cleanly (a code, the arrays frozen at the last valid sample, never NaN)
+at the first state that is not finite, leaves a joint's position range, exceeds a joint's speed
+limit by more than a tolerance, puts a link or the tool into the table, or brings two links
+that are not neighbours closer than their capsules allow.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+
+import numpy as np
+from numba import njit, prange
+
+from . import chain_dynamics as dyn
+
+#: Why a rollout stopped, by code (0: it did not).
+STOP_REASONS = ("", "diverged", "joint limit", "joint speed limit", "table", "self-collision")
+DIVERGED, JOINT_LIMIT, JOINT_SPEED, TABLE, SELF_COLLISION = 1, 2, 3, 4, 5
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def segment_distance(p0, p1, q0, q1):
+    """The smallest distance between the segments p0-p1 and q0-q1 (3-D), by clamped closest points."""
+    d1x, d1y, d1z = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
+    d2x, d2y, d2z = q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2]
+    rx, ry, rz = p0[0] - q0[0], p0[1] - q0[1], p0[2] - q0[2]
+    a = d1x * d1x + d1y * d1y + d1z * d1z
+    e = d2x * d2x + d2y * d2y + d2z * d2z
+    f = d2x * rx + d2y * ry + d2z * rz
+    if a <= 1e-15 and e <= 1e-15:
+        s = t = 0.0
+    elif a <= 1e-15:
+        s = 0.0
+        t = min(max(f / e, 0.0), 1.0)
+    else:
+        c = d1x * rx + d1y * ry + d1z * rz
+        if e <= 1e-15:
+            t = 0.0
+            s = min(max(-c / a, 0.0), 1.0)
+        else:
+            b = d1x * d2x + d1y * d2y + d1z * d2z
+            denom = a * e - b * b
+            s = min(max((b * f - c * e) / denom, 0.0), 1.0) if denom > 1e-15 else 0.0
+            t = (b * s + f) / e
+            if t < 0.0:
+                t = 0.0
+                s = min(max(-c / a, 0.0), 1.0)
+            elif t > 1.0:
+                t = 1.0
+                s = min(max((b - c) / a, 0.0), 1.0)
+    dx = rx + d1x * s - d2x * t
+    dy = ry + d1y * s - d2y * t
+    dz = rz + d1z * s - d2z * t
+    return math.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def chain_points(world_p, tool, out):
+    """The chain's points (n + 2, 3): the base origin, each joint's origin, the tool point."""
+    n = world_p.shape[0]
+    for k in range(3):
+        out[0, k] = 0.0
+        for i in range(n):
+            out[i + 1, k] = world_p[i, k]
+        out[n + 1, k] = tool[k]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def safety_code(q, qd, points, lower, upper, velocity_limit, speed_tolerance, table_height, first_table_point,
+                pairs, radius):
+    """0 when the state is safe, else the first reason it is not (a code of ``STOP_REASONS``)."""
+    n = q.shape[0]
+    for i in range(n):
+        if not (math.isfinite(q[i]) and math.isfinite(qd[i])):
+            return DIVERGED
+    for i in range(n):
+        if q[i] < lower[i] or q[i] > upper[i]:
+            return JOINT_LIMIT
+    for i in range(n):
+        if abs(qd[i]) > velocity_limit[i] * (1.0 + speed_tolerance):
+            return JOINT_SPEED
+    for i in range(first_table_point, points.shape[0]):
+        if points[i, 2] < table_height + radius:
+            return TABLE
+    for k in range(pairs.shape[0]):
+        a, b = pairs[k, 0], pairs[k, 1]
+        if segment_distance(points[a], points[a + 1], points[b], points[b + 1]) < 2.0 * radius:
+            return SELF_COLLISION
+    return 0
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def resolved_rate_torque(J, velocity, q_dot, mass_matrix, gravity_torque, velocity_limit, effort_limit, gain,
+                         damping, out_tau):
+    """The controller's held torque for a tool velocity (see the module's docstring)."""
+    n = J.shape[1]
+    # A = J J^T + damping^2 I (3 x 3, symmetric positive definite), y = A^-1 velocity by Cramer's rule
+    a00 = a11 = a22 = damping * damping
+    a01 = a02 = a12 = 0.0
+    for i in range(n):
+        a00 += J[0, i] * J[0, i]
+        a11 += J[1, i] * J[1, i]
+        a22 += J[2, i] * J[2, i]
+        a01 += J[0, i] * J[1, i]
+        a02 += J[0, i] * J[2, i]
+        a12 += J[1, i] * J[2, i]
+    c00 = a11 * a22 - a12 * a12
+    c01 = a02 * a12 - a01 * a22
+    c02 = a01 * a12 - a02 * a11
+    c11 = a00 * a22 - a02 * a02
+    c12 = a01 * a02 - a00 * a12
+    c22 = a00 * a11 - a01 * a01
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    y0 = (c00 * velocity[0] + c01 * velocity[1] + c02 * velocity[2]) / det
+    y1 = (c01 * velocity[0] + c11 * velocity[1] + c12 * velocity[2]) / det
+    y2 = (c02 * velocity[0] + c12 * velocity[1] + c22 * velocity[2]) / det
+    scale = 1.0
+    for i in range(n):
+        reference = J[0, i] * y0 + J[1, i] * y1 + J[2, i] * y2
+        if abs(reference) * scale > velocity_limit[i]:
+            scale = velocity_limit[i] / abs(reference)
+    for i in range(n):
+        acc = gravity_torque[i]
+        for j in range(n):
+            reference = scale * (J[0, j] * y0 + J[1, j] * y1 + J[2, j] * y2)
+            acc += mass_matrix[i, j] * gain * (reference - q_dot[j])
+        out_tau[i] = min(max(acc, -effort_limit[i]), effort_limit[i])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _acceleration(placement_R, placement_p, axis, mass, com, inertia, gravity, q, qd, tau, local_R, w, v, aw, al,
+                  fn, fl, cm, ch, cJ, M, L, zeros, bias, rhs, out):
+    dyn.local_rotations(placement_R, axis, q, local_R)
+    dyn.rnea(local_R, placement_p, axis, mass, com, inertia, gravity, qd, zeros, True, w, v, aw, al, fn, fl, bias)
+    dyn.crba(local_R, placement_p, axis, mass, com, inertia, cm, ch, cJ, M)
+    for i in range(q.shape[0]):
+        rhs[i] = tau[i] - bias[i]
+    return dyn.cholesky_solve(M, rhs, L, out)
+
+
+@njit(cache=True, error_model="numpy")
+def _rollout_one(
+        b, placement_R, placement_p, axis, mass, com, inertia, tool_p, gravity,
+        lower, upper, velocity_limit, effort_limit, gain, damping,
+        speed_tolerance, table_height, first_table_point, pairs, radius, conveyor_speed, with_phase,
+        thetas, start, dt, n_steps, record_every,
+        out_states, out_positions, out_velocities, out_actions, lengths, stop_step, stop_code):
+    """Rollout b of the batch (see ``rollout``); its scratch is its own, so rollouts may run in parallel."""
+    n = axis.shape[0]
+    dim = out_states.shape[2]
+    n_samples = out_states.shape[1]
+    local_R, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    w, v, aw, al, fn, fl = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)),
+                            np.empty((n, 3)), np.empty((n, 3)))
+    cm, ch, cJ, M, L = np.empty(n), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, n)), np.zeros((n, n))
+    zeros, bias, rhs, g_torque = np.zeros(n), np.empty(n), np.empty(n), np.empty(n)
+    tool, J, points = np.empty(3), np.empty((3, n)), np.empty((n + 2, 3))
+    tau, u = np.empty(n), np.empty(3)
+    x, stage, k1, k2, k3, k4 = (np.empty(dim), np.empty(dim), np.empty(dim), np.empty(dim), np.empty(dim),
+                                np.empty(dim))
+    acc = np.empty(n)
+    theta = thetas[b]
+    for i in range(dim):
+        x[i] = start[i]
+    sample = 0
+    stop_step[b] = -1
+    stop_code[b] = 0
+    dyn.local_rotations(placement_R, axis, x[:n], local_R)
+    dyn.world_frames(local_R, placement_p, world_R, world_p)
+    dyn.tool_point(world_R, world_p, tool_p, tool)
+    for k in range(n_steps + 1):
+        dyn.tool_jacobian(world_R, world_p, axis, tool, J)
+        for r in range(3):
+            s_feature = x[dim - 1] if with_phase else 0.0
+            if with_phase:
+                u[r] = theta[r, 0] * tool[0] + theta[r, 1] * tool[1] + theta[r, 2] * tool[2] \
+                    + theta[r, 3] * s_feature + theta[r, 4]
+            else:
+                u[r] = theta[r, 0] * tool[0] + theta[r, 1] * tool[1] + theta[r, 2] * tool[2] + theta[r, 3]
+        if k % record_every == 0 and sample < n_samples:
+            for i in range(dim):
+                out_states[b, sample, i] = x[i]
+            for r in range(3):
+                out_positions[b, sample, r] = tool[r]
+                speed = 0.0
+                for i in range(n):
+                    speed += J[r, i] * x[n + i]
+                out_velocities[b, sample, r] = speed
+                out_actions[b, sample, r] = u[r]
+            sample += 1
+        if k == n_steps:
+            break
+        # The controller, once per step. local_R and world_R hold x's rotations (from the safety
+        # check of the step before), and RK4's first stage is at x too: its M and rotations are
+        # reused, and g(q) comes from the composites the mass matrix leaves.
+        dyn.crba(local_R, placement_p, axis, mass, com, inertia, cm, ch, cJ, M)
+        dyn.gravity_from_composites(world_R, axis, ch, gravity, g_torque)
+        resolved_rate_torque(J, u, x[n:2 * n], M, g_torque, velocity_limit, effort_limit, gain, damping, tau)
+        dyn.rnea(local_R, placement_p, axis, mass, com, inertia, gravity, x[n:2 * n], zeros, True, w, v, aw, al,
+                 fn, fl, bias)
+        for i in range(n):
+            rhs[i] = tau[i] - bias[i]
+        ok = dyn.cholesky_solve(M, rhs, L, acc)
+        for i in range(n):
+            k1[i] = x[n + i]
+            k1[n + i] = acc[i]
+        if with_phase:
+            k1[dim - 1] = conveyor_speed
+        for which in range(1, 4):
+            h = dt if which == 3 else 0.5 * dt
+            prev = k1 if which == 1 else (k2 if which == 2 else k3)
+            out = k2 if which == 1 else (k3 if which == 2 else k4)
+            for i in range(dim):
+                stage[i] = x[i] + h * prev[i]
+            ok = ok and _acceleration(placement_R, placement_p, axis, mass, com, inertia, gravity, stage[:n],
+                                      stage[n:2 * n], tau, local_R, w, v, aw, al, fn, fl, cm, ch, cJ, M, L, zeros,
+                                      bias, rhs, acc)
+            for i in range(n):
+                out[i] = stage[n + i]
+                out[n + i] = acc[i]
+            if with_phase:
+                out[dim - 1] = conveyor_speed
+        for i in range(dim):
+            stage[i] = x[i] + dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+        code = 0 if ok else DIVERGED
+        if code == 0:
+            dyn.local_rotations(placement_R, axis, stage[:n], local_R)
+            dyn.world_frames(local_R, placement_p, world_R, world_p)
+            dyn.tool_point(world_R, world_p, tool_p, tool)
+            chain_points(world_p, tool, points)
+            code = safety_code(stage[:n], stage[n:2 * n], points, lower, upper, velocity_limit, speed_tolerance,
+                               table_height, first_table_point, pairs, radius)
+        if code != 0:
+            stop_step[b] = k + 1
+            stop_code[b] = code
+            break
+        for i in range(dim):
+            x[i] = stage[i]
+    lengths[b] = sample
+    # Freeze a stopped rollout at its last valid sample so the batch arrays stay finite.
+    for s in range(sample, n_samples):
+        for i in range(dim):
+            out_states[b, s, i] = out_states[b, sample - 1, i]
+        for r in range(3):
+            out_positions[b, s, r] = out_positions[b, sample - 1, r]
+            out_velocities[b, s, r] = 0.0
+            out_actions[b, s, r] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def rollout_serial(
+        placement_R, placement_p, axis, mass, com, inertia, tool_p, gravity,
+        lower, upper, velocity_limit, effort_limit, gain, damping,
+        speed_tolerance, table_height, first_table_point, pairs, radius, conveyor_speed, with_phase,
+        thetas, start, dt, n_steps, record_every,
+        out_states, out_positions, out_velocities, out_actions, lengths, stop_step, stop_code):
+    """Rolls out B tool-velocity policies from one start, one after another, into preallocated outputs.
+
+    Args:
+        placement_R ... gravity: the chain's arrays (``SerialChain.model`` without tool_R).
+        lower, upper, velocity_limit, effort_limit: (n,) joint limits.
+        gain: k_v of the velocity loop (1/s); damping: mu of the damped least squares (m).
+        speed_tolerance, table_height, first_table_point, pairs, radius: the safety checks
+            (``safety_code``).
+        conveyor_speed: m/s of the conveyor phase s; with_phase: the state ends with s and the
+            features are (r, s, 1) instead of (r, 1).
+        thetas: (B, 3, S); start: (D,) with D = 2n (+ 1 with the phase).
+        out_states (B, T, D), out_positions, out_velocities, out_actions (B, T, 3) with
+            T = n_steps // record_every + 1; lengths, stop_step, stop_code: (B,) ints.
+    """
+    for b in range(thetas.shape[0]):
+        _rollout_one(b, placement_R, placement_p, axis, mass, com, inertia, tool_p, gravity, lower, upper,
+                     velocity_limit, effort_limit, gain, damping, speed_tolerance, table_height, first_table_point,
+                     pairs, radius, conveyor_speed, with_phase, thetas, start, dt, n_steps, record_every, out_states,
+                     out_positions, out_velocities, out_actions, lengths, stop_step, stop_code)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def rollout_parallel(
+        placement_R, placement_p, axis, mass, com, inertia, tool_p, gravity,
+        lower, upper, velocity_limit, effort_limit, gain, damping,
+        speed_tolerance, table_height, first_table_point, pairs, radius, conveyor_speed, with_phase,
+        thetas, start, dt, n_steps, record_every,
+        out_states, out_positions, out_velocities, out_actions, lengths, stop_step, stop_code):
+    """``rollout_serial`` with the batch spread over all cores; each rollout's arithmetic is identical."""
+    for b in prange(thetas.shape[0]):
+        _rollout_one(b, placement_R, placement_p, axis, mass, com, inertia, tool_p, gravity, lower, upper,
+                     velocity_limit, effort_limit, gain, damping, speed_tolerance, table_height, first_table_point,
+                     pairs, radius, conveyor_speed, with_phase, thetas, start, dt, n_steps, record_every, out_states,
+                     out_positions, out_velocities, out_actions, lengths, stop_step, stop_code)
+
+
+#: Batches at least this large are spread over cores; below it threads cost more than they save.
+PARALLEL_FROM = 4
+_PARALLEL_LAUNCH = threading.Lock()
+
+
+def rollout(*arguments):
+    """Runs ``rollout_serial`` or, for a batch of ``PARALLEL_FROM`` or more, ``rollout_parallel``.
+
+    The arguments are ``rollout_serial``'s; thetas is the 22nd.
+    """
+    if arguments[21].shape[0] >= PARALLEL_FROM:
+        # Where numba falls back to its workqueue threading layer, two Python threads launching
+        # parallel kernels at once abort the process (as for the planar arm): one launch at a time.
+        with _PARALLEL_LAUNCH:
+            rollout_parallel(*arguments)
+    else:
+        rollout_serial(*arguments)

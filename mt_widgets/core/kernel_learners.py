@@ -1,0 +1,154 @@
+"""Kernel learners: kernel ridge regression and a Gaussian process's posterior mean (RBF kernels).
+
+Both are linear smoothers: the fitted policy at inputs X* is ``k(X*, X) (K + lam I)^-1 U``
+(kernel ridge), ``s2 k(X*, X) (s2 K + n2 I)^-1 U`` (the GP's posterior mean with signal variance
+s2, noise variance n2 and a zero prior mean), so its smoother operator S(X*) depends on the query
+inputs X only and machine teaching for them is exact least squares (``learner_teaching``).
+
+The regularised Gram matrix is decomposed once, ``K = V diag(e) V^T``: its inverse is
+``V diag(1 / (e + lam)) V^T``. A system that is singular to working precision (repeated query
+states with a vanishing lam) raises ``SingularFitError`` rather than returning NaN or noise.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .learner import Learner, check_demonstrations
+from .validation import as_float_array, as_positive
+
+#: What the learners accept as ``inputs``: the skill's features, the raw state, the task space.
+INPUT_SPACES = ("features", "state", "task")
+
+
+class SingularFitError(ValueError):
+    """The learner's linear system is singular to working precision: no fit exists to return."""
+
+
+def rbf_kernel(A, B, length_scale: float) -> np.ndarray:
+    """k(a, b) = exp(-||a - b||^2 / (2 l^2)) for rows of A (M, D) and B (N, D) -> (M, N)."""
+    squared = (np.sum(A * A, axis=1)[:, None] + np.sum(B * B, axis=1)[None, :] - 2.0 * A @ B.T)
+    return np.exp(-np.maximum(squared, 0.0) / (2.0 * length_scale * length_scale))
+
+
+def _check_inputs(inputs) -> str:
+    if inputs not in INPUT_SPACES:
+        raise ValueError(f"inputs: expected one of {', '.join(INPUT_SPACES)}, got {inputs!r}")
+    return inputs
+
+
+class _RBFSmoother(Learner):
+    """The shared machinery: an RBF Gram matrix, its regularised inverse, the smoother."""
+
+    linear_in_actions = True
+
+    def __init__(self, length_scale: float, inputs: str, linear_weight: float = 0.0):
+        self.length_scale = as_positive("length_scale", length_scale)
+        self.inputs = _check_inputs(inputs)
+        self.linear_weight = as_positive("linear_weight", linear_weight, allow_zero=True)
+
+    def _kernel(self, A, B) -> np.ndarray:
+        """The RBF, plus ``linear_weight (1 + a.b)`` when asked: the linear part on task-space inputs
+        is the paper's features (position, velocity, a bias), so the learner is ridge plus a
+        nonlinear correction, and learns a linear skill as ridge does."""
+        gram = rbf_kernel(A, B, self.length_scale)
+        return gram + self.linear_weight * (1.0 + A @ B.T) if self.linear_weight else gram
+
+    def _gram(self, A, B) -> np.ndarray:
+        raise NotImplementedError
+
+    def _regulariser(self) -> float:
+        raise NotImplementedError
+
+    def _inverse(self, X) -> np.ndarray:
+        """(G + r I)^-1 for the Gram matrix G of the query inputs, refused when singular."""
+        gram = self._gram(X, X)
+        values, vectors = np.linalg.eigh(gram)
+        shifted = np.maximum(values, 0.0) + self._regulariser()   # G is PSD: negative values are round-off
+        if shifted.min() <= shifted.max() * len(X) * np.finfo(float).eps:
+            raise SingularFitError(
+                f"{self!r}: the fit is singular: the regularised Gram matrix of the {len(X)} query states has "
+                f"condition number {shifted.max() / max(shifted.min(), 1e-300):.3g} (repeated or nearly repeated "
+                f"states with a regularisation this small); use distinct query states or a larger regularisation")
+        return (vectors / shifted) @ vectors.T
+
+    def fit(self, X, U):
+        """Learns from inputs X (N, D) and actions U (N, R); returns (X, weights (N, R))."""
+        X, U = check_demonstrations(X, U)
+        return X, self._inverse(X) @ U
+
+    def predict(self, fitted, X_star) -> np.ndarray:
+        X, weights = fitted
+        X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, X.shape[1]))
+        return self._gram(X_star, X) @ weights
+
+    def smoother(self, X, X_star) -> np.ndarray:
+        X = as_float_array("X", X, ndim=2)
+        X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, X.shape[1]))
+        return self._gram(X_star, X) @ self._inverse(X)
+
+
+class KernelRidgeLearner(_RBFSmoother):
+    """Kernel ridge regression with an RBF kernel: ``pi_hat(X*) = k(X*, X) (K + lam I)^-1 U``.
+
+    Args:
+        length_scale: the kernel width l (> 0), in the units of the inputs (m, cm, rad).
+        lam: the regularisation (> 0).
+        inputs: "task" (end-effector position and velocity, the default), "state" or "features".
+        linear_weight: c >= 0 adds ``c (1 + x.x')`` to the kernel (a linear part; 0: the RBF alone).
+    """
+
+    name = "kernel-ridge"
+
+    def __init__(self, length_scale: float, lam: float = 1e-3, inputs: str = "task", linear_weight: float = 0.0):
+        super().__init__(length_scale, inputs, linear_weight)
+        self.lam = as_positive("lam", lam)
+
+    def __repr__(self) -> str:
+        return (f"KernelRidgeLearner(length_scale={self.length_scale:.4g}, lam={self.lam:.4g}, inputs={self.inputs!r}, "
+                f"linear_weight={self.linear_weight:.4g})")
+
+    def _gram(self, A, B):
+        return self._kernel(A, B)
+
+    def _regulariser(self):
+        return self.lam
+
+
+class GaussianProcessLearner(_RBFSmoother):
+    """A Gaussian process with an RBF covariance ``s2 k(x, x')`` and a zero prior mean; the
+    policy is its posterior mean ``s2 k(X*, X) (s2 K + n2 I)^-1 U`` (one GP per action component).
+
+    Args:
+        length_scale: the kernel width l (> 0), in the units of the inputs.
+        noise_variance: n2 (> 0), the variance of a demonstrated action's noise.
+        signal_variance: s2 (> 0), the prior variance of an action.
+        inputs: "task" (the default), "state" or "features".
+        linear_weight: c >= 0 adds ``c (1 + x.x')`` to the covariance (a linear prior trend).
+    """
+
+    name = "gaussian-process"
+
+    def __init__(self, length_scale: float, noise_variance: float = 1e-4, signal_variance: float = 1.0,
+                 inputs: str = "task", linear_weight: float = 0.0):
+        super().__init__(length_scale, inputs, linear_weight)
+        self.noise_variance = as_positive("noise_variance", noise_variance)
+        self.signal_variance = as_positive("signal_variance", signal_variance)
+
+    def __repr__(self) -> str:
+        return (f"GaussianProcessLearner(length_scale={self.length_scale:.4g}, "
+                f"noise_variance={self.noise_variance:.4g}, signal_variance={self.signal_variance:.4g}, "
+                f"inputs={self.inputs!r}, linear_weight={self.linear_weight:.4g})")
+
+    def _gram(self, A, B):
+        return self.signal_variance * self._kernel(A, B)
+
+    def _regulariser(self):
+        return self.noise_variance
+
+    def posterior_variance(self, X, X_star) -> np.ndarray:
+        """The posterior variance of the policy (M,) at X_star, the same for every action component."""
+        X = as_float_array("X", X, ndim=2)
+        X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, X.shape[1]))
+        cross = self._gram(X_star, X)
+        return self.signal_variance - np.einsum("mn,nk,mk->m", cross, self._inverse(X), cross)

@@ -1,0 +1,88 @@
+"""A robot that learns a reward from demonstrations and executes the policy optimal for it.
+
+After the research line's follow-up, Sun, Zhu and Howard, "Training People to Reward Robots"
+(arXiv 2505.10151): reinforcement learning from demonstration (RLfD), taught with 8
+demonstrations. Its public text (the abstract and introduction) gives the setting, not the
+reward's form nor the optimiser; what follows is this package's assumption, chosen so that the
+reward, its learning and its optimal policy are exact and fast (docs/guide/learners.md says what
+is reproduced and what is assumed):
+
+- The plant is kinematic in the plane, ``r <- r + u`` (the uArm; inputs are positions r).
+- The reward of an action is quadratic: ``R(r, u) = -1/2 (r + u - g)^T W (r + u - g) - 1/2 |u|^2``,
+  a cost of the distance to where the skill leads (W symmetric positive semi-definite, b = W g)
+  and of the action's size. The action cost's weight is fixed to 1: a reward's scale cannot be
+  told from demonstrations, and fixing it rules out the trivial zero reward.
+- Learning the reward is inverse optimal control by the optimality condition: a demonstration
+  is optimal when ``dR/du = 0``, i.e. ``W (r_n + u_n) - b + u_n = 0``, linear in (W, b); the
+  learner takes the least-squares (W, b) over the demonstrations, with a small ridge ``lam``,
+  and projects W onto the positive semi-definite matrices (a reward with a maximum).
+- The robot executes the policy optimal for the learnt reward, ``u(r) = (W + I)^-1 (b - W r)``.
+
+The learnt reward depends on the demonstrated actions through the design of the least squares
+(``r_n + u_n``): the learner is not linear in the actions, and machine teaching for it is
+approximate (``learner_teaching.approximate_teaching``). The paper's point-reaching and
+line-reaching uArm skills are in its policy class (W = 0.25 I, and W = 0.25 n n^T), so the
+target is representable and MT can teach it to near machine precision.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .kernel_learners import SingularFitError
+from .learner import Learner, check_demonstrations
+from .validation import as_float_array, as_positive
+
+
+class RewardLearner(Learner):
+    """Learns a quadratic reward by inverse optimal control and acts optimally for it (module docstring).
+
+    Args:
+        lam: the ridge on the reward's parameters (W, b) (> 0).
+    """
+
+    name = "reward"
+    inputs = "state"
+    linear_in_actions = False
+
+    def __init__(self, lam: float = 1e-3):
+        self.lam = as_positive("lam", lam)
+
+    def __repr__(self) -> str:
+        return f"RewardLearner(lam={self.lam:.4g})"
+
+    def fit(self, X, U):
+        """Learns the reward (W (2, 2), b (2,)) from positions X (N, 2) and actions U (N, 2)."""
+        X, U = check_demonstrations(X, U)
+        if X.shape[1] != 2 or U.shape[1] != 2:
+            raise ValueError(f"X, U: expected planar positions and actions (N, 2) for the reward learner, "
+                             f"got {X.shape} and {U.shape}")
+        reached = X + U
+        n = len(X)
+        design = np.zeros((2 * n, 5))            # unknowns (w11, w12, w22, b1, b2)
+        design[0::2, 0], design[0::2, 1], design[0::2, 3] = reached[:, 0], reached[:, 1], -1.0
+        design[1::2, 1], design[1::2, 2], design[1::2, 4] = reached[:, 0], reached[:, 1], -1.0
+        target = -U.reshape(-1)
+        gram = design.T @ design + self.lam * np.eye(5)
+        w11, w12, w22, b1, b2 = np.linalg.solve(gram, design.T @ target)
+        values, vectors = np.linalg.eigh(np.array([[w11, w12], [w12, w22]]))
+        W = (vectors * np.maximum(values, 0.0)) @ vectors.T
+        return W, np.array([b1, b2])
+
+    def predict(self, fitted, X_star) -> np.ndarray:
+        """The optimal actions ``(W + I)^-1 (b - W r)`` (M, 2) at positions X_star (M, 2)."""
+        W, b = fitted
+        X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, 2))
+        system = W + np.eye(2)
+        if np.linalg.cond(system) > 1e12:
+            raise SingularFitError(f"{self!r}: the learnt reward has no unique best action (W + I is singular)")
+        return np.linalg.solve(system, (b[None, :] - X_star @ W).T).T
+
+    def reward(self, fitted, X, U) -> np.ndarray:
+        """The learnt reward R(r, u) (N,) of actions U at positions X; its goal is ``pinv(W) b``."""
+        W, b = fitted
+        X = as_float_array("X", X, ndim=2, shape=(None, 2))
+        U = as_float_array("U", U, ndim=2, shape=X.shape)
+        reached = X + U
+        # -1/2 (y - g)^T W (y - g) up to a constant: -1/2 y^T W y + b^T y.
+        return -0.5 * np.einsum("ni,ij,nj->n", reached, W, reached) + reached @ b - 0.5 * np.sum(U * U, axis=1)

@@ -1,0 +1,112 @@
+"""Every install shape, from the built wheel: the way users meet the package (``pip install mt-widgets``,
+with only the extras they need), not the clone's editable install of everything.
+
+The tier ``install`` (tests/tiers.py) builds the sdist and the wheel (``python -m build``: the wheel is
+built from the sdist, so both are checked), then installs each shape into a fresh venv from the wheel
+and runs its smoke script (tests/install/smoke_<shape>.py) with that venv's Python, in an empty folder
+outside the repository. pip's cache keeps the repeated downloads local; the sizes and import times of
+the shapes are measured by benchmarks/bench_install.py (docs/guide/install.md).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import tarfile
+import zipfile
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.install
+
+ROOT = Path(__file__).resolve().parents[2]
+HERE = Path(__file__).resolve().parent
+#: shape -> the extras installed (the core is no extra).
+SHAPES = {"core": "", "widgets": "widgets", "analysis": "analysis", "uarm": "uarm", "lab": "lab"}
+#: The environment of the shapes' Pythons: no PYTHONPATH, which would bring the checkout's package in.
+CLEAN_ENV = {name: value for name, value in os.environ.items() if name not in ("PYTHONPATH", "VIRTUAL_ENV")}
+
+
+def build_distributions(out: Path) -> tuple[Path, Path]:
+    """(sdist, wheel) of the repository, built into ``out``."""
+    subprocess.run([sys.executable, "-m", "build", "--outdir", str(out), str(ROOT)], check=True,
+                   capture_output=True, timeout=900)
+    (sdist,) = out.glob("mt_widgets-*.tar.gz")
+    (wheel,) = out.glob("mt_widgets-*.whl")
+    return sdist, wheel
+
+
+def make_shape(wheel: Path, shape: str, venv: Path) -> Path:
+    """A fresh venv at ``venv`` with the wheel installed in the shape ``shape``; its Python."""
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, capture_output=True, timeout=300)
+    python = venv / "bin" / "python"
+    requirement = f"{wheel}[{SHAPES[shape]}]" if SHAPES[shape] else str(wheel)
+    # --no-compile: no byte-compiling of every installed module (a third of the lab's install time);
+    # Python compiles what a shape imports the first time it is imported, as for any user.
+    subprocess.run([python, "-m", "pip", "install", "--quiet", "--disable-pip-version-check", "--no-compile",
+                    requirement],
+                   check=True, capture_output=True, text=True, timeout=1800, env=CLEAN_ENV)
+    return python
+
+
+@pytest.fixture(scope="module")
+def distributions(tmp_path_factory):
+    return build_distributions(tmp_path_factory.mktemp("dist"))
+
+
+def test_the_sdist_and_the_wheel_hold_the_package_and_its_data(distributions):
+    sdist, wheel = distributions
+    with zipfile.ZipFile(wheel) as archive:
+        in_wheel = set(archive.namelist())
+    with tarfile.open(sdist) as archive:
+        in_sdist = {name.split("/", 1)[1] for name in archive.getnames() if "/" in name}
+    for path in ("mt_widgets/core/ridge_kernels.py", "mt_widgets/study/protocols/paper_sim.toml",
+                 "mt_widgets/analysis/data/synthetic-sim/study.json"):
+        assert path in in_wheel and path in in_sdist, path
+    assert {"pyproject.toml", "LICENSE"} <= in_sdist
+    assert not any(name.startswith(("tests/", "notebooks/")) for name in in_wheel)
+
+
+@pytest.mark.parametrize("shape", list(SHAPES))
+def test_each_shape_installs_from_the_wheel_and_runs_its_smoke_test(distributions, shape, tmp_path):
+    _, wheel = distributions
+    python = make_shape(wheel, shape, tmp_path / "venv")
+    work = tmp_path / "work"  # an empty folder: mt_widgets can only come from the venv
+    work.mkdir()
+    where = subprocess.run([python, "-c", "import mt_widgets; print(mt_widgets.__file__)"], cwd=work,
+                           capture_output=True, text=True, check=True, timeout=300, env=CLEAN_ENV).stdout
+    assert where.startswith(str(tmp_path / "venv")), f"mt_widgets imported from {where}, not the shape's venv"
+    result = subprocess.run([python, str(HERE / f"smoke_{shape}.py")], cwd=work, capture_output=True, text=True,
+                            timeout=900, env=CLEAN_ENV)
+    assert result.returncode == 0, f"{shape}:\n{result.stdout}\n{result.stderr[-4000:]}"
+    assert result.stdout.startswith(f"{shape}:"), result.stdout
+    if shape == "lab":
+        check_the_command(python.parent, tmp_path)
+
+
+def check_the_command(bin_dir: Path, tmp_path: Path) -> None:
+    """``mt-widgets`` after ``pip install "mt-widgets[lab]"``, in an empty folder with no clone in sight:
+    its help, and the tutorials and notebooks copied from the wheel's mt_widgets/_data (one copy of each
+    notebook lives in the repository; setup.py ships them into the wheel)."""
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    env = {"PATH": f"{bin_dir}:/usr/bin:/bin", "HOME": str(tmp_path)}  # no PYTHONPATH: not this clone
+
+    def run(*argv):
+        return subprocess.run([bin_dir / "mt-widgets", *argv], cwd=empty, env=env, capture_output=True, text=True,
+                              check=True, timeout=300).stdout
+
+    assert "lab" in run("--help") and "study" in run("--help")
+    assert run("lab", "--help").startswith("usage: mt-widgets lab")
+    where = subprocess.run([bin_dir / "python", "-c", "import mt_widgets.cli.shipped as s; "
+                            "print(s.shipped_folder('tutorials'))"], cwd=empty, env=env, capture_output=True,
+                           text=True, check=True, timeout=300).stdout.strip()
+    assert where.startswith(str(bin_dir.parent)) and where.endswith("mt_widgets/_data/tutorials"), where
+    run("lab", "class", "--copy-only")
+    copied = sorted(p.name for p in (empty / "class" / "tutorials").iterdir())
+    assert copied == sorted(p.name for p in (ROOT / "tutorials").iterdir() if p.suffix in (".ipynb", ".toml"))
+    demo = (empty / "class" / "notebooks" / "demo.ipynb").read_bytes()
+    assert demo == (ROOT / "notebooks" / "demo.ipynb").read_bytes()
+    assert sorted(p.name for p in empty.iterdir()) == ["class"]
