@@ -76,6 +76,28 @@ def _widgets_made() -> list[str]:
     return sorted({type(instance).__name__ for instance in registry.values()})
 
 
+def _widgets_join_kernel() -> None:
+    """Have ipywidgets register its comm targets once the forked kernel exists.
+
+    ipywidgets registers ``jupyter.widget`` and ``jupyter.widget.control`` with the kernel's comm
+    manager when it is imported inside a kernel, and the template imported it before there was
+    one. Without ``jupyter.widget.control`` a page's widget manager cannot ask for every widget's
+    state in one message (it falls back to a round trip per widget), and without
+    ``jupyter.widget`` a widget made by the page's front end has no kernel side.
+    """
+    if "ipywidgets" not in sys.modules:
+        return
+    from ipykernel.kernelapp import IPKernelApp
+
+    init_kernel = IPKernelApp.init_kernel
+
+    def init_kernel_then_widgets(app):
+        init_kernel(app)
+        sys.modules["ipywidgets"].register_comm_target()
+
+    IPKernelApp.init_kernel = init_kernel_then_widgets
+
+
 def _peer_uid(conn: socket.socket) -> int:
     creds = conn.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, struct.calcsize("3i"))
     return struct.unpack("3i", creds)[1]
@@ -137,6 +159,7 @@ def _become_kernel(request: dict, closing: list) -> None:
             sys.modules["numba"].core.config.reload_config()
         if "numpy" in sys.modules:
             sys.modules["numpy"].random.seed()
+        _widgets_join_kernel()
         module = request["argv"][2]
         sys.argv = [module, *request["argv"][3:], f"--IPKernelApp.parent_handle={os.getppid()}"]
         runpy.run_module(module, run_name="__main__", alter_sys=True)
