@@ -162,7 +162,8 @@ def burst(browser, n: int, window_s: float, template: bool, seed: int = 29) -> d
         shutil.copy(ROOT / "notebooks" / name, root / "notebooks" / name)
     env = {"MT_WIDGETS_STUDY_LOGS": str(root / "logs"), "MT_KERNEL_TEMPLATE": "on" if template else "off"}
     server = voila(root, f"--Voila.config_file_paths={ROOT / 'deploy' / 'voila'}", env=env)
-    offsets = sorted(random.Random(seed).uniform(0, window_s) for _ in range(n))
+    rng = random.Random(seed)  # one generator: a new one per draw gave every arrival the same moment
+    offsets = sorted(rng.uniform(0, window_s) for _ in range(n))
     pages, times, errors = [], [], []
     try:
         time.sleep(8.0)  # the server's start and its preheated spare, before the study opens
@@ -220,7 +221,7 @@ async def _arrive(session, server, i: int, offset: float, start: float) -> dict:
     await asyncio.sleep(max(0.0, start + offset - time.monotonic()))
     query = urlencode({"PROLIFIC_PID": f"5f0a1b2c3d4e5f6a7b8c{i:04d}", "STUDY_ID": "BENCH", "SESSION_ID": f"S{i}"})
     t0 = time.monotonic()
-    stages, kernel_id, html = {}, None, ""
+    stages, kernel_id, html = {"at": t0 - start}, None, ""
     async with session.get(f"{server.url('/voila/render/study_online.ipynb')}?{query}") as response:
         async for chunk in response.content.iter_any():
             stages.setdefault("head", time.monotonic() - t0)
@@ -258,6 +259,23 @@ async def _arrive(session, server, i: int, offset: float, start: float) -> dict:
     return {"stages": stages, "ws": ws}
 
 
+EXTRA = [a for a in os.environ.get("BENCH_VOILA_OPTIONS", "").split(" ") if a]
+SPARE = "pool_size\":0}}" not in " ".join(EXTRA)
+
+
+def _wait_until_ready(server, template: bool, timeout_s: float = 300.0) -> None:
+    """Until the server has started its kernel template (when it forks kernels) and its preheated
+    spare, as a study server has long before its participants arrive; then 3 s for the spare's page."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        text = Path(server.log).read_text(errors="replace")
+        if ("is filled with 1 kernel" in text or not SPARE) and (not template or "kernel template ready" in text):
+            time.sleep(3.0)
+            return
+        time.sleep(0.5)
+    raise RuntimeError(f"the server was not ready after {timeout_s:.0f} s (log: {server.log})")
+
+
 def state_burst(n: int, window_s: float, template: bool, seed: int = 29) -> dict:
     """N arrivals within ``window_s`` at the widget-state level (no browser): stages, CPU by process, PSS."""
     import asyncio
@@ -270,8 +288,9 @@ def state_burst(n: int, window_s: float, template: bool, seed: int = 29) -> dict
     for name in ("study_online.ipynb", "study_online_pilot.toml"):
         shutil.copy(ROOT / "notebooks" / name, root / "notebooks" / name)
     env = {"MT_WIDGETS_STUDY_LOGS": str(root / "logs"), "MT_KERNEL_TEMPLATE": "on" if template else "off"}
-    server = voila(root, f"--Voila.config_file_paths={ROOT / 'deploy' / 'voila'}", env=env)
-    offsets = sorted(random.Random(seed).uniform(0, window_s) for _ in range(n))
+    server = voila(root, f"--Voila.config_file_paths={ROOT / 'deploy' / 'voila'}", *EXTRA, env=env)
+    rng = random.Random(seed)  # one generator: a new one per draw gave every arrival the same moment
+    offsets = sorted(rng.uniform(0, window_s) for _ in range(n))
     results, errors = [], []
 
     async def everyone():
@@ -288,7 +307,7 @@ def state_burst(n: int, window_s: float, template: bool, seed: int = 29) -> dict
             return pss
 
     try:
-        time.sleep(8.0)  # the server's start and its preheated spare, before the study opens
+        _wait_until_ready(server, template)
         cpu_before, own_before = _cpu_by_kind(server), sum(os.times()[:2])
         (pss, processes) = asyncio.run(everyone())
         cpu = {kind: seconds - cpu_before.get(kind, 0.0) for kind, seconds in _cpu_by_kind(server).items()}
