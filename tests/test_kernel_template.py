@@ -76,6 +76,11 @@ def test_a_forked_kernel_teaches_an_episode_and_interrupt_restart_shutdown_work(
         status, out = await _run(client, "import ipycanvas, ipywidgets.widgets.widget as w\n"
                                          "print(sorted({type(x.comm).__module__ for x in w._instances.values()}))")
         assert (status, out.strip()) == ("ok", "['ipykernel.comm.comm']"), out
+        # ipywidgets' comm targets, which it registers at import only inside a kernel (the
+        # template imported it before there was one): a page's widget manager asks for every
+        # widget's state through jupyter.widget.control.
+        status, out = await _run(client, "import comm\nprint(sorted(comm.get_comm_manager().targets))")
+        assert (status, out.strip()) == ("ok", "['jupyter.widget', 'jupyter.widget.control']"), out
         status, out = await _run(client, EPISODE, timeout=120)
         word, arrows, latency = out.split()
         assert (status, word) == ("ok", "episode") and int(arrows) > 0 and float(latency) > 0, out

@@ -49,7 +49,8 @@ c.KernelManager.transport = "ipc"
 # is there in milliseconds instead of importing them for about 2 s of CPU, and shares their
 # memory copy-on-write with the template and the other pages' kernels. What a page may do is
 # unchanged: Voila's server still relays no code from the page, and each kernel is its own
-# process with its own connection file and key. MT_KERNEL_TEMPLATE=off in the server's
+# process with its own connection file and key. The template starts with the first kernel, which
+# the preheated pools below ask for at the server's start. MT_KERNEL_TEMPLATE=off in the server's
 # environment starts kernels the usual way.
 c.MultiKernelManager.kernel_manager_class = "mt_widgets.kernels.provisioner.ForkingKernelManager"
 # The template also imports voila.utils, whose get_query_string every page's first cell imports:
@@ -57,10 +58,6 @@ c.MultiKernelManager.kernel_manager_class = "mt_widgets.kernels.provisioner.Fork
 # checkers' rfc3987_syntax, which builds about forty parsers), 7-10 s of CPU per kernel on this
 # 2-core machine, by far the largest part of a page's start (benchmarks/bench_online.py --burst).
 os.environ.setdefault("MT_KERNEL_TEMPLATE_PRELOAD", "numpy,numba,ipywidgets,mt_widgets,mt_widgets.study,voila.utils")
-# Started with the server, not at the first page: its imports are done before anyone arrives.
-from mt_widgets.kernels.provisioner import start_template  # noqa: E402
-
-start_template()
 
 # --- Idle-kernel culling: what the beacon cannot catch -----------------------------------------
 # A tab that vanishes without `beforeunload` (a crashed or killed browser, a phone that
