@@ -5,3 +5,15 @@ is the Jupyter side (a kernel provisioner and the kernel manager that uses it), 
 class hub's students' servers and the study pages' Voila. Nothing here imports the rest of the
 package: the template imports what its server names, by name.
 """
+
+__all__ = ["ForkingKernelManager", "ForkingProvisioner", "start_template"]
+
+
+def __getattr__(name: str):
+    # On first use, not at import: the template (``python -m mt_widgets.kernels.template``) imports
+    # this package first and must not import jupyter_server with it.
+    if name in __all__:
+        from . import provisioner
+
+        return getattr(provisioner, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
