@@ -7,6 +7,8 @@ URDFs (files read outside the science) in ``mt_widgets.robot_models``; the widge
 statistics, power, figures and the comparison with the paper in ``mt_widgets.analysis``; a
 class's progress files and checks in ``mt_widgets.classroom``; the uArm Swift Pro connector in
 ``mt_widgets.hardware``; the pages and kiosks built from them in ``mt_widgets.apps``.
+Kernels forked from an already-imported template (the class hub, the study pages) in
+``mt_widgets.kernels``.
 The ``mt-widgets`` command (the lab, the demo, a study, a class's checks) is ``mt_widgets.cli``.
 """
 

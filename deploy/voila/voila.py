@@ -2,6 +2,7 @@
 # Voila 0.5 reads it as its "voila" config file: pass --Voila.config_file_paths=<this folder>.
 # tests/browser/test_kiosk.py checks these values and what they do; benchmarks/bench_kiosk.py
 # measures memory and time to interactive with and without them.
+import os
 import sys
 import tempfile
 from pathlib import Path
@@ -50,6 +51,22 @@ c.KernelManager.transport = "ipc"
 import arrival_gate  # noqa: E402 (beside this file, found through the path set above)
 
 arrival_gate.install()
+
+# --- Kernels forked from a template, not started -----------------------------------------------
+# Every page's kernel is forked from one template process this server starts now, which has
+# imported numpy, numba, ipywidgets, ipycanvas and the widgets (mt_widgets/kernels/): a kernel
+# is there in milliseconds instead of importing them for about 2 s of CPU, and shares their
+# memory copy-on-write with the template and the other pages' kernels. What a page may do is
+# unchanged: Voila's server still relays no code from the page, and each kernel is its own
+# process with its own connection file and key. The template starts with the first kernel, which
+# the preheated pools below ask for at the server's start. MT_KERNEL_TEMPLATE=off in the server's
+# environment starts kernels the usual way.
+c.MultiKernelManager.kernel_manager_class = "mt_widgets.kernels.provisioner.ForkingKernelManager"
+# The template also imports voila.utils, whose get_query_string every page's first cell imports:
+# it imports Voila's server side (jupyter_server, jupyter_events, jsonschema and its format
+# checkers' rfc3987_syntax, which builds about forty parsers), 7-10 s of CPU per kernel on this
+# 2-core machine, by far the largest part of a page's start (benchmarks/bench_online.py --burst).
+os.environ.setdefault("MT_KERNEL_TEMPLATE_PRELOAD", "numpy,numba,ipywidgets,mt_widgets,mt_widgets.study,voila.utils")
 
 # --- Idle-kernel culling: what the beacon cannot catch -----------------------------------------
 # A tab that vanishes without `beforeunload` (a crashed or killed browser, a phone that

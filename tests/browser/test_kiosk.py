@@ -70,7 +70,8 @@ def test_voila_runs_the_shipped_culler_and_accepts_a_pages_shutdown_beacon(tmp_p
 
         (spare,) = kernel_processes(server)
         # The spare talks to the server over IPC sockets in Voila's private connection folder.
-        command = kernel_processes(server)[spare].cmdline()
+        # (A kernel forked from the template shows its command as one process title: split it.)
+        command = " ".join(kernel_processes(server)[spare].cmdline()).split()
         connection = Path(command[command.index("-f") + 1])
         info = json.loads(connection.read_text())
         assert info["transport"] == "ipc" and Path(f"{info['ip']}-{info['shell_port']}").is_socket(), info

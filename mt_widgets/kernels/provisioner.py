@@ -1,0 +1,231 @@
+"""Kernels forked from a template (``template.py``), for Jupyter servers and Voila alike.
+
+``ForkingProvisioner`` is jupyter_client's documented extension point for launching a kernel
+another way (a ``KernelProvisionerBase``; here a ``LocalProvisioner`` whose launch differs): it
+writes the connection file as usual, then asks the server's template to fork the kernel with
+that file, the kernel's environment and folder. ``ForkingKernelManager`` makes every kernel of a
+server use it (``c.MultiKernelManager.kernel_manager_class``), without an entry point to install:
+the study and demo pages' Voila (deploy/voila/voila.py) names it.
+
+A kernel is forked only when its spec runs this server's own Python with ``-m`` and a module
+the template may run (``ipykernel_launcher``, or one named in ``MT_KERNEL_TEMPLATE_MODULES``,
+such as the hub's ``mt_hub_kernel``); any other kernel starts as jupyter_client starts it. When
+the template is not there (it died, or cannot start) the kernel starts the usual way too, with a
+warning in the server's log, and a new template is started for the next kernel; a template still
+importing is waited for (at most ``MT_KERNEL_TEMPLATE_WAIT``, 60 s), since a fork after it is
+still sooner than a cold start competing with it for the cores.
+
+Signals, interrupt, restart and shutdown go through ``LocalProvisioner``'s code unchanged: the
+forked kernel leads its own process group, as a launched kernel does, and ``ForkedProcess``
+answers ``poll``/``wait``/``send_signal`` as a ``Popen`` would, its exit code coming from the
+template, which reaps it. A restart asks for a fresh fork.
+
+Settings (environment of the server): ``MT_KERNEL_TEMPLATE`` (``on``; ``off`` starts every
+kernel the usual way), ``MT_KERNEL_TEMPLATE_PRELOAD`` (modules the template imports; by default
+numpy, numba, ipywidgets, ``mt_widgets`` and ``mt_widgets.study``: no module whose import
+makes a widget).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import atexit
+import json
+import logging
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import uuid
+from pathlib import Path
+
+from jupyter_client.provisioning import LocalProvisioner
+from jupyter_server.services.kernels.kernelmanager import ServerKernelManager
+
+# Not ipycanvas, nor what imports it (mt_widgets.widgets): its import makes a widget (the canvas
+# manager every canvas draws through), and a widget made in the template has no kernel to talk
+# to; forked, it would stay mute and no canvas would ever draw. The template refuses to serve
+# when a preloaded module made a widget (template.py).
+DEFAULT_PRELOAD = ("numpy", "numba", "ipywidgets", "mt_widgets", "mt_widgets.study")
+#: The exit code reported for a kernel whose end the template could not report (it died first).
+UNKNOWN_EXIT = -1
+
+log = logging.getLogger(__name__)
+
+
+def _setting(name: str, default: str) -> str:
+    return os.environ.get(name, default)
+
+
+class KernelTemplate:
+    """This server's template process: started once, restarted when found dead."""
+
+    _shared: KernelTemplate | None = None
+
+    def __init__(self, modules: list[str], folder: str | None = None):
+        self.modules = modules
+        self.folder = tempfile.mkdtemp(prefix="mt-kt-", dir=folder)  # 0700: only this user reaches the socket
+        self.socket = os.path.join(self.folder, "s")
+        self.process: subprocess.Popen | None = None
+        self.started_at = 0.0
+
+    @classmethod
+    def shared(cls) -> KernelTemplate | None:
+        """The server's template, started at the first call; None when switched off."""
+        if _setting("MT_KERNEL_TEMPLATE", "on") == "off":
+            return None
+        if cls._shared is None:
+            # Kernel modules first: what they set up (mt_hub_kernel: no debugpy) precedes the rest.
+            modules = [m for m in _setting("MT_KERNEL_TEMPLATE_MODULES", "").split(",") if m]
+            modules += [m for m in _setting("MT_KERNEL_TEMPLATE_PRELOAD", ",".join(DEFAULT_PRELOAD)).split(",") if m]
+            # A socket's path has at most 107 bytes: the runtime folder if short enough, else /tmp.
+            runtime = os.environ.get("JUPYTER_RUNTIME_DIR")
+            folder = runtime if runtime and len(runtime) < 80 and os.path.isdir(runtime) else None
+            cls._shared = cls(list(dict.fromkeys(modules)), folder)
+            atexit.register(cls._shared.stop)
+        cls._shared.ensure_started()
+        return cls._shared
+
+    def ensure_started(self) -> None:
+        if self.process is not None and self.process.poll() is None:
+            return
+        if self.process is not None:
+            log.warning("kernel template (pid %s) ended with %s: starting a new one; kernels start the usual "
+                        "way until it is ready", self.process.pid, self.process.returncode)
+        if os.path.exists(self.socket):
+            os.unlink(self.socket)
+        # stdin is a pipe the template watches: when this server ends, so does the template.
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", "mt_widgets.kernels.template", self.socket, ",".join(self.modules)],
+            stdin=subprocess.PIPE, cwd=os.path.expanduser("~") if os.path.isdir(os.path.expanduser("~")) else "/",
+            start_new_session=True)
+        self.started_at = time.monotonic()
+
+    def stop(self) -> None:
+        if self.process is not None and self.process.poll() is None:
+            self.process.stdin.close()
+            try:
+                self.process.wait(5)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+
+    def serves(self, argv: list[str]) -> bool:
+        """Whether a kernel spec's command is one this template can fork."""
+        return (len(argv) >= 3 and argv[1] == "-m"
+                and argv[2] in ("ipykernel_launcher", *self.modules)
+                and os.path.abspath(argv[0]) in {sys.executable, os.path.join(sys.prefix, "bin", "python"),
+                                                 os.path.join(sys.prefix, "bin", Path(sys.executable).name)})
+
+    async def fork(self, argv: list[str], env: dict, cwd: str) -> ForkedProcess | None:
+        """A kernel forked with this command, environment and folder, or None (the reason logged)."""
+        deadline = time.monotonic() + float(_setting("MT_KERNEL_TEMPLATE_WAIT", "60"))
+        while not os.path.exists(self.socket):
+            if self.process.poll() is not None:
+                log.warning("kernel template ended (%s) before it was ready", self.process.returncode)
+                return None
+            if time.monotonic() > deadline:
+                log.warning("kernel template not ready after %.0f s", time.monotonic() - self.started_at)
+                return None
+            await asyncio.sleep(0.05)
+        try:
+            reader, writer = await asyncio.open_unix_connection(self.socket)
+        except OSError as error:
+            log.warning("kernel template unreachable (%s)", error)
+            return None
+        request = {"argv": list(argv), "env": {str(k): str(v) for k, v in env.items()}, "cwd": str(cwd)}
+        writer.write(json.dumps(request).encode() + b"\n")
+        await writer.drain()
+        reply = json.loads(await reader.readline() or b"{}")
+        if "pid" not in reply:
+            writer.close()
+            log.warning("kernel template refused a kernel: %s", reply.get("error", "it closed the connection"))
+            return None
+        return ForkedProcess(reply["pid"], reader, writer)
+
+
+class ForkedProcess:
+    """A forked kernel as jupyter_client's LocalProvisioner sees a ``Popen``."""
+
+    stdin = stdout = stderr = None
+
+    def __init__(self, pid: int, reader: asyncio.StreamReader, writer: asyncio.StreamWriter):
+        self.pid = pid
+        self.returncode: int | None = None
+        self._writer = writer
+        self._status = asyncio.ensure_future(reader.readline())
+
+    def poll(self) -> int | None:
+        if self.returncode is None and self._status.done():
+            line = self._status.result() if not self._status.cancelled() and self._status.exception() is None else b""
+            if line:
+                self.returncode = int(json.loads(line)["status"])
+            else:
+                # The template ended before the kernel; the kernel follows it (its parent poller)
+                # within a second. Alive until it is gone; its exit code nobody can learn.
+                try:
+                    os.kill(self.pid, 0)
+                except ProcessLookupError:
+                    self.returncode = UNKNOWN_EXIT
+            if self.returncode is not None:
+                self._writer.close()
+        return self.returncode
+
+    def wait(self, timeout: float | None = None) -> int | None:
+        # LocalProvisioner.wait calls this once poll() says the kernel has ended.
+        return self.poll()
+
+    def send_signal(self, signum: int) -> None:
+        if self.poll() is None:
+            os.kill(self.pid, signum)
+
+    def terminate(self) -> None:
+        self.send_signal(signal.SIGTERM)
+
+    def kill(self) -> None:
+        self.send_signal(signal.SIGKILL)
+
+
+class ForkingProvisioner(LocalProvisioner):
+    """LocalProvisioner whose kernels come from the server's template when it can fork them."""
+
+    forked = False
+
+    async def launch_kernel(self, cmd: list[str], **kwargs):
+        template = KernelTemplate.shared()
+        if template is not None and template.serves(cmd):
+            env = kwargs.get("env") or os.environ.copy()
+            cwd = kwargs.get("cwd") or os.getcwd()
+            started = time.perf_counter()
+            process = await template.fork(cmd, env, cwd)
+            if process is not None:
+                self.process = process
+                self.pid = process.pid
+                self.pgid = process.pid  # the kernel leads its own session and process group
+                self.cwd = cwd
+                self.forked = True
+                log.info("kernel %s forked from the template in %.0f ms (pid %d)", self.kernel_id,
+                         1000 * (time.perf_counter() - started), process.pid)
+                return self.connection_info
+            log.warning("kernel %s: starting it the usual way", self.kernel_id)
+            template.ensure_started()  # a template found dead is replaced for the next kernel
+        self.forked = False
+        return await super().launch_kernel(cmd, **kwargs)
+
+
+class ForkingKernelManager(ServerKernelManager):
+    """jupyter_server's kernel manager with a ForkingProvisioner for every kernel."""
+
+    async def _async_pre_start_kernel(self, **kw):
+        if self.provisioner is None:  # a restart keeps its provisioner
+            self.kernel_id = self.kernel_id or kw.pop("kernel_id", None) or str(uuid.uuid4())
+            self.provisioner = ForkingProvisioner(kernel_id=self.kernel_id, kernel_spec=self.kernel_spec,
+                                                  parent=self)
+        return await super()._async_pre_start_kernel(**kw)
+
+
+def start_template() -> None:
+    """Start this server's template now (server configuration files call it), so that it has
+    imported the heavy modules by the time the first kernel is asked for."""
+    KernelTemplate.shared()

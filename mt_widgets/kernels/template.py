@@ -1,0 +1,281 @@
+"""A kernel template: one process that has imported a kernel's heavy modules and forks kernels.
+
+A Python kernel spends about 2.2 s importing ipykernel, numpy, numba, ipywidgets, ipycanvas and
+this package's widgets before it runs a cell (measured on this project's 2-core machine at load
+average 3.4, with six other engineers' work running: ipykernel 0.7 s, numba 0.8 s, numpy 0.2 s,
+the widgets 0.5 s). A template imports them once; a kernel forked from it starts with all of
+them in memory, shared copy-on-write with the template and its sibling kernels, in
+milliseconds. ``mt_widgets/kernels/provisioner.py`` asks it for kernels.
+
+Run as ``python -m mt_widgets.kernels.template SOCKET MODULES`` (``MODULES``: comma-separated
+names to import; the kernel modules a request may name are ``ipykernel_launcher`` and any of
+``MODULES``). The template
+
+- listens on the Unix socket ``SOCKET`` (made 0600, in a folder the caller keeps private) and
+  serves only its own user: a request's peer credentials (SO_PEERCRED) must carry the template's
+  uid. A request runs code as that user, which its peer can do anyway. It never changes user:
+  it runs as the server that started it (on the class hub, the student: their uid, gid,
+  groups and cgroups, set before their server ran anything), and so does every kernel it forks,
+  with nothing to drop and nothing to get wrong;
+- per request (one JSON line: ``argv`` of the kernel spec, ``env``, ``cwd``) forks; the child
+  becomes its own session (so the server's interrupt, a signal to the kernel's process group,
+  reaches only that kernel), takes the request's environment and folder, re-reads numba's
+  configuration from that environment, reseeds numpy's global generator (a fork copies it, and
+  sibling kernels would otherwise draw the same numbers) and runs the kernel module as
+  ``__main__``. ZeroMQ contexts, sockets and threads are all made by the kernel after the fork:
+  the template never creates one (it checks, below, that it has no other thread when it forks).
+  Functions numba compiles with ``cache=True`` that the template imported keep the cache folder
+  of the template's environment, which is the server's and so the kernel's in both deployments
+  (on the hub, the student's own ``NUMBA_CACHE_DIR``);
+- answers ``{"pid": N}``, keeps the connection and writes ``{"status": CODE}`` when that kernel
+  ends (its exit code, or minus the signal that ended it), so the server learns a kernel's end
+  as it does from a child process;
+- ends when its standard input closes (the server that started it went away); the kernels it
+  forked end with it (ipykernel's parent poller watches the template), as launched kernels end
+  with their server.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import os
+import runpy
+import selectors
+import signal
+import socket
+import struct
+import sys
+import threading
+
+#: Kernel modules a request may always name: the standard Python kernel's.
+KERNEL_MODULES = ("ipykernel_launcher",)
+#: What a request may be at most (a kernel's environment is a few kilobytes).
+MAX_REQUEST_BYTES = 1 << 20
+
+
+def preload(modules: list[str]) -> list[str]:
+    """Import ``modules``, in order, then ipykernel's application, before any fork; the names that
+    failed. Order matters: a kernel module such as the hub's ``mt_hub_kernel`` keeps debugpy out
+    of ipykernel's import, so it comes first."""
+    failed = []
+    for name in [*modules, "ipykernel.kernelapp"]:
+        try:
+            importlib.import_module(name)
+        except Exception as error:  # a module that cannot import is a kernel that imports it later
+            print(f"kernel template: could not preload {name}: {error!r}", file=sys.stderr, flush=True)
+            failed.append(name)
+    return failed
+
+
+def _widgets_made() -> list[str]:
+    """The classes of the ipywidgets widgets that exist in this process."""
+    # ipywidgets 8's registry of live widgets (``Widget.widgets``, deprecated, reads the same).
+    module = sys.modules.get("ipywidgets.widgets.widget")
+    registry = getattr(module, "_instances", {}) if module is not None else {}
+    return sorted({type(instance).__name__ for instance in registry.values()})
+
+
+def _widgets_join_kernel() -> None:
+    """Have ipywidgets register its comm targets once the forked kernel exists.
+
+    ipywidgets registers ``jupyter.widget`` and ``jupyter.widget.control`` with the kernel's comm
+    manager when it is imported inside a kernel, and the template imported it before there was
+    one. Without ``jupyter.widget.control`` a page's widget manager cannot ask for every widget's
+    state in one message (it falls back to a round trip per widget), and without
+    ``jupyter.widget`` a widget made by the page's front end has no kernel side.
+    """
+    if "ipywidgets" not in sys.modules:
+        return
+    from ipykernel.kernelapp import IPKernelApp
+
+    init_kernel = IPKernelApp.init_kernel
+
+    def init_kernel_then_widgets(app):
+        init_kernel(app)
+        sys.modules["ipywidgets"].register_comm_target()
+
+    IPKernelApp.init_kernel = init_kernel_then_widgets
+
+
+def _peer_uid(conn: socket.socket) -> int:
+    creds = conn.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, struct.calcsize("3i"))
+    return struct.unpack("3i", creds)[1]
+
+
+def _read_request(conn: socket.socket) -> dict:
+    data = b""
+    while not data.endswith(b"\n"):
+        chunk = conn.recv(65536)
+        if not chunk:
+            raise ValueError("request: the connection closed before a full line")
+        data += chunk
+        if len(data) > MAX_REQUEST_BYTES:
+            raise ValueError(f"request: expected at most {MAX_REQUEST_BYTES} bytes")
+    request = json.loads(data)
+    argv, env, cwd = request.get("argv"), request.get("env"), request.get("cwd")
+    if not (isinstance(argv, list) and len(argv) >= 3 and all(isinstance(a, str) for a in argv)):
+        raise ValueError(f"request: argv: expected [python, '-m', module, ...], got {argv!r}")
+    if not (isinstance(env, dict) and all(isinstance(k, str) and isinstance(v, str) for k, v in env.items())):
+        raise ValueError("request: env: expected a mapping of strings to strings")
+    if not isinstance(cwd, str):
+        raise ValueError(f"request: cwd: expected a folder, got {cwd!r}")
+    return request
+
+
+def _become_kernel(request: dict, closing: list) -> None:
+    """In the forked child: the kernel of ``request``. Never returns."""
+    code = 1
+    try:
+        signal.set_wakeup_fd(-1)  # before its pipe closes: a signal must not write to a closed socket
+        for fileobj in closing:
+            fileobj.close()
+        for signum in (signal.SIGCHLD, signal.SIGINT, signal.SIGTERM, signal.SIGPIPE):
+            signal.signal(signum, signal.SIG_DFL)
+        os.setsid()
+        # The kernel's command as its process title (ps, psutil): what the server asked for, with
+        # its connection file, instead of the template's (tools find kernels by that file).
+        try:
+            import setproctitle
+        except ImportError:
+            pass
+        else:
+            setproctitle.setproctitle(" ".join(request["argv"]))
+        # The template's standard input is the pipe whose end tells it its server went away.
+        devnull = os.open(os.devnull, os.O_RDONLY)
+        os.dup2(devnull, 0)
+        os.close(devnull)
+        os.chdir(request["cwd"])
+        os.environ.clear()
+        os.environ.update(request["env"])
+        # ipykernel ends when the process that started it goes away (its parent poller); that
+        # process is now the template, which ends with the server.
+        # (ipykernel read JPY_PARENT_PID when the template imported it, so it is also passed on
+        # the command line.)
+        os.environ["JPY_PARENT_PID"] = str(os.getppid())
+        if "numba" in sys.modules:
+            # NUMBA_CACHE_DIR and the like are read at numba's import: read them again from the
+            # kernel's environment (on the hub, the student's own cache folder).
+            sys.modules["numba"].core.config.reload_config()
+        if "numpy" in sys.modules:
+            sys.modules["numpy"].random.seed()
+        _widgets_join_kernel()
+        module = request["argv"][2]
+        sys.argv = [module, *request["argv"][3:], f"--IPKernelApp.parent_handle={os.getppid()}"]
+        runpy.run_module(module, run_name="__main__", alter_sys=True)
+        code = 0
+    except SystemExit as stop:
+        code = stop.code if isinstance(stop.code, int) else (0 if stop.code is None else 1)
+    except BaseException:
+        import traceback
+
+        traceback.print_exc()
+    finally:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+
+
+def serve(path: str, kernel_modules: tuple[str, ...]) -> None:
+    """Serve fork requests on the Unix socket ``path`` until standard input closes."""
+    uid = os.getuid()
+    listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    old_umask = os.umask(0o177)
+    try:
+        listener.bind(path)
+    finally:
+        os.umask(old_umask)
+    listener.listen(64)
+    # SIGCHLD only wakes the loop (through the wakeup pipe); kernels are reaped below.
+    wake_read, wake_write = socket.socketpair()
+    wake_read.setblocking(False)
+    wake_write.setblocking(False)
+    signal.set_wakeup_fd(wake_write.fileno(), warn_on_full_buffer=False)
+    signal.signal(signal.SIGCHLD, lambda *_: None)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server's Ctrl-C is for the server
+    selector = selectors.DefaultSelector()
+    selector.register(listener, selectors.EVENT_READ, "listen")
+    selector.register(wake_read, selectors.EVENT_READ, "wake")
+    selector.register(sys.stdin, selectors.EVENT_READ, "stdin")
+    watchers: dict[int, socket.socket] = {}  # kernel pid -> the connection that asked for it
+    print(f"kernel template ready on {path} (pid {os.getpid()})", file=sys.stderr, flush=True)
+    running = True
+    while running:
+        for key, _ in selector.select():
+            if key.data == "stdin":
+                if not os.read(sys.stdin.fileno(), 4096):
+                    running = False
+            elif key.data == "wake":
+                try:
+                    while wake_read.recv(4096):
+                        pass
+                except BlockingIOError:
+                    pass
+                _reap(watchers)
+            else:
+                conn, _ = listener.accept()
+                try:
+                    if _peer_uid(conn) != uid:
+                        raise PermissionError("refused: the request came from another user")
+                    request = _read_request(conn)
+                    if request["argv"][1] != "-m" or request["argv"][2] not in kernel_modules:
+                        raise ValueError(f"request: argv: expected '-m' and one of {sorted(kernel_modules)}, "
+                                         f"got {request['argv'][1:3]}")
+                    if threading.active_count() != 1:
+                        raise RuntimeError("the template has a thread: forking it would copy a lock held")
+                except (OSError, ValueError, RuntimeError) as error:
+                    _send(conn, {"error": str(error)})
+                    conn.close()
+                    continue
+                pid = os.fork()
+                if pid == 0:
+                    _become_kernel(request, [listener, wake_read, wake_write, conn, *watchers.values()])
+                _send(conn, {"pid": pid})
+                watchers[pid] = conn
+                _reap(watchers)
+    listener.close()
+    try:
+        os.unlink(path)
+    except FileNotFoundError:
+        pass
+
+
+def _send(conn: socket.socket, message: dict) -> None:
+    try:
+        conn.sendall(json.dumps(message).encode() + b"\n")
+    except OSError:
+        pass  # the server went away: the kernel's end is nobody's news
+
+
+def _reap(watchers: dict[int, socket.socket]) -> None:
+    while True:
+        try:
+            pid, status = os.waitpid(-1, os.WNOHANG)
+        except ChildProcessError:
+            return
+        if pid == 0:
+            return
+        conn = watchers.pop(pid, None)
+        if conn is not None:
+            _send(conn, {"status": os.waitstatus_to_exitcode(status)})
+            conn.close()
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = sys.argv[1:] if argv is None else argv
+    if len(args) != 2:
+        raise SystemExit("usage: python -m mt_widgets.kernels.template SOCKET MODULE[,MODULE...]")
+    path, modules = args[0], [name for name in args[1].split(",") if name]
+    preload(modules)
+    made = _widgets_made()
+    if made:
+        # A widget made here has no kernel (its comm is a dummy): in every kernel forked from here
+        # it would be mute, and a page drawing through it (ipycanvas's canvas manager) would
+        # never draw. Refusing makes the server start its kernels the usual way, logged.
+        raise SystemExit(f"kernel template: importing {modules} made widgets ({made}); preload modules "
+                         "that make none (MT_KERNEL_TEMPLATE_PRELOAD)")
+    serve(path, tuple(dict.fromkeys([*KERNEL_MODULES, *modules])))
+
+
+if __name__ == "__main__":
+    main()
