@@ -100,11 +100,30 @@ def stage_css(*views) -> str:
 def _resolve_skill(skill) -> Skill:
     if isinstance(skill, str):
         if skill not in SKILLS:
-            raise ValueError(f"skill: expected a Skill or one of {sorted(SKILLS)}, got {skill!r}")
+            raise ValueError(f"skill: expected a Skill, a TeachingEpisode or one of {sorted(SKILLS)}, got {skill!r}")
         return SKILLS[skill]
     if not isinstance(skill, Skill):
-        raise ValueError(f"skill: expected a Skill, a TeachingEpisode or a skill key, got {type(skill).__name__}")
+        raise TypeError(f"skill: expected a Skill, a TeachingEpisode or a skill key, got {type(skill).__name__}")
     return skill
+
+
+def episode_to_show(skill, query_states, seed, lam, duration) -> TeachingEpisode:
+    """The ``TeachingEpisode`` an episode widget shows (``EpisodeWidget``, ``SpaceEpisodeWidget``).
+
+    ``skill`` is a ``TeachingEpisode`` (shown as it is: ``query_states`` and ``duration`` must then
+    be None, and ``lam`` None or its own) or a ``Skill`` or skill key, taught on ``query_states``
+    (or states drawn with ``seed``) with ridge parameter ``lam`` (None: ``DEFAULT_LAMBDA``).
+    """
+    if isinstance(skill, TeachingEpisode):
+        for name, value in (("query_states", query_states), ("duration", duration)):
+            if value is not None:
+                raise ValueError(f"{name}: expected None when a TeachingEpisode is shown (it has its own), "
+                                 f"got {value!r}"[:200])
+        if lam is not None and as_positive("lam", lam, allow_zero=True) != skill.lam:
+            raise ValueError(f"lam: expected None or the shown TeachingEpisode's own ({skill.lam}), got {lam}")
+        return skill
+    return TeachingEpisode(_resolve_skill(skill), query_states, seed=None if query_states is not None else seed,
+                           lam=DEFAULT_LAMBDA if lam is None else lam, duration=duration)
 
 
 class EpisodeWidget(VBox):
@@ -158,18 +177,7 @@ class EpisodeWidget(VBox):
                  show_outcome: bool = True, guidance_modality: str = "arrows+words"):
         self.guidance_arrows, self.guidance_words = guidance_parts(guidance_modality)
         self.guidance_modality = guidance_modality
-        if isinstance(skill, TeachingEpisode):
-            for name, value in (("query_states", query_states), ("duration", duration)):
-                if value is not None:
-                    raise ValueError(f"{name}: expected None when a TeachingEpisode is shown (it has its own), "
-                                     f"got {value!r}"[:200])
-            if lam is not None and as_positive("lam", lam, allow_zero=True) != skill.lam:
-                raise ValueError(f"lam: expected None or the shown TeachingEpisode's own ({skill.lam}), got {lam}")
-            episode = skill
-        else:
-            episode = TeachingEpisode(_resolve_skill(skill), query_states,
-                                      seed=None if query_states is not None else seed,
-                                      lam=DEFAULT_LAMBDA if lam is None else lam, duration=duration)
+        episode = episode_to_show(skill, query_states, seed, lam, duration)
         #: The ``TeachingEpisode`` shown: the science of this episode lives there.
         self.episode = episode
         # Guidance that shows nothing is no guidance: the episode does not stop after each arrow.

@@ -26,12 +26,13 @@ from collections.abc import Callable
 from ipywidgets import HTML, Layout, VBox
 from traitlets import Float, Int, Unicode
 
-from mt_widgets.core import DEFAULT_LAMBDA, SKILLS, EpisodeResult, Skill, TeachingEpisode
+from mt_widgets.core import SKILLS, EpisodeResult, Skill, TeachingEpisode
 from mt_widgets.core.drawing import SpaceDrawing
 from mt_widgets.core.guidance import guidance_parts
-from mt_widgets.core.validation import as_bool, as_count, as_positive
+from mt_widgets.core.validation import as_bool, as_count
 
 from .callbacks import Callbacks
+from .episode import episode_to_show
 from .progress import EffortProgress
 from .space_teaching import SpaceTeachingCanvas
 
@@ -95,25 +96,7 @@ class SpaceEpisodeWidget(VBox):
                  panel_size: int = 260):
         arrows, words = guidance_parts(guidance_modality)
         self.guidance_modality = guidance_modality
-        if isinstance(skill, TeachingEpisode):
-            for name, value in (("query_states", query_states), ("duration", duration)):
-                if value is not None:
-                    raise ValueError(f"{name}: expected None when a TeachingEpisode is shown (it has its own), "
-                                     f"got {value!r}"[:200])
-            if lam is not None and as_positive("lam", lam, allow_zero=True) != skill.lam:
-                raise ValueError(f"lam: expected None or the shown TeachingEpisode's own ({skill.lam}), got {lam}")
-            episode = skill
-        else:
-            if isinstance(skill, str):
-                if skill not in SKILLS:
-                    raise ValueError(f"skill: expected a Skill, a TeachingEpisode or one of {sorted(SKILLS)}, "
-                                     f"got {skill!r}")
-                skill = SKILLS[skill]
-            if not isinstance(skill, Skill):
-                raise TypeError(f"skill: expected a Skill, a TeachingEpisode or a skill key, got "
-                                f"{type(skill).__name__}")
-            episode = TeachingEpisode(skill, query_states, seed=None if query_states is not None else seed,
-                                      lam=DEFAULT_LAMBDA if lam is None else lam, duration=duration)
+        episode = episode_to_show(skill, query_states, seed, lam, duration)
         #: The ``TeachingEpisode`` shown (the one place its demonstrations live).
         self.episode = episode
         self.guidance = as_bool("guidance", guidance) and (arrows or words)
