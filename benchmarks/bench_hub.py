@@ -106,7 +106,8 @@ def _is_kernel(process) -> bool:
         if any(part in ("ipykernel_launcher", "mt_hub_kernel") for part in process.cmdline()):
             return True
         parent = process.parent()
-        return parent is not None and "mt_widgets.kernels.template" in parent.cmdline()
+        return parent is not None and any(name in " ".join(parent.cmdline()) for name in (
+            "mt_widgets.kernels.template", "mt-widgets kernel template"))
     except (psutil.NoSuchProcess, psutil.AccessDenied, psutil.ZombieProcess):
         return False
 

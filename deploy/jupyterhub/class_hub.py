@@ -287,9 +287,13 @@ class CgroupLimits:
         (cpu / "cpu.cfs_quota_us").write_text(str(int(self.cpus * period)))
         return [memory, cpu]
 
+    def procs_files(self, login: str) -> list[str]:
+        """The files a process writes its pid to (as root) to join ``login``'s groups."""
+        return [str(group / "cgroup.procs") for group in self.groups(login)]
+
     def join_function(self, login: str):
         """A function for a child process (before exec, still root) that moves it into ``login``'s groups."""
-        files = [str(group / "cgroup.procs") for group in self.groups(login)]
+        files = self.procs_files(login)
 
         def join():
             for path in files:

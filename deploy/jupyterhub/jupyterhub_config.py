@@ -41,6 +41,10 @@ Settings (environment variables, so one file serves a course and the tests, test
 - ``MT_WIDGETS_CLASS_FOLDER``, ``MT_WIDGETS_EXCHANGE``: the class folder and nbgrader's exchange.
 - ``MT_HUB_NUMBA_TEMPLATE``: a warm numba cache (``warm_numba_cache.py``) copied into a
   student's empty cache at spawn, so nobody's first episode waits for compiling.
+- ``MT_HUB_SERVER_TEMPLATE`` (on): students' servers are forked, as each student, from a template
+  that has imported their server and kernel (``mt_widgets/kernels/server_template.py``), and
+  their kernels from a template of their own; ``off`` starts every server and kernel the usual
+  way. Instructors' servers always start the usual way (their extensions differ).
 """
 
 import os
@@ -61,6 +65,7 @@ from roster_authenticator import RosterAuthenticator  # noqa: E402
 
 import mt_widgets  # noqa: E402
 from mt_widgets.classroom.roster import read_roster  # noqa: E402
+from mt_widgets.kernels.server_template import ServerTemplate  # noqa: E402
 
 c = get_config()  # noqa: F821 - provided by JupyterHub's config loader
 
@@ -180,7 +185,8 @@ for _entry in roster.entries:
 
 class ClassSpawner(LocalProcessSpawner):
     """A student's server as their own system user, inside their cgroups (umask 027 comes from
-    student-config/jupyter_server_config.py, which Zero to JupyterHub's pods load too)."""
+    student-config/jupyter_server_config.py, which Zero to JupyterHub's pods load too): forked
+    from the class's server template when it is on (``SERVER_TEMPLATE``), else started the usual way."""
 
     def make_preexec_fn(self, name):
         drop_root = super().make_preexec_fn(name)
@@ -192,6 +198,26 @@ class ClassSpawner(LocalProcessSpawner):
             drop_root()
 
         return preexec
+
+    async def start(self):
+        if SERVER_TEMPLATE is None or self.user.admin:
+            return await super().start()
+        import pwd
+
+        account = pwd.getpwnam(self.user.name)
+        request = {
+            "argv": [*self.cmd, *self.get_args()], "env": self.get_env(), "cwd": account.pw_dir,
+            "uid": account.pw_uid, "gid": account.pw_gid,
+            "groups": os.getgrouplist(self.user.name, account.pw_gid),
+            "cgroup_procs": LIMITS.procs_files(self.user.name) if LIMITS is not None else [],
+        }
+        pid = await SERVER_TEMPLATE.fork(request)
+        if pid is None:
+            self.log.warning("%s's server: starting it the usual way", self.user.name)
+            return await super().start()
+        self.proc, self.pid = None, pid
+        self.log.info("%s's server forked from the server template (pid %d)", self.user.name, pid)
+        return (self.ip or "127.0.0.1", self.port)
 
 
 c.JupyterHub.spawner_class = ClassSpawner
@@ -225,6 +251,26 @@ c.Spawner.environment = {
                              if spawner.user.admin else str(STUDENT_PYTHON.parent)),
     **{name: os.environ[name] for name in _passed_on if os.environ.get(name)},
 }
+
+# Students' servers forked from one template that has imported their server and kernel
+# (mt_widgets/kernels/server_template.py says what keeps it safe). Its environment is the
+# students' without anything of a student's or of the hub's: it imports what they will run.
+SERVER_TEMPLATE = None
+if os.environ.get("MT_HUB_SERVER_TEMPLATE", "on") != "off":
+    SERVER_TEMPLATE = ServerTemplate(
+        STUDENT_PYTHON, servers=["jupyterhub.singleuser"], kernels=["mt_hub_kernel"],
+        preload=["jupyterhub.singleuser.extension", "jupyter_server.serverapp", "jupyterlab.labapp",
+                 "jupyterlab_server", "notebook_shim.nbserver", "numpy", "numba", "ipywidgets",
+                 "ipykernel.ipkernel", "mt_widgets", "mt_widgets.classroom"],
+        env={"PATH": str(STUDENT_PYTHON.parent), "PYTHONPATH": _python_path, "PYTHONDONTWRITEBYTECODE": "1",
+             "JUPYTER_CONFIG_PATH": str(HERE / "student-config"), "JUPYTER_PATH": str(HERE / "student-share"),
+             "MT_HUB_ROLE": "student", "LANG": os.environ.get("LANG", "C.UTF-8")},
+        # The warm cache's compiled rollouts, loaded once and shared by every student's kernel.
+        numba_cache=os.environ.get("MT_HUB_NUMBA_TEMPLATE"))
+    _hub_app = sys.modules.get("jupyterhub.app")
+    if _hub_app is not None and _hub_app.JupyterHub.initialized():
+        SERVER_TEMPLATE.ensure_started()  # a hub is starting: the template imports meanwhile
+    # (else the config is only being read, as its tests do: the first spawn starts the template)
 
 
 def _copy_owned(source: Path, target: Path, uid: int, gid: int) -> None:

@@ -72,6 +72,24 @@ class KernelTemplate:
         self.started_at = 0.0
 
     @classmethod
+    def adopt(cls, socket_path: str, pid: int, modules: list[str]) -> KernelTemplate:
+        """Make the template already listening at ``socket_path``, forked by this process as ``pid``
+        (``server_template.py`` forks one in each student's server), this server's template."""
+        adopted = cls.__new__(cls)
+        adopted.modules = list(modules)
+        adopted.folder = os.path.dirname(socket_path)
+        adopted.socket = socket_path
+        adopted.process = ChildProcess(pid)
+        adopted.started_at = time.monotonic()
+        cls._shared = adopted
+        return adopted
+
+    @classmethod
+    def adopted(cls) -> bool:
+        """Whether this server was given a template (``adopt``)."""
+        return cls._shared is not None and isinstance(cls._shared.process, ChildProcess)
+
+    @classmethod
     def shared(cls) -> KernelTemplate | None:
         """The server's template, started at the first call; None when switched off."""
         if _setting("MT_KERNEL_TEMPLATE", "on") == "off":
@@ -104,7 +122,7 @@ class KernelTemplate:
         self.started_at = time.monotonic()
 
     def stop(self) -> None:
-        if self.process is not None and self.process.poll() is None:
+        if self.process is not None and self.process.poll() is None and self.process.stdin is not None:
             self.process.stdin.close()
             try:
                 self.process.wait(5)
@@ -143,6 +161,27 @@ class KernelTemplate:
             log.warning("kernel template refused a kernel: %s", reply.get("error", "it closed the connection"))
             return None
         return ForkedProcess(reply["pid"], reader, writer)
+
+
+class ChildProcess:
+    """A child of this process that it did not start with ``subprocess``, as a ``Popen`` is polled."""
+
+    stdin = None
+
+    def __init__(self, pid: int):
+        self.pid = pid
+        self.returncode: int | None = None
+
+    def poll(self) -> int | None:
+        if self.returncode is None:
+            try:
+                pid, status = os.waitpid(self.pid, os.WNOHANG)
+            except ChildProcessError:
+                self.returncode = UNKNOWN_EXIT
+            else:
+                if pid:
+                    self.returncode = os.waitstatus_to_exitcode(status)
+        return self.returncode
 
 
 class ForkedProcess:

@@ -16,6 +16,7 @@
 """
 
 import os
+import sys
 
 c = get_config()  # noqa: F821 - provided by Jupyter's config loader
 
@@ -42,3 +43,9 @@ if os.environ.get("MT_HUB_ROLE") != "instructor":
     }
     # Students' kernels run without JupyterLab's debugger: the hub puts student-share/ first on
     # their JUPYTER_PATH, whose kernels/python3 spec starts student-site/mt_hub_kernel.py.
+
+# A server forked by the class's server template (mt_widgets/kernels/server_template.py) was given
+# a kernel template of its own: its kernels are forked from it, with everything imported.
+_provisioner = sys.modules.get("mt_widgets.kernels.provisioner")
+if _provisioner is not None and _provisioner.KernelTemplate.adopted():
+    c.MappingKernelManager.kernel_manager_class = "mt_widgets.kernels.provisioner.ForkingKernelManager"

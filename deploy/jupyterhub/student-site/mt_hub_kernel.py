@@ -9,12 +9,17 @@ debugger, which no lesson uses. An entry of None in ``sys.modules`` makes that i
 missing package does, so ipykernel runs as it does where debugpy is absent; the spec's
 ``"debugger": false`` tells JupyterLab not to offer it. Instructors' kernels keep the debugger
 (their servers keep the usual spec).
+
+The blocking is done at import, not only when run: the class's server template
+(``mt_widgets/kernels/server_template.py``) imports this module before ipykernel, so that the
+students' kernels it forks have no debugpy either.
 """
 
 import sys
 
+sys.modules["debugpy"] = None
+
 if __name__ == "__main__":
-    sys.modules["debugpy"] = None
     from ipykernel import kernelapp
 
     kernelapp.launch_new_instance()
