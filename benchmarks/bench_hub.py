@@ -112,6 +112,36 @@ def _is_kernel(process) -> bool:
         return False
 
 
+def _cpu_by_part(hub, students) -> dict[str, float]:
+    """CPU seconds so far of every process on the machine, by part: this benchmark's own client
+    (it reads every student's websocket as their browser would, on the same two cores), the hub
+    and its proxy, students' servers (with their kernel templates), students' kernels, the
+    server template, and everything else (other work on the machine)."""
+    import pwd
+
+    uids = {pwd.getpwnam(name).pw_uid for name in students}
+    hub_tree = {p.pid for p in _hub_processes(hub)}
+    parts = dict.fromkeys(("benchmark client", "hub and proxy", "servers", "kernels", "server template", "other"), 0.0)
+    for process in psutil.process_iter(["uids", "cmdline"]):
+        try:
+            times = process.cpu_times()
+            cpu = times.user + times.system
+            if process.pid == os.getpid():
+                part = "benchmark client"
+            elif process.info["uids"] and process.info["uids"].real in uids:
+                part = "kernels" if _is_kernel(process) else "servers"
+            elif "mt_widgets.kernels.server_template" in " ".join(process.info["cmdline"] or ()):
+                part = "server template"
+            elif process.pid in hub_tree:
+                part = "hub and proxy"
+            else:
+                part = "other"
+        except (psutil.NoSuchProcess, psutil.AccessDenied, psutil.ZombieProcess):
+            continue
+        parts[part] += cpu
+    return parts
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--students", type=int, default=30)
@@ -164,8 +194,12 @@ def main() -> None:
                 raise SystemExit(f"{students[0]} alone: {alone}")
             hub.server_api(students[0], "DELETE", f"/api/kernels/{alone['kernel_id']}")
             first_alone, first_alone_total = float(alone["stdout"].split()[1]), alone["total_s"]
+            cpu_before, firsts_started = _cpu_by_part(hub, students), time.perf_counter()
             with ThreadPoolExecutor(len(students)) as pool:
                 firsts = list(pool.map(lambda item: run(item, FIRST_EPISODE), enumerate(students)))
+            firsts_wall = time.perf_counter() - firsts_started
+            firsts_cpu = {part: seconds - cpu_before.get(part, 0.0)
+                          for part, seconds in _cpu_by_part(hub, students).items()}
             first_walls = [float(r["stdout"].split()[1]) for r in firsts]
             first_totals = [r["total_s"] for r in firsts]
             # CPU of a kernel's start and first episode (the kernel's whole life so far).
@@ -210,6 +244,9 @@ def main() -> None:
                         memory[kind][measure].append(sum(getattr(info, measure) for info in infos) / 2**20)
                 for measure in totals:
                     totals[measure].append(memory["server"][measure][-1] + memory["kernel"][measure][-1])
+            # The server template (root's, no student's): its PSS is what the class pays for it.
+            template_pss = sum(p.memory_full_info().pss for p in psutil.process_iter(["cmdline"])
+                               if "mt_widgets.kernels.server_template" in " ".join(p.info["cmdline"] or ())) / 2**20
         finally:
             hub.stop()
             hub.kept_log.unlink()
@@ -228,6 +265,9 @@ def main() -> None:
           f"p95 {percentile(first_totals, 0.95):.2f} s / worst {max(first_totals):.2f} s with its start (after the "
           f"servers were ready); CPU per kernel start and first episode "
           f"p50 {statistics.median(first_cpu):.2f} s")
+    print(f"CPU seconds during the {len(students)} first episodes ({firsts_wall:.1f} s, at most "
+          f"{firsts_wall * os.cpu_count():.0f} CPU-s): " + ", ".join(f"{part} {seconds:.1f}"
+                                                                    for part, seconds in firsts_cpu.items()))
     if human:
         print(f"feedback latency at human pace (an arrow every 3-8 s): p50 {percentile(human, 0.5):.0f} ms, "
               f"p95 {percentile(human, 0.95):.0f} ms (target {TARGETS['feedback_p95_ms']:.0f} ms)")
@@ -237,6 +277,8 @@ def main() -> None:
           + "; ".join(f"{measure.upper()} {statistics.median(totals[measure]):.0f} MiB (server "
                       f"{statistics.median(memory['server'][measure]):.0f} + kernel "
                       f"{statistics.median(memory['kernel'][measure]):.0f})" for measure in ("rss", "pss", "uss")))
+    print(f"the server template: {template_pss:.0f} MiB PSS, {template_pss / len(students):.1f} MiB per student; "
+          f"PSS per student with it: {statistics.median(totals['pss']) + template_pss / len(students):.0f} MiB")
     if human:
         print(f"CPU at human pace: {statistics.mean(student_cpu):.1f} s per student (server + kernel) and "
               f"{hub_cpu:.1f} s for the hub and proxy over {human_wall:.0f} s: students per core at that pace "

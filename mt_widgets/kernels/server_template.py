@@ -250,17 +250,7 @@ def main(argv: list[str] | None = None) -> None:
     made = template._widgets_made()
     if made:
         raise SystemExit(f"server template: importing {preload} made widgets ({made}); preload modules that make none")
-    for package in numba_packages:
-        started = time.perf_counter()
-        loaded = template.load_numba_caches(package)
-        print(f"server template: {loaded} compiled versions of {package}'s functions loaded from "
-              f"{os.environ.get('NUMBA_CACHE_DIR')} in {time.perf_counter() - started:.1f} s",
-              file=sys.stderr, flush=True)
-    import gc
-
-    # Imported objects stay where they are: the collector does not write to their pages, which
-    # stay shared with every fork (a collection in the template would copy them into each).
-    gc.freeze()
+    template.settle(numba_packages)
     serve(template.listen(path), tuple(servers), tuple(kernels))
 
 

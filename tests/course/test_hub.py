@@ -244,7 +244,10 @@ def test_a_students_kernel_is_their_own_user_and_reaches_no_one_elses_work(hub):
     assert grp.getgrnam(TEST_INSTRUCTORS).gr_gid not in probe["groups"]
     assert probe["own_progress_lines"] >= 1  # the student's own progress is recorded
     # A student's kernel is the students' spec: ipykernel without its debugger (mt_hub_kernel.py).
-    assert "mt_hub_kernel" in probe["kernel_command"] and probe["debugger_loaded"] is False, probe["kernel_command"]
+    # (A kernel forked from the student's kernel template carries its command as its process title:
+    # one string, mt_widgets/kernels/template.py.)
+    assert "-m mt_hub_kernel -f " in " ".join(probe["kernel_command"]), probe["kernel_command"]
+    assert probe["debugger_loaded"] is False
     denied = ["read_classmate_home", "read_classmate_file", "list_class_folder", "read_classmate_progress",
               "append_classmate_progress", "take_classmate_lock", "list_course", "read_course_source",
               "write_package", "write_stdlib", "become_root"]
@@ -253,9 +256,15 @@ def test_a_students_kernel_is_their_own_user_and_reaches_no_one_elses_work(hub):
     # Every process of the student's runs as the student, in the student's cgroups.
     processes = hub.processes(me)
     assert len(processes) >= 2 and all(p.uids().effective == account.pw_uid for p in processes)
-    memory_group = next(line.split(":", 2)[2] for line in Path(f"/proc/{processes[0].pid}/cgroup").read_text()
-                        .splitlines() if ":memory:" in line)
-    assert memory_group.endswith(f"/{hub.cgroup}/{me}")
+    for process in processes:  # the server, its kernel template and the kernel (all forked)
+        memory_group = next(line.split(":", 2)[2] for line in Path(f"/proc/{process.pid}/cgroup").read_text()
+                            .splitlines() if ":memory:" in line)
+        assert memory_group.endswith(f"/{hub.cgroup}/{me}"), (process, memory_group)
+    # The server was forked from the class's server template, the kernel from the student's own
+    # kernel template (mt_widgets/kernels/server_template.py), not started the usual way.
+    assert f"{me}'s server forked from the server template" in hub.tail(2_000_000)
+    titles = [" ".join(process.cmdline()) for process in processes]
+    assert sum(title == "mt-widgets kernel template" for title in titles) == 1, titles
     home = hub.homes / me
     assert oct(home.stat().st_mode & 0o777) == "0o700" and home.stat().st_uid == account.pw_uid
 
