@@ -62,6 +62,7 @@ import threading
 import time
 
 from . import template
+from .provisioner import KernelTemplate
 
 #: What a request may be at most (a server's environment is a few kilobytes).
 MAX_REQUEST_BYTES = 1 << 20
@@ -163,8 +164,6 @@ def _become_server(conn: socket.socket, closing: list, server_modules: tuple[str
         _become_user(request)
         template.start_child(closing, request["env"], request["cwd"], " ".join(request["argv"]))
         path, pid, _ = _fork_kernel_template(tuple(dict.fromkeys([*template.KERNEL_MODULES, *kernel_modules])))
-        from .provisioner import KernelTemplate
-
         KernelTemplate.adopt(path, pid, list(kernel_modules))
     except BaseException:
         import traceback
@@ -246,7 +245,7 @@ def main(argv: list[str] | None = None) -> None:
                          "KERNEL_MODULES PRELOAD NUMBA_PACKAGES")
     path = args[0]
     servers, kernels, preload, numba_packages = ([name for name in arg.split(",") if name] for arg in args[1:])
-    template.preload([*kernels, *servers, *preload, "mt_widgets.kernels.provisioner"])
+    template.preload([*kernels, *servers, *preload])
     made = template._widgets_made()
     if made:
         raise SystemExit(f"server template: importing {preload} made widgets ({made}); preload modules that make none")
