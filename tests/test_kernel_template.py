@@ -203,15 +203,51 @@ def test_a_template_not_ready_in_time_means_a_usual_start_logged(template, caplo
 
 
 def test_a_template_whose_imports_make_a_widget_refuses_and_kernels_start_the_usual_way(template, monkeypatch,
-                                                                                        caplog):
+                                                                                        caplog, tmp_path):
     async def scenario():
         template.stop()
         monkeypatch.setattr(KernelTemplate, "_shared", None)
-        monkeypatch.setenv("MT_KERNEL_TEMPLATE_PRELOAD", "numpy,ipycanvas")
+        (tmp_path / "mtt_makes_widget.py").write_text("import ipywidgets\nSLIDER = ipywidgets.IntSlider()\n")
+        monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(tmp_path), os.environ.get("PYTHONPATH")])))
+        monkeypatch.setenv("MT_KERNEL_TEMPLATE_PRELOAD", "numpy,mtt_makes_widget")
         with caplog.at_level(logging.WARNING, logger=provisioner.__name__):
             manager, client = await _started()
         assert not manager.provisioner.forked
         assert any("ended (1) before it was ready" in r.getMessage() for r in caplog.records), caplog.text
+        client.stop_channels()
+        await manager.shutdown_kernel()
+        KernelTemplate._shared.stop()
+
+    asyncio.run(scenario())
+
+
+CANVAS_PROBE = """
+import ipycanvas, ipycanvas.canvas as module, ipywidgets
+canvas = ipycanvas.Canvas(width=10, height=10)
+manager = canvas._canvas_manager
+managers = [w for w in ipywidgets.widgets.widget._instances.values() if type(w).__name__ == "_CanvasManager"]
+canvas.fill_rect(0, 0, 5, 5)
+print(manager is module._CANVAS_MANAGER, type(manager.comm).__module__, len(managers), manager.comm.comm_id)
+"""
+
+
+def test_ipycanvas_preloaded_a_forked_kernel_draws_through_a_canvas_manager_of_its_own(template, monkeypatch):
+    async def scenario():
+        template.stop()
+        monkeypatch.setattr(KernelTemplate, "_shared", None)
+        monkeypatch.setenv("MT_KERNEL_TEMPLATE_PRELOAD", "numpy,ipywidgets,mt_widgets.widgets")
+        manager, client = await _started()
+        assert manager.provisioner.forked
+        iopub = []
+        reply = await client.execute_interactive(CANVAS_PROBE, timeout=60, output_hook=iopub.append)
+        assert reply["content"]["status"] == "ok"
+        out = "".join(m["content"].get("text", "") for m in iopub if m["msg_type"] == "stream").split()
+        # The manager the canvas draws through is the module's, made in this kernel: a real comm
+        # (ipykernel's, not the template's mute one), and the only one left.
+        assert out[:3] == ["True", "ipykernel.comm.comm", "1"], out
+        # The drawing reached the front end (this client) on that comm (opened when the kernel started).
+        assert any(m["msg_type"] == "comm_msg" and m["content"]["comm_id"] == out[3] and m["buffers"]
+                   for m in iopub)
         client.stop_channels()
         await manager.shutdown_kernel()
         KernelTemplate._shared.stop()

@@ -66,7 +66,8 @@ c.MultiKernelManager.kernel_manager_class = "mt_widgets.kernels.provisioner.Fork
 # it imports Voila's server side (jupyter_server, jupyter_events, jsonschema and its format
 # checkers' rfc3987_syntax, which builds about forty parsers), 7-10 s of CPU per kernel on this
 # 2-core machine, by far the largest part of a page's start (benchmarks/bench_online.py --burst).
-os.environ.setdefault("MT_KERNEL_TEMPLATE_PRELOAD", "numpy,numba,ipywidgets,mt_widgets,mt_widgets.study,voila.utils")
+os.environ.setdefault("MT_KERNEL_TEMPLATE_PRELOAD", "numpy,numba,ipywidgets,mt_widgets,mt_widgets.study,"
+                      "mt_widgets.widgets,mt_widgets.apps.study,voila.utils")
 
 # --- Idle-kernel culling: what the beacon cannot catch -----------------------------------------
 # A tab that vanishes without `beforeunload` (a crashed or killed browser, a phone that

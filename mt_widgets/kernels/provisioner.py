@@ -22,8 +22,8 @@ template, which reaps it. A restart asks for a fresh fork.
 
 Settings (environment of the server): ``MT_KERNEL_TEMPLATE`` (``on``; ``off`` starts every
 kernel the usual way), ``MT_KERNEL_TEMPLATE_PRELOAD`` (modules the template imports; by default
-numpy, numba, ipywidgets, ``mt_widgets`` and ``mt_widgets.study``: no module whose import
-makes a widget).
+numpy, numba, ipywidgets, ``mt_widgets``, its study, widgets and study pages: no module whose
+import makes a widget, ipycanvas's canvas manager excepted).
 """
 
 from __future__ import annotations
@@ -44,11 +44,12 @@ from pathlib import Path
 from jupyter_client.provisioning import LocalProvisioner
 from jupyter_server.services.kernels.kernelmanager import ServerKernelManager
 
-# Not ipycanvas, nor what imports it (mt_widgets.widgets): its import makes a widget (the canvas
-# manager every canvas draws through), and a widget made in the template has no kernel to talk
-# to; forked, it would stay mute and no canvas would ever draw. The template refuses to serve
-# when a preloaded module made a widget (template.py).
-DEFAULT_PRELOAD = ("numpy", "numba", "ipywidgets", "mt_widgets", "mt_widgets.study")
+# No module whose import makes a widget: a widget made in the template has no kernel to talk to,
+# and forked it would stay mute. The one exception is ipycanvas's canvas manager (every canvas
+# draws through it), which each forked kernel makes again once it has a kernel (template.py);
+# the template refuses to serve when a preloaded module made any other widget.
+DEFAULT_PRELOAD = ("numpy", "numba", "ipywidgets", "mt_widgets", "mt_widgets.study", "mt_widgets.widgets",
+                   "mt_widgets.apps.study")
 #: The exit code reported for a kernel whose end the template could not report (it died first).
 UNKNOWN_EXIT = -1
 

@@ -70,11 +70,43 @@ def preload(modules: list[str]) -> list[str]:
 
 
 def _widgets_made() -> list[str]:
-    """The classes of the ipywidgets widgets that exist in this process."""
+    """The classes of the ipywidgets widgets that exist in this process, but for those a forked
+    kernel makes again (``_remake_canvas_manager``)."""
     # ipywidgets 8's registry of live widgets (``Widget.widgets``, deprecated, reads the same).
     module = sys.modules.get("ipywidgets.widgets.widget")
     registry = getattr(module, "_instances", {}) if module is not None else {}
-    return sorted({type(instance).__name__ for instance in registry.values()})
+    remade = _canvas_manager_remade()
+    return sorted({type(instance).__name__ for instance in registry.values() if instance is not remade})
+
+
+def _canvas_manager_remade():
+    """ipycanvas's canvas manager made at its import, when a forked kernel can make it again: the
+    one widget every canvas draws through (ipycanvas 0.14: the module's ``_CANVAS_MANAGER``, the
+    default of ``_CanvasBase._canvas_manager``); None when ipycanvas is not imported or differs."""
+    canvas = sys.modules.get("ipycanvas.canvas")
+    if canvas is None or not hasattr(canvas, "_CanvasBase") or not hasattr(canvas, "_CANVAS_MANAGER"):
+        return None
+    trait = canvas._CanvasBase.class_traits().get("_canvas_manager")
+    if trait is None or trait.default_value is not canvas._CANVAS_MANAGER:
+        return None
+    return canvas._CANVAS_MANAGER
+
+
+def _remake_canvas_manager() -> None:
+    """In a forked kernel, once it has a kernel: a canvas manager of its own, with a real comm.
+    The template's was made at ipycanvas's import, before any kernel: its comm goes nowhere, and
+    every canvas drawing through it would stay blank."""
+    stale = _canvas_manager_remade()
+    if stale is None:
+        return
+    canvas = sys.modules["ipycanvas.canvas"]
+    fresh = canvas._CanvasManager()
+    canvas._CANVAS_MANAGER = fresh
+    canvas._CanvasBase.class_traits()["_canvas_manager"].default_value = fresh
+    # Out of ipywidgets' registry of live widgets (a page asking for every widget's state would
+    # get it); not closed: its comm belongs to no comm manager, and closing it would ask the
+    # kernel's to forget a comm it never had.
+    sys.modules["ipywidgets.widgets.widget"]._instances.pop(stale.comm.comm_id, None)
 
 
 def _widgets_join_kernel() -> None:
@@ -95,6 +127,7 @@ def _widgets_join_kernel() -> None:
     def init_kernel_then_widgets(app):
         init_kernel(app)
         sys.modules["ipywidgets"].register_comm_target()
+        _remake_canvas_manager()
 
     IPKernelApp.init_kernel = init_kernel_then_widgets
 

@@ -20,13 +20,16 @@ from contextlib import contextmanager
 import ipycanvas
 from ipycanvas import hold_canvas
 
-# Private names of ipycanvas 0.14 (pinned below 0.15 in pyproject.toml).
-_MANAGER = ipycanvas.canvas._CANVAS_MANAGER
+
+def _manager():
+    # A private name of ipycanvas 0.14 (pinned below 0.15 in pyproject.toml), read at each use: a
+    # kernel forked from a template replaces the manager made at import (mt_widgets/kernels/template.py).
+    return ipycanvas.canvas._CANVAS_MANAGER
 
 
 def forget_current_canvas() -> None:
     """Make the next drawing command start with a ``switchCanvas`` (issue #322)."""
-    _MANAGER._current_canvas = None
+    _manager()._current_canvas = None
 
 
 @contextmanager
@@ -36,7 +39,7 @@ def drawing_batch():
     Nested batches join the outer one (as ``hold_canvas`` does), so a view can call
     painters that open their own batch.
     """
-    if _MANAGER._caching:
+    if _manager()._caching:
         yield
         return
     forget_current_canvas()
