@@ -263,7 +263,7 @@ def test_a_students_kernel_is_their_own_user_and_reaches_no_one_elses_work(hub):
     # The server was forked from the class's server template, the kernel from the student's own
     # kernel template (mt_widgets/kernels/server_template.py), not started the usual way.
     assert f"{me}'s server forked from the server template" in hub.tail(2_000_000)
-    titles = [" ".join(process.cmdline()) for process in processes]
+    titles = [" ".join(process.cmdline()).strip() for process in processes]
     assert sum(title == "mt-widgets kernel template" for title in titles) == 1, titles
     home = hub.homes / me
     assert oct(home.stat().st_mode & 0o777) == "0o700" and home.stat().st_uid == account.pw_uid
