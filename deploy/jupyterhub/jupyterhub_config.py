@@ -113,8 +113,9 @@ c.JupyterHub.db_url = f"sqlite:///{STATE / 'jupyterhub.sqlite'}"
 c.JupyterHub.cookie_secret_file = str(STATE / "jupyterhub_cookie_secret")
 c.ConfigurableHTTPProxy.pid_file = str(STATE / "proxy.pid")
 c.ConfigurableHTTPProxy.api_url = f"http://127.0.0.1:{int(os.environ.get('MT_HUB_PROXY_API_PORT', '8001'))}"
-# A whole class logs in at the start of a lesson: let them all spawn at once.
-c.JupyterHub.concurrent_spawn_limit = int(os.environ.get("MT_HUB_SPAWN_LIMIT", "40"))
+# A whole class logs in at the start of a lesson: let them all spawn at once (a forked server
+# starts in about 0.2 CPU-seconds: sixty at once are ready well within a minute, docs/guide/scaling.md).
+c.JupyterHub.concurrent_spawn_limit = int(os.environ.get("MT_HUB_SPAWN_LIMIT", "100"))
 c.JupyterHub.active_server_limit = 0
 
 # -- who comes in ----------------------------------------------------------------------------------

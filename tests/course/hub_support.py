@@ -105,7 +105,7 @@ class ClassHub:
     theirs, and removes those users, their group, their cgroups and the folder.
     """
 
-    def __init__(self, students, admins=(), numba_template: Path | None = None, spawn_limit: int = 40,
+    def __init__(self, students, admins=(), numba_template: Path | None = None, spawn_limit: int = 100,
                  mem_limit: str = "1G", cpu_limit: str = "1.0", extra_roster: str = ""):
         for login in (*students, *admins):
             if not login.startswith(TEST_PREFIX):
