@@ -60,8 +60,45 @@ def _setting(name: str, default: str) -> str:
     return os.environ.get(name, default)
 
 
-class KernelTemplate:
+class TemplateProcess:
+    """A template process this process starts (``command``), whose standard input is a pipe: when
+    this process ends, so does the template. Started once, started again when found dead."""
+
+    #: What the log calls it.
+    what = "template"
+    socket: str
+    process = None
+    started_at = 0.0
+
+    def command(self) -> tuple[list[str], dict | None, str]:
+        """The template's command, environment (None: this process's) and folder."""
+        raise NotImplementedError
+
+    def ensure_started(self) -> None:
+        if self.process is not None and self.process.poll() is None:
+            return
+        if self.process is not None:
+            log.warning("%s (pid %s) ended with %s: starting a new one; until it is ready, what it forks "
+                        "starts the usual way", self.what, self.process.pid, self.process.returncode)
+        if os.path.exists(self.socket):
+            os.unlink(self.socket)
+        argv, env, cwd = self.command()
+        self.process = subprocess.Popen(argv, stdin=subprocess.PIPE, env=env, cwd=cwd, start_new_session=True)
+        self.started_at = time.monotonic()
+
+    def stop(self) -> None:
+        if self.process is not None and self.process.poll() is None and self.process.stdin is not None:
+            self.process.stdin.close()
+            try:
+                self.process.wait(5)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+
+
+class KernelTemplate(TemplateProcess):
     """This server's template process: started once, restarted when found dead."""
+
+    what = "kernel template"
 
     _shared: KernelTemplate | None = None
 
@@ -107,28 +144,10 @@ class KernelTemplate:
         cls._shared.ensure_started()
         return cls._shared
 
-    def ensure_started(self) -> None:
-        if self.process is not None and self.process.poll() is None:
-            return
-        if self.process is not None:
-            log.warning("kernel template (pid %s) ended with %s: starting a new one; kernels start the usual "
-                        "way until it is ready", self.process.pid, self.process.returncode)
-        if os.path.exists(self.socket):
-            os.unlink(self.socket)
-        # stdin is a pipe the template watches: when this server ends, so does the template.
-        self.process = subprocess.Popen(
-            [sys.executable, "-m", "mt_widgets.kernels.template", self.socket, ",".join(self.modules)],
-            stdin=subprocess.PIPE, cwd=os.path.expanduser("~") if os.path.isdir(os.path.expanduser("~")) else "/",
-            start_new_session=True)
-        self.started_at = time.monotonic()
-
-    def stop(self) -> None:
-        if self.process is not None and self.process.poll() is None and self.process.stdin is not None:
-            self.process.stdin.close()
-            try:
-                self.process.wait(5)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
+    def command(self) -> tuple[list[str], dict | None, str]:
+        home = os.path.expanduser("~")
+        return ([sys.executable, "-m", "mt_widgets.kernels.template", self.socket, ",".join(self.modules)],
+                None, home if os.path.isdir(home) else "/")
 
     def serves(self, argv: list[str]) -> bool:
         """Whether a kernel spec's command is one this template can fork."""
@@ -139,29 +158,37 @@ class KernelTemplate:
 
     async def fork(self, argv: list[str], env: dict, cwd: str) -> ForkedProcess | None:
         """A kernel forked with this command, environment and folder, or None (the reason logged)."""
-        deadline = time.monotonic() + float(_setting("MT_KERNEL_TEMPLATE_WAIT", "60"))
-        while not os.path.exists(self.socket):
-            if self.process.poll() is not None:
-                log.warning("kernel template ended (%s) before it was ready", self.process.returncode)
-                return None
-            if time.monotonic() > deadline:
-                log.warning("kernel template not ready after %.0f s", time.monotonic() - self.started_at)
-                return None
-            await asyncio.sleep(0.05)
-        try:
-            reader, writer = await asyncio.open_unix_connection(self.socket)
-        except OSError as error:
-            log.warning("kernel template unreachable (%s)", error)
-            return None
         request = {"argv": list(argv), "env": {str(k): str(v) for k, v in env.items()}, "cwd": str(cwd)}
-        writer.write(json.dumps(request).encode() + b"\n")
-        await writer.drain()
-        reply = json.loads(await reader.readline() or b"{}")
-        if "pid" not in reply:
-            writer.close()
-            log.warning("kernel template refused a kernel: %s", reply.get("error", "it closed the connection"))
+        answer = await ask_template(self.what, self, request, float(_setting("MT_KERNEL_TEMPLATE_WAIT", "60")))
+        return None if answer is None else ForkedProcess(*answer)
+
+
+async def ask_template(what: str, template, request: dict, wait_s: float):
+    """Sends ``request`` to a template (``template.socket``, ``.process``, ``.started_at``) once it
+    listens, waiting at most ``wait_s``; (pid, reader, writer) of the fork, whose connection then
+    brings its exit status, or None (the reason logged: the caller starts the usual way)."""
+    deadline = time.monotonic() + wait_s
+    while not os.path.exists(template.socket):
+        if template.process.poll() is not None:
+            log.warning("%s ended (%s) before it was ready", what, template.process.returncode)
             return None
-        return ForkedProcess(reply["pid"], reader, writer)
+        if time.monotonic() > deadline:
+            log.warning("%s not ready after %.0f s", what, time.monotonic() - template.started_at)
+            return None
+        await asyncio.sleep(0.05)
+    try:
+        reader, writer = await asyncio.open_unix_connection(template.socket)
+    except OSError as error:
+        log.warning("%s unreachable (%s)", what, error)
+        return None
+    writer.write(json.dumps(request).encode() + b"\n")
+    await writer.drain()
+    reply = json.loads(await reader.readline() or b"{}")
+    if "pid" not in reply:
+        writer.close()
+        log.warning("%s refused: %s", what, reply.get("error", "it closed the connection"))
+        return None
+    return int(reply["pid"]), reader, writer
 
 
 class ChildProcess:

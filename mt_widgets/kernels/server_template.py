@@ -52,17 +52,13 @@ import ctypes
 import json
 import logging
 import os
-import selectors
-import signal
 import socket
-import subprocess
 import sys
 import tempfile
 import threading
-import time
 
 from . import template
-from .provisioner import KernelTemplate
+from .provisioner import KernelTemplate, TemplateProcess, ask_template
 
 #: What a request may be at most (a server's environment is a few kilobytes).
 MAX_REQUEST_BYTES = 1 << 20
@@ -159,7 +155,7 @@ def _become_server(conn: socket.socket, closing: list, server_modules: tuple[str
     """In the forked child: read the request, become its user, start their kernel template, run
     their server. Never returns."""
     try:
-        request = _check_request(_read_line(conn), server_modules)
+        request = _check_request(template.read_line(conn), server_modules)
         conn.close()
         _become_user(request)
         template.start_child(closing, request["env"], request["cwd"], " ".join(request["argv"]))
@@ -174,34 +170,10 @@ def _become_server(conn: socket.socket, closing: list, server_modules: tuple[str
     template.run_as_main(request["argv"][2], request["argv"][3:])
 
 
-def _read_line(conn: socket.socket) -> dict:
-    data = b""
-    while not data.endswith(b"\n"):
-        chunk = conn.recv(65536)
-        if not chunk:
-            raise ValueError("request: the connection closed before a full line")
-        data += chunk
-        if len(data) > MAX_REQUEST_BYTES:
-            raise ValueError(f"request: expected at most {MAX_REQUEST_BYTES} bytes")
-    request = json.loads(data)
-    if not isinstance(request, dict):
-        raise ValueError("request: expected a JSON object")
-    return request
-
-
 def serve(listener: socket.socket, server_modules: tuple[str, ...], kernel_modules: tuple[str, ...]) -> None:
     """Fork a server per connection from this process's own user (the hub) until standard input ends."""
     uid = os.getuid()
-    wake_read, wake_write = socket.socketpair()
-    wake_read.setblocking(False)
-    wake_write.setblocking(False)
-    signal.set_wakeup_fd(wake_write.fileno(), warn_on_full_buffer=False)
-    signal.signal(signal.SIGCHLD, lambda *_: None)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the hub's Ctrl-C is for the hub
-    selector = selectors.DefaultSelector()
-    selector.register(listener, selectors.EVENT_READ, "listen")
-    selector.register(wake_read, selectors.EVENT_READ, "wake")
-    selector.register(0, selectors.EVENT_READ, "stop")
+    selector, wake_read, wake_write = template.fork_loop(listener, 0)
     watchers: dict[int, socket.socket] = {}
     print(f"server template ready on {listener.getsockname()} (pid {os.getpid()})", file=sys.stderr, flush=True)
     running = True
@@ -211,11 +183,7 @@ def serve(listener: socket.socket, server_modules: tuple[str, ...], kernel_modul
                 if not os.read(0, 4096):
                     running = False
             elif key.data == "wake":
-                try:
-                    while wake_read.recv(4096):
-                        pass
-                except BlockingIOError:
-                    pass
+                template.drain(wake_read)
                 template._reap(watchers)
             else:
                 conn, _ = listener.accept()
@@ -267,7 +235,7 @@ def untrusted(folder: str) -> str | None:
     return None
 
 
-class ServerTemplate:
+class ServerTemplate(TemplateProcess):
     """The hub's side: starts the template (as the hub's user) and asks it for servers.
 
     Args:
@@ -282,6 +250,8 @@ class ServerTemplate:
         numba_packages: packages whose cached functions are loaded (``mt_widgets``).
     """
 
+    what = "server template"
+
     def __init__(self, python: str, servers: list[str], kernels: list[str], preload: list[str], env: dict,
                  numba_cache: str | None = None, numba_packages: tuple[str, ...] = ("mt_widgets",)):
         self.python, self.servers, self.kernels, self.preload = str(python), servers, kernels, preload
@@ -295,60 +265,24 @@ class ServerTemplate:
         self.numba_packages = list(numba_packages) if not problem else []
         self.env = {**env, "HOME": home, "NUMBA_CACHE_DIR": numba_cache if not problem else os.path.join(home, "numba"),
                     "MPLCONFIGDIR": os.path.join(home, "matplotlib")}
-        self.process: subprocess.Popen | None = None
-        self.started_at = 0.0
 
-    def ensure_started(self) -> None:
-        if self.process is not None and self.process.poll() is None:
-            return
-        if self.process is not None:
-            log.warning("server template (pid %s) ended with %s: starting a new one; servers start the usual "
-                        "way until it is ready", self.process.pid, self.process.returncode)
-        if os.path.exists(self.socket):
-            os.unlink(self.socket)
-        self.process = subprocess.Popen(
-            [self.python, "-m", "mt_widgets.kernels.server_template", self.socket, ",".join(self.servers),
-             ",".join(self.kernels), ",".join(self.preload), ",".join(self.numba_packages)],
-            stdin=subprocess.PIPE, env=self.env, cwd=self.env["HOME"], start_new_session=True)
-        self.started_at = time.monotonic()
-
-    def stop(self) -> None:
-        if self.process is not None and self.process.poll() is None:
-            self.process.stdin.close()
-            try:
-                self.process.wait(5)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
+    def command(self) -> tuple[list[str], dict | None, str]:
+        return ([self.python, "-m", "mt_widgets.kernels.server_template", self.socket, ",".join(self.servers),
+                 ",".join(self.kernels), ",".join(self.preload), ",".join(self.numba_packages)],
+                self.env, self.env["HOME"])
 
     async def fork(self, request: dict, wait_s: float = 60.0) -> int | None:
         """The pid of a server forked for ``request`` (see ``_check_request``), or None (the reason
         logged; the caller starts the server the usual way)."""
         self.ensure_started()
-        deadline = time.monotonic() + wait_s
-        while not os.path.exists(self.socket):
-            if self.process.poll() is not None:
-                log.warning("server template ended (%s) before it was ready", self.process.returncode)
-                return None
-            if time.monotonic() > deadline:
-                log.warning("server template not ready after %.0f s", time.monotonic() - self.started_at)
-                return None
-            await asyncio.sleep(0.05)
-        try:
-            reader, writer = await asyncio.open_unix_connection(self.socket)
-        except OSError as error:
-            log.warning("server template unreachable (%s)", error)
+        answer = await ask_template(self.what, self, request, wait_s)
+        if answer is None:
             return None
-        writer.write(json.dumps(request).encode() + b"\n")
-        await writer.drain()
-        reply = json.loads(await reader.readline() or b"{}")
-        if "pid" not in reply:
-            writer.close()
-            log.warning("server template refused: %s", reply.get("error", "it closed the connection"))
-            return None
+        pid, reader, writer = answer
         # The connection stays open until the server ends (the template then writes its status):
         # read it so that the hub's log says how a forked server ended.
-        asyncio.ensure_future(self._report_end(reply["pid"], reader, writer))
-        return int(reply["pid"])
+        asyncio.ensure_future(self._report_end(pid, reader, writer))
+        return pid
 
     async def _report_end(self, pid: int, reader, writer) -> None:
         line = await reader.readline()

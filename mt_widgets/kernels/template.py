@@ -137,7 +137,8 @@ def _peer_uid(conn: socket.socket) -> int:
     return struct.unpack("3i", creds)[1]
 
 
-def _read_request(conn: socket.socket) -> dict:
+def read_line(conn: socket.socket) -> dict:
+    """One request: a JSON object on one line, of at most ``MAX_REQUEST_BYTES``."""
     data = b""
     while not data.endswith(b"\n"):
         chunk = conn.recv(65536)
@@ -147,6 +148,13 @@ def _read_request(conn: socket.socket) -> dict:
         if len(data) > MAX_REQUEST_BYTES:
             raise ValueError(f"request: expected at most {MAX_REQUEST_BYTES} bytes")
     request = json.loads(data)
+    if not isinstance(request, dict):
+        raise ValueError("request: expected a JSON object")
+    return request
+
+
+def _read_request(conn: socket.socket) -> dict:
+    request = read_line(conn)
     argv, env, cwd = request.get("argv"), request.get("env"), request.get("cwd")
     if not (isinstance(argv, list) and len(argv) >= 3 and all(isinstance(a, str) for a in argv)):
         raise ValueError(f"request: argv: expected [python, '-m', module, ...], got {argv!r}")
@@ -286,6 +294,32 @@ def _become_kernel(request: dict, closing: list) -> None:
     run_as_main(request["argv"][2], [*request["argv"][3:], f"--IPKernelApp.parent_handle={os.getppid()}"])
 
 
+def fork_loop(listener: socket.socket, stop_fd: int):
+    """What a template's loop waits on: ``listener`` ("listen"), a wakeup socket that SIGCHLD writes
+    to ("wake": children are reaped in the loop, never in a signal handler) and ``stop_fd``
+    ("stop"). SIGINT is ignored: a Ctrl-C is for the server or hub that started the template.
+    Returns the selector and the wakeup socket's two ends (a fork closes both)."""
+    wake_read, wake_write = socket.socketpair()
+    wake_read.setblocking(False)
+    wake_write.setblocking(False)
+    signal.set_wakeup_fd(wake_write.fileno(), warn_on_full_buffer=False)
+    signal.signal(signal.SIGCHLD, lambda *_: None)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    selector = selectors.DefaultSelector()
+    selector.register(listener, selectors.EVENT_READ, "listen")
+    selector.register(wake_read, selectors.EVENT_READ, "wake")
+    selector.register(stop_fd, selectors.EVENT_READ, "stop")
+    return selector, wake_read, wake_write
+
+
+def drain(wake_read: socket.socket) -> None:
+    try:
+        while wake_read.recv(4096):
+            pass
+    except BlockingIOError:
+        pass
+
+
 def listen(path: str) -> socket.socket:
     """A Unix socket listening at ``path``, readable and writable by this user only."""
     listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
@@ -303,17 +337,7 @@ def serve(listener: socket.socket, kernel_modules: tuple[str, ...], stop_fd: int
     server that started the template) reaches its end."""
     uid = os.getuid()
     path = listener.getsockname()
-    # SIGCHLD only wakes the loop (through the wakeup pipe); kernels are reaped below.
-    wake_read, wake_write = socket.socketpair()
-    wake_read.setblocking(False)
-    wake_write.setblocking(False)
-    signal.set_wakeup_fd(wake_write.fileno(), warn_on_full_buffer=False)
-    signal.signal(signal.SIGCHLD, lambda *_: None)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server's Ctrl-C is for the server
-    selector = selectors.DefaultSelector()
-    selector.register(listener, selectors.EVENT_READ, "listen")
-    selector.register(wake_read, selectors.EVENT_READ, "wake")
-    selector.register(stop_fd, selectors.EVENT_READ, "stop")
+    selector, wake_read, wake_write = fork_loop(listener, stop_fd)
     watchers: dict[int, socket.socket] = {}  # kernel pid -> the connection that asked for it
     print(f"kernel template ready on {path} (pid {os.getpid()})", file=sys.stderr, flush=True)
     running = True
@@ -323,11 +347,7 @@ def serve(listener: socket.socket, kernel_modules: tuple[str, ...], stop_fd: int
                 if not os.read(stop_fd, 4096):
                     running = False
             elif key.data == "wake":
-                try:
-                    while wake_read.recv(4096):
-                        pass
-                except BlockingIOError:
-                    pass
+                drain(wake_read)
                 _reap(watchers)
             else:
                 conn, _ = listener.accept()
