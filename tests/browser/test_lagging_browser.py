@@ -52,6 +52,11 @@ def receipts_after(log, since: float) -> int:
                if at >= since and direction == "sent" and b'"image_data"' in data)
 
 
+def model_errors(console) -> list[str]:
+    """The console's messages about a command for a widget model the page no longer has."""
+    return [text for text in console if "not found" in text.lower() or "could not find model" in text.lower()]
+
+
 def test_a_lagging_browser_draws_the_new_view_and_the_retired_one_is_closed_after_its_receipt(
         page, voila_server, artifacts):
     console, traffic = [], []
@@ -77,23 +82,27 @@ def test_a_lagging_browser_draws_the_new_view_and_the_retired_one_is_closed_afte
     new = reference("sim-line", guidance=False)
     wait_for_new_canvases(page)
     start = new.player.view.transform.to_pixel(new.skill.end_effector(new.skill.start[None])[0][0])
-    wait_for_color(page, 0, *ee_pixel(new), OKABE["yellow"])
-    wait_for_color(page, 1, *start, OKABE["yellow"])
+    try:
+        wait_for_color(page, 0, *ee_pixel(new), OKABE["yellow"])
+        wait_for_color(page, 1, *start, OKABE["yellow"])
+    except Exception:
+        page.screenshot(path=artifacts("not-drawn"))
+        raise AssertionError(f"the new episode's canvases were not drawn once the browser caught up; "
+                             f"the console's model errors: {model_errors(console)}") from None
     page.screenshot(path=artifacts("after"))
 
     # The old episode's widgets (its two canvases among them) are closed once the page answered.
-    page.wait_for_function("() => true")   # lets Playwright deliver websocket events
     deadline = replaced + CLOSED_WITHIN_S
     while closes_after(traffic, replaced) < 2 and time.monotonic() < deadline:
-        page.wait_for_timeout(200)
+        page.wait_for_timeout(200)   # Playwright delivers the websocket events meanwhile
     closed, answered = closes_after(traffic, replaced), receipts_after(traffic, replaced)
     firsts = {kind: min((at - replaced for at, direction, data in traffic if at >= replaced and direction == way
                          and marker in data), default=None)
               for kind, way, marker in [("receipt", "sent", b'"image_data"'), ("close", "received", b'"comm_close"')]}
-    print(f"after the replacement: first receipt answer {firsts['receipt']}, first close {firsts['close']}; "
-          f"{answered} receipts, {closed} closes")
-    assert answered >= 1, "the page sent no receipt (image_data) back after the view was replaced"
-    assert closed >= 2, (f"{closed} widgets closed within {CLOSED_WITHIN_S} s of the replacement "
-                         f"({answered} receipts answered)")
-    assert not [text for text in console
-                if "not found" in text.lower() or "could not find model" in text.lower()], console
+    seen = (f"after the replacement: first receipt answered at {firsts['receipt']} s, first close at "
+            f"{firsts['close']} s; {answered} receipts, {closed} closes")
+    assert answered >= 1, f"the page sent no receipt (image_data) back after the view was replaced: {seen}"
+    assert closed >= 2, f"the retired widgets were not closed within {CLOSED_WITHIN_S} s: {seen}"
+    # Nothing of the old view is closed before the page has said it drew what was queued for it.
+    assert firsts["close"] >= firsts["receipt"], seen
+    assert not model_errors(console), model_errors(console)
