@@ -11,7 +11,9 @@ the manager for good (its promise chain stays rejected: every canvas of the page
 blank). So an animation is sent in chunks of ``CHUNK_S`` seconds of frames, each a little
 before the browser needs it (``AHEAD_S``), from the kernel's event loop; ``Animation.cancel``
 stops sending, so whatever replaces an animation waits at most about half a second, and
-``retire`` closes a replaced view only once the frames already sent have played. Without a
+``retire`` closes a replaced view only once the page says it has drawn everything sent before
+(a receipt, ``receipt.py``; the kernel's own estimate of playback is wrong for a browser that lags
+behind it, a phone or a loaded machine). Without a
 running event loop (a script, kernel-free tests: no browser to pace) the whole animation
 goes as one message, as before.
 
@@ -29,6 +31,7 @@ from collections.abc import Callable
 import numpy as np
 from IPython import get_ipython
 
+from .receipt import RECEIPTS
 from .redraw import drawing_batch
 from .tree import widget_tree
 
@@ -39,6 +42,9 @@ CHUNK_S = 0.2
 AHEAD_S = 0.2
 #: Extra seconds before a retired widget is closed, for messages in flight.
 CLOSE_MARGIN_S = 2.0
+#: Seconds after which a retired widget is closed though no page answered its receipt (no page, or
+#: one closed meanwhile): nothing leaks. Never before the estimate of playback plus CLOSE_MARGIN_S.
+CLOSE_FALLBACK_S = 60.0
 
 
 def kernel_loop():
@@ -79,6 +85,9 @@ class _Queue:
 
 #: layer canvas -> the animation playing on it (weakly: a closed view takes its entry with it).
 _PLAYING: weakref.WeakKeyDictionary[object, Animation] = weakref.WeakKeyDictionary()
+#: layer canvas -> the last receipt number issued when its latest chunk was sent: a receipt with a
+#: higher number was queued behind that chunk.
+_SENT_BEFORE_RECEIPT: weakref.WeakKeyDictionary[object, int] = weakref.WeakKeyDictionary()
 
 
 class Animation:
@@ -123,6 +132,7 @@ class Animation:
                     self._then()
         self._next = stop
         self.done = stop == self.n_frames
+        _SENT_BEFORE_RECEIPT[canvas] = RECEIPTS.issued
         self._sent_until = _Queue.add((stop - start) / self.fps)
 
     def start(self) -> Animation:
@@ -195,9 +205,12 @@ def stop_animations(widget) -> None:
 
 def retire(widget, keep=None, shown_only: bool = False) -> None:
     """Takes a widget tree off the page for good: stops its animations now, and closes every widget
-    it owns (``tree.widget_tree``: layouts, styles and off-page parts included) once the browser has
-    played what was already sent (closing earlier would leave queued commands pointing at a closed
-    canvas, which stops ipycanvas' drawing for the whole page).
+    it owns (``tree.widget_tree``: layouts, styles and off-page parts included) once the page says it
+    has drawn everything sent to them (a receipt, ``receipt.py``): closing earlier would leave queued
+    commands pointing at a closed canvas, which stops ipycanvas' drawing for the whole page.
+
+    Without a page to answer (none open, or closed meanwhile) the close comes at ``CLOSE_FALLBACK_S``
+    (never before the kernel's estimate of playback plus ``CLOSE_MARGIN_S``); without a kernel, at once.
 
     Args:
         widget: the view leaving the page.
@@ -208,7 +221,8 @@ def retire(widget, keep=None, shown_only: bool = False) -> None:
     """
     if not isinstance(shown_only, bool):
         raise TypeError(f"shown_only: expected a bool, got {type(shown_only).__name__}")
-    for node in _canvases(widget):
+    canvases = list(_canvases(widget))
+    for node in canvases:
         stop_animation(node)
 
     def close():
@@ -222,8 +236,50 @@ def retire(widget, keep=None, shown_only: bool = False) -> None:
     loop = kernel_loop()
     if loop is None:
         close()
-    else:
-        loop.call_later(_Queue.drained_in() + CLOSE_MARGIN_S, close)
+        return
+    _Closing(canvases, close, loop).start()
+
+
+class _Closing:
+    """One retired view waiting for the page's receipt (or the fallback) before it is closed."""
+
+    def __init__(self, canvases, close: Callable[[], None], loop):
+        self.canvases, self._close, self._loop = canvases, close, loop
+        self._fallback = None
+        self.closed = False
+
+    def start(self) -> None:
+        self._fallback = self._loop.call_later(max(CLOSE_FALLBACK_S, _Queue.drained_in() + CLOSE_MARGIN_S),
+                                               self._finish)
+        RECEIPTS.request(self._on_drawn)
+
+    def _still_sending(self, number: int) -> bool:
+        """Whether a canvas of the view got a chunk after receipt ``number`` was queued, or will get more."""
+        for canvas in self.canvases:
+            playing = _PLAYING.get(canvas)
+            if playing is not None and not (playing.done or playing.cancelled):
+                return True
+            if _SENT_BEFORE_RECEIPT.get(canvas, -1) >= number:
+                return True
+        return False
+
+    def _on_drawn(self, number: int) -> None:
+        if self.closed:
+            return
+        if self._still_sending(number):
+            # Drawn up to a point this view's canvases have gone past: ask again, behind what came since.
+            RECEIPTS.request(self._on_drawn)
+            return
+        self._finish()
+
+    def _finish(self) -> None:
+        if self.closed:
+            return
+        self.closed = True
+        if self._fallback is not None:
+            self._fallback.cancel()
+        RECEIPTS.forget(self._on_drawn)
+        self._close()
 
 
 def set_style_now(canvas, name: str, value) -> None:
