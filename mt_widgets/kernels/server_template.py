@@ -60,8 +60,6 @@ import threading
 from . import template
 from .provisioner import KernelTemplate, TemplateProcess, ask_template
 
-#: What a request may be at most (a server's environment is a few kilobytes).
-MAX_REQUEST_BYTES = 1 << 20
 #: linux/prctl.h
 PR_SET_DUMPABLE = 4
 #: The cgroup v1 and v2 mount a request's groups must be under.
