@@ -199,3 +199,29 @@ def teach_by_numbers(page, episode, guidance: bool) -> None:
         if guidance:
             page.get_by_role("button", name="Finish and watch" if index == n - 1 else "Next state").click()
     page.get_by_text("Your teaching error").wait_for(timeout=20_000)
+
+
+def open_demo(page, voila_server, console):
+    """Opens the demo page (notebooks/demo.ipynb) in Voila, its console kept in ``console``, and waits for
+    its teaching canvas's hand."""
+    page.on("console", lambda message: console.append(message.text))
+    page.on("pageerror", lambda error: console.append(str(error)))
+    page.goto(voila_server.url("/voila/render/demo.ipynb"), timeout=60_000)
+    page.wait_for_selector("canvas", timeout=60_000)
+    wait_for_color(page, 0, *ee_pixel(reference(guidance=True)), OKABE["yellow"])
+
+
+def set_guidance(page, on: bool) -> None:
+    box = page.get_by_role("checkbox")
+    if box.is_checked() != on:
+        box.click()
+
+
+def mark_canvases(page) -> None:
+    """Marks the canvas elements on the page now, to tell when a new episode's have replaced them."""
+    page.evaluate("() => document.querySelectorAll('canvas').forEach(c => { c.dataset.old = '1'; })")
+
+
+def wait_for_new_canvases(page) -> None:
+    page.wait_for_function("() => { const all = document.querySelectorAll('canvas');"
+                           " return all.length === 2 && [...all].every(c => !c.dataset.old); }", timeout=10_000)

@@ -10,7 +10,17 @@ import time
 
 import pytest
 
-from .helpers import OKABE, ee_pixel, reference, teach_by_numbers, wait_for_color
+from .helpers import (
+    OKABE,
+    ee_pixel,
+    mark_canvases,
+    open_demo,
+    reference,
+    set_guidance,
+    teach_by_numbers,
+    wait_for_color,
+    wait_for_new_canvases,
+)
 
 pytestmark = pytest.mark.browser
 
@@ -18,30 +28,6 @@ pytestmark = pytest.mark.browser
 #: against) is drawn 10 s or more after it began. Every canvas must be drawn before 8.5 s: that is
 #: the behaviour, not a speed (how fast a canvas is drawn is for benchmarks/, never asserted).
 REPRODUCTION_S, DRAWN_BEFORE_S = 10.0, 8.5
-
-
-def open_demo(page, voila_server, console):
-    page.on("console", lambda message: console.append(message.text))
-    page.on("pageerror", lambda error: console.append(str(error)))
-    page.goto(voila_server.url("/voila/render/demo.ipynb"), timeout=60_000)
-    page.wait_for_selector("canvas", timeout=60_000)
-    wait_for_color(page, 0, *ee_pixel(reference(guidance=True)), OKABE["yellow"])
-
-
-def set_guidance(page, on: bool) -> None:
-    box = page.get_by_role("checkbox")
-    if box.is_checked() != on:
-        box.click()
-
-
-def mark_canvases(page) -> None:
-    """Marks the canvas elements on the page now, to tell when a new episode's have replaced them."""
-    page.evaluate("() => document.querySelectorAll('canvas').forEach(c => { c.dataset.old = '1'; })")
-
-
-def wait_for_new_canvases(page) -> None:
-    page.wait_for_function("() => { const all = document.querySelectorAll('canvas');"
-                           " return all.length === 2 && [...all].every(c => !c.dataset.old); }", timeout=10_000)
 
 
 def expect_drawn(page, episode, what: str, playing_since: float) -> None:

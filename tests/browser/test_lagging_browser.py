@@ -15,8 +15,17 @@ import time
 
 import pytest
 
-from .helpers import OKABE, ee_pixel, reference, teach_by_numbers, wait_for_color
-from .test_impatient_clicks import mark_canvases, open_demo, set_guidance, wait_for_new_canvases
+from .helpers import (
+    OKABE,
+    ee_pixel,
+    mark_canvases,
+    open_demo,
+    reference,
+    set_guidance,
+    teach_by_numbers,
+    wait_for_color,
+    wait_for_new_canvases,
+)
 
 pytestmark = pytest.mark.browser
 
