@@ -35,50 +35,60 @@ MARK = "MTTSECRET"
 
 PROBE = '''
 import json, os, re, sys, time
-out = sys.argv[1]
-report = {"resuid": os.getresuid(), "resgid": os.getresgid(), "groups": sorted(os.getgroups()),
-          "cwd": os.getcwd(), "sid_is_self": os.getsid(0) == os.getpid()}
-try:
-    os.setuid(0)
-    report["became_root"] = True
-except PermissionError:
-    report["became_root"] = False
-from mt_widgets.kernels import template
-from mt_widgets.kernels.provisioner import KernelTemplate
-caches = [f._cache._cache_path for f in template._cached_numba_functions("mt_widgets")]
-report["numba_caches"] = len(caches)
-report["numba_caches_elsewhere"] = [p for p in caches if not p.startswith(os.environ["NUMBA_CACHE_DIR"])]
-report["kernel_template_adopted"] = KernelTemplate.adopted()
-shared = KernelTemplate._shared
-for _ in range(100):
-    if os.path.exists(shared.socket):
-        break
-    time.sleep(0.05)
-report["kernel_template_socket"] = shared.socket
-report["kernel_template_uid"] = os.stat(f"/proc/{shared.process.pid}").st_uid
-found = set()
-with open("/proc/self/maps") as maps, open("/proc/self/mem", "rb", 0) as mem:
-    for line in maps:
-        fields = line.split()
-        if "r" not in fields[1] or (len(fields) > 5 and fields[5].startswith("[v")):
-            continue
-        start, end = (int(x, 16) for x in fields[0].split("-"))
-        try:
-            mem.seek(start)
-            chunk = mem.read(end - start)
-        except (OSError, ValueError, OverflowError):
-            continue
-        found.update(m.decode() for m in re.findall(rb"MTTSECRET[0-9a-f]{32}", chunk))
-report["secrets_in_memory"] = sorted(found)
-with open(out, "w") as handle:
-    json.dump(report, handle)
+
+
+def main():
+    out = sys.argv[1]
+    report = {"resuid": os.getresuid(), "resgid": os.getresgid(), "groups": sorted(os.getgroups()),
+              "cwd": os.getcwd(), "sid_is_self": os.getsid(0) == os.getpid()}
+    try:
+        os.setuid(0)
+        report["became_root"] = True
+    except PermissionError:
+        report["became_root"] = False
+    from mt_widgets.kernels import template
+    from mt_widgets.kernels.provisioner import KernelTemplate
+    caches = [f._cache._cache_path for f in template._cached_numba_functions("mt_widgets")]
+    report["numba_caches"] = len(caches)
+    report["numba_caches_elsewhere"] = [p for p in caches if not p.startswith(os.environ["NUMBA_CACHE_DIR"])]
+    report["kernel_template_adopted"] = KernelTemplate.adopted()
+    shared = KernelTemplate._shared
+    for _ in range(100):
+        if os.path.exists(shared.socket):
+            break
+        time.sleep(0.05)
+    report["kernel_template_socket"] = shared.socket
+    report["kernel_template_uid"] = os.stat(f"/proc/{shared.process.pid}").st_uid
+    found = set()
+    with open("/proc/self/maps") as maps, open("/proc/self/mem", "rb", 0) as mem:
+        for line in maps:
+            fields = line.split()
+            if "r" not in fields[1] or (len(fields) > 5 and fields[5].startswith("[v")):
+                continue
+            start, end = (int(x, 16) for x in fields[0].split("-"))
+            try:
+                mem.seek(start)
+                chunk = mem.read(end - start)
+            except (OSError, ValueError, OverflowError):
+                continue
+            found.update(m.decode() for m in re.findall(rb"MTTSECRET[0-9a-f]{32}", chunk))
+    report["secrets_in_memory"] = sorted(found)
+    with open(out, "w") as handle:
+        json.dump(report, handle)
+
+
+# The template imports it first, as it imports a real server module: only run, it probes.
+if __name__ == "__main__":
+    main()
 '''
 
 
 @pytest.fixture(scope="module")
 def users(tmp_path_factory):
     site = Path(f"/tmp/mtt-st-site-{secrets.token_hex(3)}")
-    site.mkdir(mode=0o755)
+    site.mkdir()
+    # Explicit modes: the users must read the probe whatever the umask (CI's may be 077).
+    os.chmod(site, 0o755)
     (site / "mtt_probe_server.py").write_text(PROBE)
     os.chmod(site / "mtt_probe_server.py", 0o644)
     made = {}
