@@ -262,7 +262,10 @@ if os.environ.get("MT_HUB_SERVER_TEMPLATE", "on") != "off":
         STUDENT_PYTHON, servers=["jupyterhub.singleuser"], kernels=["mt_hub_kernel"],
         preload=["jupyterhub.singleuser.extension", "jupyter_server.serverapp", "jupyterlab.labapp",
                  "jupyterlab_server", "notebook_shim.nbserver", "numpy", "numba", "ipywidgets",
-                 "ipykernel.ipkernel", "mt_widgets", "mt_widgets.classroom", "mt_widgets.widgets"],
+                 "ipykernel.ipkernel", "mt_widgets", "mt_widgets.classroom", "mt_widgets.widgets",
+                 # what a server's and a kernel's start imported after the fork (py-spy, bench_hub.py)
+                 "mt_widgets.kernels.activity", "jupyterlab.extensions.readonly", "jupyter_core.migrate",
+                 "jinja2.ext", "pdb"],
         env={"PATH": str(STUDENT_PYTHON.parent), "PYTHONPATH": _python_path, "PYTHONDONTWRITEBYTECODE": "1",
              "JUPYTER_CONFIG_PATH": str(HERE / "student-config"), "JUPYTER_PATH": str(HERE / "student-share"),
              "MT_HUB_ROLE": "student", "LANG": os.environ.get("LANG", "C.UTF-8")},

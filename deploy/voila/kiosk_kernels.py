@@ -14,31 +14,19 @@ there. A spare taken between two passes therefore has at most ``cull_interval`` 
 idleness at the next pass (the config keeps that well below ``cull_idle_timeout``), and its page
 connects long before the following one.
 
-It also watches a kernel's activity with less work per message. jupyter_server's watcher checks
-each IOPub message's signature and parses its header with date conversion, about a third of
-the server's CPU per message (py-spy on a skill click, which relays about 180 widget messages).
-This watcher reads only the header's and the parent header's JSON and the content of status
-messages, and keeps the same rules (what counts as activity, the execution state). The
-signature protects nothing here: the stream comes from the server's own kernel over a socket
-in Voila's private (0700) connection folder, which only the server's own user can reach, and
-what a message there can change is bookkeeping (the idle clock, the execution state the culler
-reads); the websocket that relays the messages to the page is unchanged. It assumes the
-session's default JSON packer (the kiosk's config sets no other).
+It also watches a kernel's activity from the messages' headers, a fraction of jupyter_server's
+work per message (``mt_widgets/kernels/activity.py`` says why that is safe).
 """
 
 from __future__ import annotations
 
-import json
-
 from jupyter_server._tz import utcnow
-from jupyter_server.services.kernels.kernelmanager import AsyncMappingKernelManager
 
-#: The frame that separates a ZeroMQ message's routing identities from the Jupyter message.
-_DELIMITER = b"<IDS|MSG>"
+from mt_widgets.kernels.activity import HeaderActivityKernelManager
 
 
-class KioskKernelManager(AsyncMappingKernelManager):
-    """jupyter_server's kernel manager whose culler counts a spare's departure from the pool as activity."""
+class KioskKernelManager(HeaderActivityKernelManager):
+    """Watches activity from the headers; its culler counts a spare's departure from the pool as activity."""
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -54,37 +42,6 @@ class KioskKernelManager(AsyncMappingKernelManager):
                 if task.done() and not task.cancelled() and task.exception() is None:
                     spares.add(task.result()["kernel_id"])
         return spares
-
-    def start_watching_activity(self, kernel_id):
-        """jupyter_server's activity watch (the same last_activity and execution_state), cheaper."""
-        kernel = self._kernels[kernel_id]
-        kernel.reason = ""
-        kernel.last_activity = utcnow()
-        kernel._activity_stream = kernel.connect_iopub()
-
-        def record_activity(msg_list):
-            # [identities..., <IDS|MSG>, signature, header, parent_header, metadata, content, buffers...]
-            frames = msg_list if isinstance(msg_list[0], bytes) else [bytes(frame) for frame in msg_list]
-            try:
-                start = frames.index(_DELIMITER) + 2
-                header = json.loads(frames[start])
-                parent = json.loads(frames[start + 1]) or {}
-            except (ValueError, IndexError):
-                self.log.warning("kernel %s sent an IOPub message that is not a Jupyter message", kernel_id)
-                return
-            msg_type, parent_type = header.get("msg_type"), parent.get("msg_type")
-            tracked_parent = self.track_message_type(parent_type)
-            if self.track_message_type(msg_type) or tracked_parent or kernel.execution_state == "busy":
-                self.last_kernel_activity = kernel.last_activity = utcnow()
-            if msg_type == "status":
-                execution_state = json.loads(frames[start + 3])["execution_state"]
-                if tracked_parent:
-                    kernel.execution_state = execution_state
-                elif kernel.execution_state == "starting" and execution_state != "starting":
-                    # jupyter_server's rule: after starting, "idle" unless a tracked message says otherwise.
-                    kernel.execution_state = "idle"
-
-        kernel._activity_stream.on_recv(record_activity)
 
     async def cull_kernels(self):
         now = utcnow()

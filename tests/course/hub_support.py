@@ -320,16 +320,32 @@ class ClassHub:
                                                  timeout=timeout, subprotocols=[WS_PROTOCOL])
         started = time.perf_counter()
         stdout, error, replied, idle, died = [], None, False, False, False
-        try:
+        session, deadline = uuid.uuid4().hex, time.monotonic() + timeout
+
+        def request(msg_type: str, content: dict) -> str:
             msg_id = uuid.uuid4().hex
             connection.send_binary(_encode_v1("shell", {
-                "header": {"msg_id": msg_id, "username": name, "session": uuid.uuid4().hex,
-                           "msg_type": "execute_request", "version": "5.3", "date": ""},
-                "parent_header": {}, "metadata": {},
-                "content": {"code": code, "silent": False, "store_history": False, "user_expressions": {},
-                            "allow_stdin": False, "stop_on_error": True},
-            }))
-            deadline = time.monotonic() + timeout
+                "header": {"msg_id": msg_id, "username": name, "session": session,
+                           "msg_type": msg_type, "version": "5.3", "date": ""},
+                "parent_header": {}, "metadata": {}, "content": content}))
+            return msg_id
+
+        try:
+            # As JupyterLab does: nothing but a kernel_info_request until its reply. The server relays
+            # a kernel's messages only once its own IOPub subscription for this connection is live
+            # (jupyter_server's nudge); IOPub messages published before that are dropped, so an
+            # execution sent at once can finish unseen (its idle status lost: a wait forever).
+            info_id = request("kernel_info_request", {})
+            while True:
+                if time.monotonic() > deadline:
+                    raise TimeoutError(f"{name}'s kernel did not answer kernel_info within {timeout} s")
+                message = _decode(connection.recv())
+                if (message["msg_type"] == "kernel_info_reply"
+                        and message.get("parent_header", {}).get("msg_id") == info_id):
+                    break
+            msg_id = request("execute_request", {"code": code, "silent": False, "store_history": False,
+                                                 "user_expressions": {}, "allow_stdin": False,
+                                                 "stop_on_error": True})
             while not (replied and idle) and not died:
                 if time.monotonic() > deadline:
                     raise TimeoutError(f"{name}'s kernel did not finish within {timeout} s")

@@ -21,6 +21,14 @@ import sys
 c = get_config()  # noqa: F821 - provided by Jupyter's config loader
 
 c.KernelManager.transport = "ipc"
+# Kernels' activity (the idle clock the culler and the hub read) kept from the messages' headers:
+# a tenth of a server's CPU in a lecture's first minute was jupyter_server's own watch
+# (mt_widgets/kernels/activity.py says why reading the headers is as safe).
+c.ServerApp.kernel_manager_class = "mt_widgets.kernels.activity.HeaderActivityKernelManager"
+# Nobody installs extensions from a class member's server (the installation is root's): the
+# read-only extension manager lists them without PyPI's HTTP client, whose SSL context and
+# imports were another seventh of a student's server start.
+c.LabApp.extension_manager = "readonly"
 # Files a member's server and kernels create are readable by their own group at most (on the
 # class folder, that group is the instructors'): deploy/jupyterhub/class_hub.py.
 os.umask(0o027)

@@ -1,4 +1,4 @@
-"""deploy/voila/kiosk_kernels.py's activity watcher against jupyter_server's own, message by message.
+"""mt_widgets/kernels/activity.py's watcher against jupyter_server's own, message by message.
 
 Both watchers are fed the same IOPub messages (signed by the kernel's session, as a kernel sends
 them); after each, the kernel's execution state and whether its idle clock moved must agree.
@@ -15,12 +15,15 @@ from jupyter_client.session import Session
 from jupyter_server.services.kernels.kernelmanager import AsyncMappingKernelManager
 
 from browser_support import REPO
+from mt_widgets.kernels.activity import HeaderActivityKernelManager
 
-# Loaded from its file: deploy/voila on sys.path would make its voila.py shadow the voila package.
-_spec = importlib.util.spec_from_file_location("kiosk_kernels", REPO / "deploy" / "voila" / "kiosk_kernels.py")
-_module = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(_module)
-KioskKernelManager = _module.KioskKernelManager
+
+def _kiosk_manager_class():
+    # Loaded from its file: deploy/voila on sys.path would make its voila.py shadow the voila package.
+    spec = importlib.util.spec_from_file_location("kiosk_kernels", REPO / "deploy" / "voila" / "kiosk_kernels.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.KioskKernelManager
 
 
 class _Stream:
@@ -70,10 +73,12 @@ SEQUENCE = [
 ]
 
 
-def test_the_kiosk_watcher_keeps_jupyter_servers_activity_and_execution_state_for_every_message():
+@pytest.mark.parametrize("manager_class", [HeaderActivityKernelManager, _kiosk_manager_class()],
+                         ids=["header", "kiosk"])
+def test_the_header_watcher_keeps_jupyter_servers_activity_and_execution_state_for_every_message(manager_class):
     session = Session(key=b"secret")
     reference, reference_kernel, feed_reference = _watched(AsyncMappingKernelManager, session)
-    kiosk, kiosk_kernel, feed_kiosk = _watched(KioskKernelManager, session)
+    kiosk, kiosk_kernel, feed_kiosk = _watched(manager_class, session)
     assert kiosk_kernel.reason == "" and kiosk_kernel.last_activity is not None
     moved_somewhere = set()
     for msg_type, content, parent in SEQUENCE:
@@ -94,7 +99,7 @@ def test_the_kiosk_watcher_keeps_jupyter_servers_activity_and_execution_state_fo
 
 
 def test_a_frame_list_that_is_not_a_jupyter_message_is_logged_and_changes_nothing(caplog):
-    _, kernel, feed = _watched(KioskKernelManager, Session(key=b"secret"))
+    _, kernel, feed = _watched(HeaderActivityKernelManager, Session(key=b"secret"))
     state, clock = kernel.execution_state, kernel.last_activity
     with caplog.at_level("WARNING"):
         feed([b"kernel.abc.iopub", b"no delimiter here"])
@@ -106,7 +111,7 @@ def test_a_frame_list_that_is_not_a_jupyter_message_is_logged_and_changes_nothin
 def test_zmq_frames_are_read_as_bytes_are(as_frames):
     zmq = pytest.importorskip("zmq")
     session = Session(key=b"secret")
-    _, kernel, feed = _watched(KioskKernelManager, session)
+    _, kernel, feed = _watched(HeaderActivityKernelManager, session)
     frames = _frames(session, "status", {"execution_state": "busy"}, "execute_request")
     feed([zmq.Frame(frame) for frame in frames] if as_frames else frames)
     assert kernel.execution_state == "busy"
