@@ -17,7 +17,6 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from ipycanvas import MultiCanvas
 from ipywidgets import Layout
 
 from mt_widgets.core.drawing import PlantDrawing
@@ -25,6 +24,7 @@ from mt_widgets.core.validation import as_bool
 
 from .coords import ViewTransform, nice_ticks
 from .legend import CanvasLegend
+from .looks import layered_canvas
 from .redraw import drawing_batch, repaint_on_new_view
 from .robots import painter_for
 from .theme import get_theme
@@ -101,7 +101,7 @@ class ArmView:
                                        float(action_length))
         layout = Layout(width=css_width, height="auto") if css_width else Layout()
         self.text_scale = _text_scale(css_width, width)
-        self.canvas = MultiCanvas(len(LAYERS), width=width, height=height, layout=layout)
+        self.canvas = layered_canvas(len(LAYERS), width, height, layout=layout)
         self.painter = painter_for(skill)
         self._painters: dict[str, Callable[[object], None]] = {}
         for name in LAYERS:

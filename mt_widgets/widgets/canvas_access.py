@@ -44,6 +44,8 @@ from pathlib import Path
 import anywidget
 import traitlets
 
+from .looks import shared_layout
+
 #: The smallest grab zone radius for a finger, in CSS pixels (a 48 px target, above the 44 px
 #: that touch guidelines ask for); a larger mouse radius is kept.
 FINGER_RADIUS_CSS_PX = 24.0
@@ -76,7 +78,7 @@ class CanvasDescription(anywidget.AnyWidget):
         #: Links the canvas element and this description on the page.
         self.token = uuid.uuid4().hex[:12]
         canvas.add_class(CANVAS_CLASS_PREFIX + self.token)
-        super().__init__(canvas_class=CANVAS_CLASS_PREFIX + self.token)
+        super().__init__(canvas_class=CANVAS_CLASS_PREFIX + self.token, layout=shared_layout())
         self.add_class("mt-visually-hidden")
 
     def update(self, text: str, grab_zones=()) -> None:

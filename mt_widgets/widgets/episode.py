@@ -33,6 +33,7 @@ from mt_widgets.core.validation import as_bool, as_count, as_positive
 
 from .callbacks import Callbacks
 from .guidance import GuidancePanel, explain_difference
+from .looks import plain, shared_layout
 from .progress import EffortProgress
 from .reproduction import ReproductionPlayer
 from .teaching import TeachingCanvas
@@ -211,7 +212,8 @@ class EpisodeWidget(VBox):
         heading = title if title is not None else self.skill.title
         # The description states the skill's formula, i.e. the answer: a study hides it.
         description = f"<div style='max-width:760px'>{self.skill.description}</div>" if show_description else ""
-        self.header = HTML(f"<h3 style='margin:4px 0'>{heading}</h3>{description}" if heading or description else "")
+        self.header = plain(HTML, f"<h3 style='margin:4px 0'>{heading}</h3>{description}"
+                            if heading or description else "")
         self.teaching.on_confirm(self._on_confirm)
         # Enter on the canvas while guidance is shown: what "Next state" does (keyboard users).
         self.teaching.on_enter_when_locked(lambda: self.next() if self.phase == "guidance" else None)
@@ -220,7 +222,7 @@ class EpisodeWidget(VBox):
         self.teaching.observe(self._sync_traits, names=["state_index", "demonstrations"])
         #: Where a page puts what comes after the episode (the demo: its result and "Try again");
         #: it sits beside the canvas, where the person is looking when the reproduction plays.
-        self.next_actions = VBox(layout=Layout(margin="8px 0 0 0"))
+        self.next_actions = plain(VBox, layout=shared_layout(margin="8px 0 0 0"))
         # The stage: one canvas on the left (the teaching canvas; the reproduction takes its
         # place when the episode finishes), and on the right what to do now: the arrow's
         # controls, the guidance, "Next state" / "Finish and watch", then the page's next actions.
@@ -235,12 +237,14 @@ class EpisodeWidget(VBox):
         player_legend.layout.display = "none"
         self._show_status = self.player.status.layout.display != "none"   # hidden for a blinded study
         self.player.status.layout.display = "none"                        # until the reproduction plays
-        self.side = VBox([self.teaching.controls, self.guidance_panel, self.next_button, self.player.status,
-                          self.next_actions, self.teaching.view.legend, player_legend],
-                         layout=Layout(min_width="300px", max_width="400px", flex="1 1 300px"))
-        canvases = VBox([self.teaching.view.canvas, self.player], layout=Layout(flex="0 1 auto"))
-        self.stage = HBox([canvases, self.side], layout=Layout(flex_flow="row wrap", align_items="flex-start",
-                                                                grid_gap="4px 16px", width="100%"))
+        # The boxes share their layouts (looks.py): no view changes them.
+        self.side = plain(VBox, [self.teaching.controls, self.guidance_panel, self.next_button, self.player.status,
+                                 self.next_actions, self.teaching.view.legend, player_legend],
+                          layout=shared_layout(min_width="300px", max_width="400px", flex="1 1 300px"))
+        canvases = plain(VBox, [self.teaching.view.canvas, self.player], layout=shared_layout(flex="0 1 auto"))
+        self.stage = plain(HBox, [canvases, self.side],
+                           layout=shared_layout(flex_flow="row wrap", align_items="flex-start",
+                                                grid_gap="4px 16px", width="100%"))
         children = [self.header, self.progress, self.stage]
         if css_width is None:  # the canvases grow with the page (see stage_css)
             for view in (self.teaching.view, self.player.view):
@@ -248,7 +252,7 @@ class EpisodeWidget(VBox):
             # The column is as wide as its canvas: long lines under it (the reproduction's
             # status) wrap instead of widening it and pushing the side column under it.
             canvases.add_class(_canvas_class(self.teaching.view))
-            children.append(HTML(stage_css(self.teaching.view, self.player.view)))
+            children.append(plain(HTML, stage_css(self.teaching.view, self.player.view)))
         super().__init__(children)
         self.add_class("mt-focus")  # a visible focus on each control (canvas_access.py)
         if demonstrations is not None and len(demonstrations):

@@ -10,10 +10,12 @@ import math
 
 import numpy as np
 from ipywidgets import HTML
+from ipywidgets.widgets.widget_string import HTMLStyle
 
 from mt_widgets.core import action_difference
 from mt_widgets.core.validation import as_bool
 
+from .looks import shared_style
 from .theme import ArrowStyle, Theme
 
 
@@ -66,7 +68,7 @@ class GuidancePanel(HTML):
     def __init__(self, theme: Theme, units: str):
         self.theme = theme
         self.units = units
-        super().__init__(value="")
+        super().__init__(value="", style=shared_style(HTMLStyle))   # a layout of its own, the shared style
 
     def show(self, action, optimal, exact: bool = True, legend: bool = True) -> None:
         """Explain the difference between ``action`` and ``optimal`` (both (2,)); ``legend``: with the

@@ -8,7 +8,9 @@ canvas: a novice or a visitor never has to guess what the green arrow or the das
 from __future__ import annotations
 
 from ipywidgets import HTML, Layout
+from ipywidgets.widgets.widget_string import HTMLStyle
 
+from .looks import shared_style
 from .theme import ArrowStyle, Theme
 
 #: Every kind of mark a view may draw, in the order the legend lists them.
@@ -109,7 +111,7 @@ class CanvasLegend(HTML):
     def __init__(self, theme: Theme, drawing, target=None, target_label: str | None = "goal", marks=()):
         self.theme, self.drawing, self.target, self.target_label = theme, drawing, target, target_label
         self.marks: tuple[str, ...] = ()
-        super().__init__(value="", layout=Layout(max_width="100%"))
+        super().__init__(value="", layout=Layout(max_width="100%"), style=shared_style(HTMLStyle))
         self.add_class("mt-canvas-legend")
         self.show(marks)
 

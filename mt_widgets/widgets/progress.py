@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
-from ipywidgets import HTML, HBox, IntProgress, Layout, VBox
+from ipywidgets import HTML, HBox, IntProgress, VBox
 from traitlets import Int, observe
 
 from mt_widgets.core.validation import as_count
+
+from .looks import plain, shared_layout
 
 
 class EffortProgress(VBox):
@@ -25,13 +27,14 @@ class EffortProgress(VBox):
                  episodes_done: int = 0):
         self.demonstration_budget = as_count("demonstration_budget", demonstration_budget)
         self.episode_budget = as_count("episode_budget", episode_budget)
-        bar = Layout(width="260px")
-        self.demonstration_bar = IntProgress(min=0, max=self.demonstration_budget, layout=bar,
+        bar = shared_layout(width="260px")   # shared layouts and styles: looks.py
+        self.demonstration_bar = plain(IntProgress, min=0, max=self.demonstration_budget, layout=bar,
                                              description="Demos", bar_style="info")
-        self.episode_bar = IntProgress(min=0, max=self.episode_budget, layout=bar, description="Episodes")
-        self.label = HTML()
+        self.episode_bar = plain(IntProgress, min=0, max=self.episode_budget, layout=bar, description="Episodes")
+        self.label = plain(HTML)
         # The bars side by side (wrapping on a narrow page): the episode's canvas stays high on the page.
-        super().__init__([HBox([self.demonstration_bar, self.episode_bar], layout=Layout(flex_flow="row wrap")),
+        super().__init__([plain(HBox, [self.demonstration_bar, self.episode_bar],
+                                layout=shared_layout(flex_flow="row wrap")),
                           self.label])
         self.demonstrations_done = as_count("demonstrations_done", demonstrations_done, minimum=0)
         self.episodes_done = as_count("episodes_done", episodes_done, minimum=0)

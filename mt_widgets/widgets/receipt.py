@@ -25,6 +25,7 @@ from collections.abc import Callable
 
 from ipycanvas import Canvas
 
+from .looks import shared_layout
 from .redraw import drawing_batch
 
 #: Receipt numbers live in one pixel's 24 colour bits; they wrap around (never near in one session).
@@ -88,7 +89,7 @@ class Receipts:
             return
         # Not shown anywhere: its model exists in every page all the same (the widget manager
         # makes a model for every comm), and the command chain runs for it.
-        self.canvas = Canvas(width=1, height=1, sync_image_data=True)
+        self.canvas = Canvas(width=1, height=1, sync_image_data=True, layout=shared_layout())
         self.canvas.on_client_ready(self._on_page)
         self.canvas.observe(self._on_picture, names="image_data")
 

@@ -9,6 +9,7 @@ from mt_widgets.core.validation import as_bool
 
 from .animation import DEFAULT_FPS, frame_times, play_frames, sample_at, set_style_now
 from .arm_view import ArmView
+from .looks import plain, shared_layout
 from .redraw import drawing_batch
 
 
@@ -61,22 +62,25 @@ class ReproductionPlayer(VBox):
                             css_width=css_width, target_label=target_label)
         self.theme = self.view.theme
         # Its own width, never shrunk by the line beside it (a long error line cut it to "Rep...").
-        self.replay_button = Button(description="Replay", icon="repeat", disabled=True,
-                                    tooltip="Play the reproduction again",
-                                    layout=Layout(width="auto", min_width="96px", flex="0 0 auto"))
+        self.replay_button = plain(Button, description="Replay", icon="repeat", disabled=True,
+                                   tooltip="Play the reproduction again",
+                                   layout=shared_layout(width="auto", min_width="96px", flex="0 0 auto"))
         self.replay_button.on_click(lambda _: self.replay())
-        self.status = HTML(value="<i>The robot reproduces what it learnt here after the last demonstration.</i>")
+        # Its own layout (hidden and shown), the shared style (looks.py).
+        self.status = plain(HTML, layout=Layout(),
+                            value="<i>The robot reproduces what it learnt here after the last demonstration.</i>")
         if not self.show_outcome:
             self.status.layout.display = "none"
-        self.error_label = HTML(value="")
+        self.error_label = plain(HTML, value="")
         self.trajectory = None
         self.ghost = None
         self.error = None
         self._frames = None
         self.view.show_state(skill.start, show_velocity=False)
         self.view.legend.remove("velocity")  # frames draw the robot, not its velocity
-        super().__init__([self.view.canvas, self.view.legend, HBox([self.replay_button, self.error_label],
-                                                                 layout=Layout(align_items="center", grid_gap="8px")),
+        super().__init__([self.view.canvas, self.view.legend, plain(HBox, [self.replay_button, self.error_label],
+                                                                        layout=shared_layout(align_items="center",
+                                                                                             grid_gap="8px")),
                           self.status],
                          layout=Layout(align_items="flex-start"))
 

@@ -29,7 +29,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from ipywidgets import HTML, Button, FloatText, HBox, Layout, ToggleButtons, VBox
+from ipywidgets import HTML, Button, FloatText, HBox, Layout, ToggleButtons, ToggleButtonsStyle, VBox
 from traitlets import Any, Bool, Int, List
 
 from mt_widgets.core import Demonstration, TeachingEpisode
@@ -39,6 +39,7 @@ from .arm_view import ArmView
 from .arrows import draw_arrow_pair
 from .callbacks import Callbacks
 from .canvas_access import CanvasDescription
+from .looks import plain, shared_layout, shared_style
 from .pointer_drag import ARROW_KEY_SIGNS, PointerDrag, confirm_or_clear
 from .redraw import drawing_batch
 
@@ -149,19 +150,21 @@ class TeachingCanvas(VBox):
         self._enter_when_locked = Callbacks()
 
         units = skill.action_units
-        self.readout = HTML(value="")
-        self.hint = HTML(value="")
-        self.scale_label = HTML(value=f"<small>Scale: {self.view.scale_text}</small>")
-        self.entry_mode = ToggleButtons(options=[("u1, u2", "components"), ("angle, size", "polar")],
-                                        value="components", style={"button_width": "90px"},
+        # Parts built with the shared layouts and styles (looks.py): 28 models fewer a canvas.
+        self.readout = plain(HTML, value="")
+        self.hint = plain(HTML, value="")
+        self.scale_label = plain(HTML, value=f"<small>Scale: {self.view.scale_text}</small>")
+        self.entry_mode = plain(ToggleButtons, options=[("u1, u2", "components"), ("angle, size", "polar")],
+                                        value="components", style=shared_style(ToggleButtonsStyle, button_width="90px"),
                                         tooltips=["Components of the action",
                                                   "Angle in degrees from +x (anticlockwise) and magnitude"])
-        self.first_entry = FloatText(description=f"u1 ({units})", step=0.1, layout=Layout(width="170px"))
-        self.second_entry = FloatText(description=f"u2 ({units})", step=0.1, layout=Layout(width="170px"))
-        self.set_button = Button(description="Set arrow", tooltip="Draw the arrow from the numbers")
-        self.confirm_button = Button(description="Confirm", button_style="success", icon="check", disabled=True,
+        self.first_entry = plain(FloatText, description=f"u1 ({units})", step=0.1, layout=shared_layout(width="170px"))
+        self.second_entry = plain(FloatText, description=f"u2 ({units})", step=0.1,
+                                  layout=shared_layout(width="170px"))
+        self.set_button = plain(Button, description="Set arrow", tooltip="Draw the arrow from the numbers")
+        self.confirm_button = plain(Button, description="Confirm", button_style="success", icon="check", disabled=True,
                                      tooltip="Record this arrow as your demonstration (Enter on the canvas)")
-        self.clear_button = Button(description="Clear", icon="eraser", disabled=True,
+        self.clear_button = plain(Button, description="Clear", icon="eraser", disabled=True,
                                    tooltip="Remove the arrow and draw again (Escape on the canvas)")
         self.entry_mode.observe(self._on_entry_mode, names="value")
         self.set_button.on_click(lambda _: self._set_from_entries())
@@ -181,19 +184,20 @@ class TeachingCanvas(VBox):
         self.view.legend.layout.max_width = "100%"
         self.controls = controls = VBox([
             self.readout,
-            HBox([self.confirm_button, self.clear_button]),
-            HTML("<small>Or type the arrow:</small>"),
+            plain(HBox, [self.confirm_button, self.clear_button]),
+            plain(HTML, "<small>Or type the arrow:</small>"),
             self.entry_mode,
-            HBox([self.first_entry, self.second_entry]),
+            plain(HBox, [self.first_entry, self.second_entry]),
             self.set_button,
             self.hint,
             self.scale_label,
-            HTML("<small>Keyboard: Tab to the canvas (or click it), then arrow keys move the arrow tip "
+            plain(HTML, "<small>Keyboard: Tab to the canvas (or click it), then arrow keys move the arrow tip "
                  "(Shift: finer), Enter confirms, Escape clears, Tab moves on.</small>"),
             self.description,
-        ], layout=Layout(min_width="300px", max_width="380px"))
-        super().__init__([HBox([canvas, VBox([controls, self.view.legend], layout=Layout(max_width="400px"))],
-                               layout=Layout(flex_flow="row wrap", align_items="flex-start"))])
+        ], layout=Layout(min_width="300px", max_width="380px"))   # its own: an episode hides it
+        super().__init__([plain(HBox, [canvas, plain(VBox, [controls, self.view.legend],
+                                                     layout=shared_layout(max_width="400px"))],
+                                layout=shared_layout(flex_flow="row wrap", align_items="flex-start"))])
         self.add_class("mt-focus")  # a visible focus on each control (canvas_access.py)
         self._show_given()
 

@@ -6,7 +6,8 @@ layers, and a view built of parts keeps some off the page (``EpisodeWidget`` mov
 canvas's pieces to its stage; the ``TeachingCanvas`` box that held them stays an attribute).
 So the tree follows a widget's trait values and attributes, and through this package's own
 view helpers (an arm view holds its canvas and legend), but never a callback (a callback's
-owner, a page or an app, is not the view's) and never a trait's class-wide default.
+owner, a page or an app, is not the view's), never a trait's class-wide default, and never a
+layout or style shared by many widgets (``looks.py``).
 """
 
 from __future__ import annotations
@@ -15,11 +16,15 @@ from collections.abc import Iterator
 
 from ipywidgets import Widget
 
+from .looks import is_shared
+
 #: Objects whose attributes are followed besides widgets: this package's view helpers.
 _VIEW_MODULES = ("mt_widgets.widgets.",)
 
 
 def _followed(value) -> bool:
+    if is_shared(value):
+        return False
     return isinstance(value, (Widget, list, tuple, dict)) or type(value).__module__.startswith(_VIEW_MODULES)
 
 
