@@ -265,7 +265,8 @@ if os.environ.get("MT_HUB_SERVER_TEMPLATE", "on") != "off":
                  "ipykernel.ipkernel", "mt_widgets", "mt_widgets.classroom", "mt_widgets.widgets",
                  # what a server's and a kernel's start imported after the fork (py-spy, bench_hub.py)
                  "mt_widgets.kernels.activity", "jupyterlab.extensions.readonly", "jupyter_core.migrate",
-                 "jinja2.ext", "pdb"],
+                 "jinja2.ext", "pdb", "IPython.core.debugger", "IPython.core.oinspect",
+                 "IPython.core.completerlib", "IPython.extensions.storemagic"],
         env={"PATH": str(STUDENT_PYTHON.parent), "PYTHONPATH": _python_path, "PYTHONDONTWRITEBYTECODE": "1",
              "JUPYTER_CONFIG_PATH": str(HERE / "student-config"), "JUPYTER_PATH": str(HERE / "student-share"),
              "MT_HUB_ROLE": "student", "LANG": os.environ.get("LANG", "C.UTF-8")},

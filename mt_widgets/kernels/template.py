@@ -196,8 +196,14 @@ def start_child(closing: list, env: dict, cwd: str, title: str) -> None:
         # child's environment (on the hub, the student's own cache folder), and point every
         # cached function imported so far there too (a function's cache folder is chosen when it
         # is defined, from the template's environment).
-        sys.modules["numba"].core.config.reload_config()
-        _point_numba_caches_here()
+        # A child whose cache folder is its template's (a student's kernel forked from their own
+        # kernel template) keeps the functions' caches as they are: pointing them again was a tenth
+        # of a kernel's CPU in a lecture's first minute (py-spy, benchmarks/bench_hub.py).
+        config = sys.modules["numba"].core.config
+        cache_folder = config.CACHE_DIR
+        config.reload_config()
+        if config.CACHE_DIR != cache_folder:
+            _point_numba_caches_here()
     if "numpy" in sys.modules:
         sys.modules["numpy"].random.seed()
 

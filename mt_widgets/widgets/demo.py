@@ -12,13 +12,14 @@ skill chooser then offers that arm's skills.
 
 from __future__ import annotations
 
-from ipywidgets import HTML, Box, Button, Checkbox, HBox, Layout, ToggleButtons, VBox
+from ipywidgets import HTML, Box, Button, Checkbox, HBox, ToggleButtons, ToggleButtonsStyle, VBox
 
 from mt_widgets.core import SKILLS, Skill
 from mt_widgets.core.validation import as_bool
 
 from .animation import retire
 from .episode import EpisodeResult, EpisodeWidget
+from .looks import plain, shared_layout, shared_style
 from .space_episode import SpaceEpisodeWidget, drawn_in_space
 
 #: The four skills of the paper, as a visitor reads them on the chooser.
@@ -119,19 +120,21 @@ class DemoPage(VBox):
         self.episode_options = episode_options
         self.errors: list[tuple[str, bool, float]] = []
         self._switching_arm = False
-        self.arm_chooser = ToggleButtons(options=list(self.arms), value=arm, style={"button_width": "120px"},
-                                         tooltips=[f"Teach the {label}" for label in self.arms],
-                                         layout=Layout(display=None if len(self.arms) > 1 else "none"))
-        self.skill_chooser = ToggleButtons(options=self._skill_options(arm), value=skill,
-                                           style={"button_width": "150px"},
-                                           tooltips=[s.title for s in self.arms[arm].values()])
-        self.guidance_switch = Checkbox(value=as_bool("guidance", guidance),
-                                        description="Guidance: show the best arrow after each of mine", indent=False,
-                                        layout=Layout(width="auto"))
-        self.new_states_button = Button(description="Try again with new states", icon="refresh",
-                                        layout=Layout(width="auto"))
-        self.result_line = HTML(value="")
-        self.episode_slot = Box()
+        # The page's parts share their layouts and styles (looks.py): none of them changes its own.
+        self.arm_chooser = plain(ToggleButtons, options=list(self.arms), value=arm,
+                                 style=shared_style(ToggleButtonsStyle, button_width="120px"),
+                                 tooltips=[f"Teach the {label}" for label in self.arms],
+                                 layout=shared_layout() if len(self.arms) > 1 else shared_layout(display="none"))
+        self.skill_chooser = plain(ToggleButtons, options=self._skill_options(arm), value=skill,
+                                   style=shared_style(ToggleButtonsStyle, button_width="150px"),
+                                   tooltips=[s.title for s in self.arms[arm].values()])
+        self.guidance_switch = plain(Checkbox, value=as_bool("guidance", guidance),
+                                     description="Guidance: show the best arrow after each of mine", indent=False,
+                                     layout=shared_layout(width="auto"))
+        self.new_states_button = plain(Button, description="Try again with new states", icon="refresh",
+                                       layout=shared_layout(width="auto"))
+        self.result_line = plain(HTML, value="")
+        self.episode_slot = plain(Box)
         self.episode: EpisodeWidget | None = None
         self.arm_chooser.observe(lambda _: self._on_arm_chosen(), names="value")
         self.skill_chooser.observe(lambda _: None if self._switching_arm else self.start_episode(), names="value")
@@ -140,9 +143,9 @@ class DemoPage(VBox):
         # The choices on one line, so the episode's canvas starts high on the page; the result and
         # "try again" go beside the canvas (the episode's next_actions), where the visitor is
         # looking when the reproduction plays.
-        choices = HBox([self.arm_chooser, self.skill_chooser, self.guidance_switch],
-                       layout=Layout(flex_flow="row wrap", align_items="center", grid_gap="2px 16px"))
-        super().__init__([HTML(WELCOME), choices, self.episode_slot])
+        choices = plain(HBox, [self.arm_chooser, self.skill_chooser, self.guidance_switch],
+                        layout=shared_layout(flex_flow="row wrap", align_items="center", grid_gap="2px 16px"))
+        super().__init__([plain(HTML, WELCOME), choices, self.episode_slot])
         self.add_class("mt-focus")  # a visible focus on each control (canvas_access.py)
         self.start_episode()
 

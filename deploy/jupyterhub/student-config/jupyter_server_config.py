@@ -48,6 +48,9 @@ if os.environ.get("MT_HUB_ROLE") != "instructor":
         "voila.server_extension": False,
         "mt_hub_voila": True,
         "notebook": False,
+        # The classic Notebook's config shim: nothing here configures NotebookApp, and its check of
+        # every config member was a twentieth of a student's server start (py-spy, bench_hub.py).
+        "notebook_shim": False,
     }
     # Students' kernels run without JupyterLab's debugger: the hub puts student-share/ first on
     # their JUPYTER_PATH, whose kernels/python3 spec starts student-site/mt_hub_kernel.py.
