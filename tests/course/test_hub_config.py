@@ -189,7 +189,7 @@ def test_students_servers_use_ipc_kernels_and_leave_out_what_lessons_do_not_use(
     off = {name for name, enabled in student.ServerApp.jpserver_extensions.items() if not enabled}
     assert off == {"jupyter_lsp", "jupyter_server_terminals", "nbgrader.server_extensions.formgrader",
                    "nbgrader.server_extensions.assignment_list", "nbgrader.server_extensions.validate_assignment",
-                   "nbgrader.server_extensions.course_list", "voila.server_extension", "notebook"}
+                   "nbgrader.server_extensions.course_list", "voila.server_extension", "notebook", "notebook_shim"}
     # nbgrader's student side and Voila's pages instead come from student-site/, loaded at first use.
     for lazy in ("mt_hub_nbgrader", "mt_hub_voila"):
         assert student.ServerApp.jpserver_extensions[lazy] is True
@@ -198,9 +198,24 @@ def test_students_servers_use_ipc_kernels_and_leave_out_what_lessons_do_not_use(
     spec = json.loads((HUB / "student-share" / "kernels" / "python3" / "kernel.json").read_text())
     assert spec["argv"][:3] == ["{prefix}/bin/python", "-m", "mt_hub_kernel"] and spec["metadata"]["debugger"] is False
     assert (HUB / "student-site" / "mt_hub_kernel.py").is_file()
+    # For everyone: activity read from the headers, extensions listed without PyPI's client.
+    for config in (student, _server_config("instructor")):
+        assert config.ServerApp.kernel_manager_class == "mt_widgets.kernels.activity.HeaderActivityKernelManager"
+        assert config.LabApp.extension_manager == "readonly"
     instructor = _server_config("instructor")
     assert instructor.KernelManager.transport == "ipc"
     assert "jpserver_extensions" not in instructor.ServerApp
+
+
+def test_the_server_template_is_on_unless_the_environment_says_off(setting):
+    def template(config):
+        return config.JupyterHub.spawner_class.start.__globals__["SERVER_TEMPLATE"]
+
+    on = template(setting())
+    shutil.rmtree(on.folder)   # its socket's folder, made when the config is read
+    assert on.servers == ["jupyterhub.singleuser"] and on.kernels == ["mt_hub_kernel"]
+    assert "mt_widgets.kernels.activity" in on.preload   # the server's kernel manager, imported before forking
+    assert template(setting(MT_HUB_SERVER_TEMPLATE="off")) is None
 
 
 def test_the_installation_check_names_the_folder_students_cannot_enter(tmp_path):
