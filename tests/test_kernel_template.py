@@ -81,6 +81,11 @@ def test_a_forked_kernel_teaches_an_episode_and_interrupt_restart_shutdown_work(
         # widget's state through jupyter.widget.control.
         status, out = await _run(client, "import comm\nprint(sorted(comm.get_comm_manager().targets))")
         assert (status, out.strip()) == ("ok", "['jupyter.widget', 'jupyter.widget.control']"), out
+        # With debugpy installed (as here) the kernel keeps its list of loaded modules' files for
+        # the debugger; the hub's kernels, without one, skip it (tests/course/test_hub.py).
+        status, out = await _run(client, "import sys, ipykernel.ipkernel as k\n"
+                                         "print(k.sys is sys, len(get_ipython().kernel._kernel_modules) > 100)")
+        assert (status, out.strip()) == ("ok", "True True"), out
         status, out = await _run(client, EPISODE, timeout=120)
         word, arrows, latency = out.split()
         assert (status, word) == ("ok", "episode") and int(arrows) > 0 and float(latency) > 0, out

@@ -113,6 +113,10 @@ result = {{
     "become_root": attempt(lambda: os.setuid(0)),
     "kernel_command": open("/proc/self/cmdline").read().split("\\0"),
     "debugger_loaded": "debugpy" in sys.modules and sys.modules["debugpy"] is not None,
+    # Without a debugger the kernel skips listing every module's file (mt_widgets/kernels/template.py);
+    # ipykernel's own module sees the real sys again once the kernel is made.
+    "kernel_module_list": len(get_ipython().kernel._kernel_modules),
+    "ipkernel_sys_is_sys": __import__("ipykernel.ipkernel").ipkernel.sys is sys,
 }}
 print(json.dumps(result))
 """
@@ -248,6 +252,7 @@ def test_a_students_kernel_is_their_own_user_and_reaches_no_one_elses_work(hub):
     # one string, mt_widgets/kernels/template.py.)
     assert "-m mt_hub_kernel -f " in " ".join(probe["kernel_command"]), probe["kernel_command"]
     assert probe["debugger_loaded"] is False
+    assert (probe["kernel_module_list"], probe["ipkernel_sys_is_sys"]) == (0, True), probe
     denied = ["read_classmate_home", "read_classmate_file", "list_class_folder", "read_classmate_progress",
               "append_classmate_progress", "take_classmate_lock", "list_course", "read_course_source",
               "write_package", "write_stdlib", "become_root"]
