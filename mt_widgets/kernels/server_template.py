@@ -215,8 +215,25 @@ def main(argv: list[str] | None = None) -> None:
     made = template._widgets_made()
     if made:
         raise SystemExit(f"server template: importing {preload} made widgets ({made}); preload modules that make none")
+    _system_facts_once()
     template.settle(numba_packages)
     serve(template.listen(path), tuple(servers), tuple(kernels))
+
+
+def _system_facts_once() -> None:
+    """Every server's web app asks jupyter_server for its system facts at start (its version, Python,
+    platform, and the git commit of the folder it is installed in, found by running ``git rev-parse``
+    in a subprocess when that folder lies in a git checkout, as a clone's ``.venv`` does): a fork and
+    exec of git per student's server, for facts that are the template's own and the same for all.
+    They are gathered once here, without git (nothing here runs git as root), and every fork shares
+    them."""
+    serverapp = sys.modules.get("jupyter_server.serverapp")
+    sysinfo = sys.modules.get("jupyter_server._sysinfo")
+    if serverapp is None or sysinfo is None or not callable(getattr(serverapp, "get_sys_info", None)):
+        return
+    sysinfo.pkg_commit_hash = lambda pkg_path: ("", "")
+    facts = sysinfo.get_sys_info()
+    serverapp.get_sys_info = lambda: dict(facts)
 
 
 def untrusted(folder: str) -> str | None:

@@ -73,6 +73,16 @@ def main():
                 continue
             found.update(m.decode() for m in re.findall(rb"MTTSECRET[0-9a-f]{32}", chunk))
     report["secrets_in_memory"] = sorted(found)
+    # The server's system facts come from the template, gathered once without running git
+    # (a server's web app asks for them at every start).
+    import subprocess
+    import jupyter_server
+    started = []
+    popen = subprocess.Popen
+    subprocess.Popen = lambda *args, **kwargs: started.append(args) or popen(*args, **kwargs)
+    facts = sys.modules["jupyter_server.serverapp"].get_sys_info()
+    subprocess.Popen = popen
+    report["system_facts"] = [len(started), facts["jupyter_server_version"] == jupyter_server.__version__]
     with open(out, "w") as handle:
         json.dump(report, handle)
 
@@ -116,7 +126,8 @@ def users(tmp_path_factory):
 def server_template(users):
     site, _ = users
     python = STUDENT_PYTHON if STUDENT_PYTHON.exists() else Path(sys.executable)
-    template = ServerTemplate(python, servers=["mtt_probe_server"], kernels=[], preload=["numpy", "mt_widgets"],
+    template = ServerTemplate(python, servers=["mtt_probe_server"], kernels=[],
+                              preload=["numpy", "mt_widgets", "jupyter_server.serverapp"],
                               env={"PATH": str(python.parent), "PYTHONPATH": f"{site}{os.pathsep}{REPO}",
                                    "PYTHONDONTWRITEBYTECODE": "1"})
     template.ensure_started()
@@ -178,6 +189,8 @@ def test_each_fork_is_its_student_and_holds_no_one_elses_secret(server_template,
         assert report["kernel_template_adopted"] is True
         assert report["kernel_template_uid"] == account.pw_uid
         assert report["kernel_template_socket"].startswith(str(home / "runtime") + "/")
+        # jupyter_server's system facts, as the template gathered them: no git run per server.
+        assert report["system_facts"] == [0, True], report["system_facts"]
 
 
 def test_requests_that_would_run_as_root_or_another_module_run_nothing(server_template, users):
