@@ -284,13 +284,19 @@ def _copy_owned(source: Path, target: Path, uid: int, gid: int) -> None:
         os.chown(path, uid, gid, follow_symlinks=False)
 
 
-def _port_outside_ephemeral_range() -> int:
-    """A free port below Linux's ephemeral range (32768-60999). JupyterHub's own choice comes from
-    that range, where every outgoing connection's local port comes from too: with a class starting
-    at once, a connection can take a server's port between the hub choosing it and the server
-    binding it."""
+#: The port chosen for each login's server, from its spawn until it stops.
+_SERVER_PORTS: dict[str, int] = {}
+
+
+def _port_outside_ephemeral_range(taken=frozenset()) -> int:
+    """A free port below Linux's ephemeral range (32768-60999), none of ``taken``. JupyterHub's own
+    choice comes from that range, where every outgoing connection's local port comes from too: with
+    a class starting at once, a connection can take a server's port between the hub choosing it and
+    the server binding it."""
     for _ in range(500):
         port = random.randint(20000, 32000)
+        if port in taken:
+            continue
         with socket.socket() as probe:
             try:
                 probe.bind(("127.0.0.1", port))
@@ -298,6 +304,24 @@ def _port_outside_ephemeral_range() -> int:
                 continue
             return port
     raise RuntimeError("no free port between 20000 and 32000 for a student's server")
+
+
+def _reserve_port(login: str) -> int:
+    """The port for ``login``'s server, kept for it until it stops (``_release_port``).
+
+    A free port is free only until a server binds it: thirty servers spawned at once are each given
+    a port before any of them has bound one, so the probe alone could give two students the same
+    port (about once in thirty classes of thirty; seen in benchmarks/bench_hub.py). The second
+    server then cannot bind it and ends, but the hub, which takes any HTTP answer as "up", finds
+    the first student's server there and routes the second student to it. The hub runs its spawn
+    hooks one at a time on its event loop, so this record has no race of its own."""
+    taken = {port for other, port in _SERVER_PORTS.items() if other != login}
+    _SERVER_PORTS[login] = _port_outside_ephemeral_range(taken)
+    return _SERVER_PORTS[login]
+
+
+def _release_port(login: str) -> None:
+    _SERVER_PORTS.pop(login, None)
 
 
 def _before_spawn(spawner) -> None:
@@ -323,10 +347,11 @@ def _before_spawn(spawner) -> None:
         _copy_owned(Path(template), cache, user.pw_uid, user.pw_gid)
     if LIMITS is not None:
         LIMITS.create(login)
-    spawner.port = _port_outside_ephemeral_range()
+    spawner.port = _reserve_port(login)
 
 
 def _after_stop(spawner) -> None:
+    _release_port(spawner.user.name)
     if LIMITS is not None:
         LIMITS.remove(spawner.user.name)
 

@@ -160,7 +160,14 @@ class ClassHub:
                                         stdout=self._log_file, stderr=subprocess.STDOUT, start_new_session=True)
         self.session = requests.Session()
         self.session.headers["Authorization"] = f"token {self.token}"
-        # One connection per student thread when a whole class is driven at once.
+        # A fresh connection for every request: the proxy (configurable-http-proxy, node) closes a
+        # keep-alive connection after 5 s idle, and a request sent on a pooled connection at that
+        # moment fails with "connection reset by peer" (seen once in bench_hub.py, a few seconds
+        # after the lecture, on the next phase's first request). A browser resends such a request
+        # on a new connection by itself; requests does not, and resending a POST blindly could
+        # start two kernels. Loopback
+        # connections cost next to nothing; the kernels' websockets are separate connections.
+        self.session.headers["Connection"] = "close"
         adapter = requests.adapters.HTTPAdapter(pool_connections=4, pool_maxsize=64)
         self.session.mount("http://", adapter)
         deadline = time.monotonic() + 120

@@ -157,6 +157,24 @@ def test_the_spawn_hook_gives_a_warm_cache_a_runtime_folder_cgroups_and_a_port_o
         config.Spawner.pre_spawn_hook(spawner)
 
 
+def test_students_spawned_at_once_never_share_a_port(setting):
+    """Each server's port is kept for its login from the spawn until the server stops: a free port is
+    free only until a server binds it, and a class is given its ports before any server binds one."""
+    hooks = setting().Spawner.pre_spawn_hook.__globals__
+    reserve, release = hooks["_reserve_port"], hooks["_release_port"]
+    logins = [f"student{n:03d}" for n in range(400)]
+    ports = [reserve(login) for login in logins]  # a large class, nobody's server bound yet
+    assert len(set(ports)) == len(ports) and all(20000 <= port < 32768 for port in ports)
+    # A restart may get any free port, but never a port another login holds.
+    again = reserve(logins[0])
+    assert again not in ports[1:]
+    release(logins[1])
+    assert logins[1] not in hooks["_SERVER_PORTS"] and hooks["_SERVER_PORTS"][logins[0]] == again
+    for login in logins:
+        release(login)
+    assert hooks["_SERVER_PORTS"] == {}
+
+
 def test_each_students_caches_and_runtime_are_their_own_and_nothing_writes_into_the_install(setting):
     config = setting()
     environment = config.Spawner.environment
