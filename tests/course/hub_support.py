@@ -165,8 +165,8 @@ class ClassHub:
         # moment fails with "connection reset by peer" (seen once in bench_hub.py, a few seconds
         # after the lecture, on the next phase's first request). A browser resends such a request
         # on a new connection by itself; requests does not, and resending a POST blindly could
-        # start two kernels. Loopback
-        # connections cost next to nothing; the kernels' websockets are separate connections.
+        # start two kernels. Loopback connections cost next to nothing; the kernels' websockets
+        # are separate connections.
         self.session.headers["Connection"] = "close"
         adapter = requests.adapters.HTTPAdapter(pool_connections=4, pool_maxsize=64)
         self.session.mount("http://", adapter)
