@@ -104,8 +104,20 @@ def _cpu_seconds(processes) -> float:
 
 
 def _hub_processes(hub) -> list:
+    """The hub and its proxy: the processes under the hub that run as the hub's user, except the
+    server template. (Every student's server and kernel is under the hub too, forked by the
+    template or started by the spawner; until 2026-12-04 they were counted here as well, so the
+    hub's share at human pace held the students' own CPU a second time.)"""
     hub_process = psutil.Process(hub.process.pid)
-    return [hub_process, *hub_process.children(recursive=True)]
+    own = [hub_process]
+    for process in hub_process.children(recursive=True):
+        try:
+            if (process.uids().real == hub_process.uids().real
+                    and "mt_widgets.kernels.server_template" not in " ".join(process.cmdline())):
+                own.append(process)
+        except (psutil.NoSuchProcess, psutil.AccessDenied, psutil.ZombieProcess):
+            continue
+    return own
 
 
 def _is_kernel(process) -> bool:
