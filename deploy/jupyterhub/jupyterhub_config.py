@@ -284,7 +284,8 @@ def _copy_owned(source: Path, target: Path, uid: int, gid: int) -> None:
         os.chown(path, uid, gid, follow_symlinks=False)
 
 
-#: The port chosen for each login's server, from its spawn until it stops.
+#: The port chosen for each login's server, from its spawn until it stops. (Keyed by login: a
+#: member has one server here, named servers being off; with them on, key by the server too.)
 _SERVER_PORTS: dict[str, int] = {}
 
 

@@ -140,7 +140,7 @@ def _lighter_kernel_init() -> None:
     ``jupyter.widget`` a widget made by the page's front end has no kernel side.
     """
     try:
-        from ipykernel import debugger, ipkernel
+        from ipykernel import ipkernel
         from ipykernel.kernelapp import IPKernelApp
     except ImportError:  # a kernel module other than ipykernel's
         return
@@ -148,6 +148,10 @@ def _lighter_kernel_init() -> None:
     init_kernel = IPKernelApp.init_kernel
 
     def init_kernel_lighter(app):
+        # Asked here, once the kernel module has run (as ipykernel itself asks): a module such as
+        # the hub's mt_hub_kernel keeps debugpy out when it runs.
+        from ipykernel import debugger
+
         skip_module_list = not debugger._is_debugpy_available
         if skip_module_list:
             ipkernel.sys = _SysWithoutModuleList()

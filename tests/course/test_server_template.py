@@ -80,9 +80,13 @@ def main():
     started = []
     popen = subprocess.Popen
     subprocess.Popen = lambda *args, **kwargs: started.append(args) or popen(*args, **kwargs)
-    facts = sys.modules["jupyter_server.serverapp"].get_sys_info()
-    subprocess.Popen = popen
-    report["system_facts"] = [len(started), facts["jupyter_server_version"] == jupyter_server.__version__]
+    try:
+        serverapp = sys.modules["jupyter_server.serverapp"]
+        facts = serverapp.get_sys_info()
+    finally:
+        subprocess.Popen = popen
+    replaced = serverapp.get_sys_info is not sys.modules["jupyter_server._sysinfo"].get_sys_info
+    report["system_facts"] = [len(started), replaced, facts["jupyter_server_version"] == jupyter_server.__version__]
     with open(out, "w") as handle:
         json.dump(report, handle)
 
@@ -190,7 +194,7 @@ def test_each_fork_is_its_student_and_holds_no_one_elses_secret(server_template,
         assert report["kernel_template_uid"] == account.pw_uid
         assert report["kernel_template_socket"].startswith(str(home / "runtime") + "/")
         # jupyter_server's system facts, as the template gathered them: no git run per server.
-        assert report["system_facts"] == [0, True], report["system_facts"]
+        assert report["system_facts"] == [0, True, True], report["system_facts"]
 
 
 def test_requests_that_would_run_as_root_or_another_module_run_nothing(server_template, users):
