@@ -33,19 +33,25 @@ def to_canvas(page, index: int, px: float, py: float) -> tuple[float, float]:
 
 
 def wait_for_color(page, index: int, x: float, y: float, rgb, tolerance: int = 40, timeout: float = 15_000,
-                   radius: int = 2) -> None:
-    """Wait until a pixel within ``radius`` of canvas pixel (x, y) has colour ``rgb``."""
-    page.wait_for_function(
+                   radius: int = 2) -> float:
+    """Wait until a pixel within ``radius`` of canvas pixel (x, y) has colour ``rgb``.
+
+    Returns the page's ``performance.now()`` at the first animation frame that showed it: the check
+    runs in the page on every frame, so the time is the page's, within a frame, and not when the
+    test's process heard of it.
+    """
+    return page.wait_for_function(
         """([index, x, y, rgb, tol, r]) => {
             const c = document.querySelectorAll('canvas')[index];
             if (!c) return false;
             const d = c.getContext('2d').getImageData(Math.round(x) - r, Math.round(y) - r, 2 * r + 1, 2 * r + 1).data;
             for (let i = 0; i < d.length; i += 4) {
                 if (Math.abs(d[i] - rgb[0]) <= tol && Math.abs(d[i + 1] - rgb[1]) <= tol
-                    && Math.abs(d[i + 2] - rgb[2]) <= tol && d[i + 3] > 200) return true;
+                    && Math.abs(d[i + 2] - rgb[2]) <= tol && d[i + 3] > 200) return performance.now();
             }
             return false;
-        }""", arg=[index, float(x), float(y), list(rgb), tolerance, radius], timeout=timeout)
+        }""", arg=[index, float(x), float(y), list(rgb), tolerance, radius], timeout=timeout,
+        polling="raf").json_value()
 
 
 def status(page) -> dict:
