@@ -38,20 +38,22 @@ def tables(results: dict) -> dict[str, str]:
     targets = [[row["what"], row["measured"], row["target"], f"{row['ratio']:.2f}"]
                for row in results["targets"]["rows"]]
     kiosk = results["kiosk"]
-    memory = kiosk["memory_after_11_visits_mb"]
-    first = kiosk["runs"][6]
+    # The summary is the newest run timed in the page that measured every server and the memory.
+    summary = [run for run in kiosk["runs"] if run.get("timed") == "in the page" and "memory_mb" in run][-1]
+    memory = summary["memory_mb"]
     kiosk_summary = _table(
         ["demo page", "shipped `deploy/voila/voila.py`", "stock Voila (reference)", "ratio", "shipped, no preheat"],
-        [["server + kernels memory after 11 visits", f"{memory['shipped']:,} MB ({memory['shipped_kernels']})",
+        [[f"server + kernels memory after {summary['visits']} visits (RSS summed)",
+          f"{memory['shipped']:,} MB ({memory['shipped_kernels']})",
           f"{memory['stock']:,} MB ({memory['stock_kernels']} kernels)", f"{memory['shipped'] / memory['stock']:.2f}",
           f"{memory['shipped_no_preheat']} MB"],
-         ["time to interactive, warm, p50 / p95", f"{first['shipped_p50']:.2f} s / {first['shipped_p95']:.2f} s",
-          f"{first['stock_p50']:.2f} s / {first['stock_p95']:.2f} s",
-          f"{first['shipped_p50'] / first['stock_p50']:.2f}",
-          f"{first['shipped_no_preheat_p50']:.2f} s / {first['shipped_no_preheat_p95']:.2f} s"]])
-    kiosk_runs = _table(["date", "run", "shipped p50", "shipped p95", "stock p50", "stock p95", "ratio (p50)"],
-                        [[run["date"], run["label"], _seconds(run["shipped_p50"]), _seconds(run.get("shipped_p95")),
-                          _seconds(run["stock_p50"]), _seconds(run.get("stock_p95")),
+         ["time to interactive, warm, p50 / p95", f"{summary['shipped_p50']:.2f} s / {summary['shipped_p95']:.2f} s",
+          f"{summary['stock_p50']:.2f} s / {summary['stock_p95']:.2f} s",
+          f"{summary['shipped_p50'] / summary['stock_p50']:.2f}",
+          f"{summary['shipped_no_preheat_p50']:.2f} s / {summary['shipped_no_preheat_p95']:.2f} s"]])
+    kiosk_runs = _table(["date", "run", "times", "shipped p50", "shipped p95", "stock p50", "stock p95", "ratio (p50)"],
+                        [[run["date"], run["label"], run.get("timed", "polled"), _seconds(run["shipped_p50"]),
+                          _seconds(run.get("shipped_p95")), _seconds(run["stock_p50"]), _seconds(run.get("stock_p95")),
                           f"{run['shipped_p50'] / run['stock_p50']:.2f}"] for run in kiosk["runs"]])
     online = _table(["participants at once", "arrival (navigation -> welcome), p50 / max",
                      "response (click -> next screen), p50 / p95 / max", "server + kernels memory", "per kernel"],
@@ -141,6 +143,10 @@ def figures(results: dict, folder: Path) -> list[Path]:
     axes.plot(positions, [run.get("shipped_p95", float("nan")) for run in runs], "v", color="#56B4E9",
               label="shipped p95")
     axes.axhline(kiosk["target_p50_s"], color="#D55E00", linestyle=":", label="target p50")
+    in_page = [index for index, run in enumerate(runs) if run.get("timed") == "in the page"]
+    if in_page:  # before this line Playwright polled for the canvas: every time is late by up to 0.5 s
+        axes.axvline(in_page[0] - 0.5, color="black", linewidth=0.8)
+        axes.text(in_page[0] - 0.4, 0.05, "timed in the page", fontsize=7, transform=axes.get_xaxis_transform())
     axes.set_xticks(list(positions), [f"{run['date'][5:]}\n#{index + 1}" for index, run in enumerate(runs)], fontsize=7)
     axes.set_ylabel("time to interactive (s)")
     axes.set_ylim(0, None)
