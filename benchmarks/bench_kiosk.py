@@ -23,7 +23,9 @@ run the page.
 - memory: resident set sizes of each Voila server and every process under it (its kernels),
   after the N visits, and the number of kernels left;
 - demo page, time to interactive: navigation -> the arm drawn on the canvas and a skill
-  button's click answered by the new skill's canvas (the page's ``performance.now()``); p50 and
+  button's click answered by the new skill's canvas (the page's ``performance.now()``, each taken in
+  the page when it happened, not when Playwright heard of it: ``NOTE_FIRST_CANVAS`` in
+  tests/browser/kiosk.py says why); p50 and
   p95 over the warm visits (all but the first, which also fills the browser's cache); and where
   that time went (medians, from navigation): the HTML received, DOMContentLoaded, the load event
   (the page's own scripts and styles), the kernel asked for (Voila's app has loaded its
