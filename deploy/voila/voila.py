@@ -94,9 +94,10 @@ c.VoilaConfiguration.multi_kernel_manager_class = "kiosk_kernels.KioskKernelMana
 # --- Preheated kernels: only for the pages that need them --------------------------------------
 # Preheating runs a page's notebook in a spare kernel before anyone asks for it, so a visitor
 # gets an executed page instead of waiting for a kernel to start and import numpy, numba and
-# ipycanvas (benchmarks/bench_kiosk.py: time to interactive drops from about 3-4 s to about
-# 1.5 s). One spare kernel per page: visitors arrive one at a time at a kiosk, and the pool
-# refills within a few seconds; every spare costs a kernel's memory all day. The other
+# ipycanvas (benchmarks/bench_kiosk.py, times taken in the page: the demo page's warm time to
+# interactive is about 1.2-1.4 s without the spare and 0.8-1.0 s with it). One spare kernel per
+# page: visitors arrive one at a time at a kiosk, and the pool refills within a few seconds; every
+# spare costs a kernel's memory all day. The other
 # notebooks of notebooks/ get no spare (analysis.ipynb does heavy work on open, study_uarm.ipynb
 # talks to hardware), which matters when the whole folder is served.
 c.VoilaConfiguration.preheat_kernel = True

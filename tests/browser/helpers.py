@@ -36,9 +36,9 @@ def wait_for_color(page, index: int, x: float, y: float, rgb, tolerance: int = 4
                    radius: int = 2) -> float:
     """Wait until a pixel within ``radius`` of canvas pixel (x, y) has colour ``rgb``.
 
-    Returns the page's ``performance.now()`` at the first animation frame that showed it: the check
-    runs in the page on every frame, so the time is the page's, within a frame, and not when the
-    test's process heard of it.
+    Returns the page's ``performance.now()`` when the check first saw it. The check runs in the page,
+    at once and then on every animation frame, so the time is the page's (within a frame) and not
+    when the test's process heard of it.
     """
     return page.wait_for_function(
         """([index, x, y, rgb, tol, r]) => {
