@@ -157,11 +157,12 @@ class Visit:
     phases: dict | None = None
 
 
-#: Notes, in the page, when the first canvas element is inserted (ms since navigation). Every time a
-#: visit reports is taken in the page like this, or by a check the page runs on every animation
-#: frame (``wait_for_color``): Playwright's own waits for a selector poll from the test's process at
-#: 0, 20, 50, 100, 100 and then every 500 ms, so a time read after them is late by up to half a
-#: second (seen: the canvas inserted at 0.53-0.66 s and found at 1.04-1.15 s in 5 of 8 visits).
+#: Notes, in the page, when the first canvas element is inserted into the document (ms since
+#: navigation; the arm is drawn on it within a frame or two). Every time a visit reports is taken in
+#: the page like this, or by a check the page runs on every animation frame (``wait_for_color``):
+#: Playwright's own waits for a selector poll from the test's process at 0, 20, 50, 100, 100 and then
+#: every 500 ms, so a time read after them is late by up to half a second (seen in 7 warm visits:
+#: the canvas inserted at 0.53-0.91 s, found 0.08-0.51 s later).
 NOTE_FIRST_CANVAS = """
 new MutationObserver((_, observer) => {
   if (document.querySelector('canvas')) { window.__firstCanvas = performance.now(); observer.disconnect(); }
@@ -191,6 +192,7 @@ def visit(context, server: Server, *, unload: bool = True, keep_open: bool = Fal
     page.goto(server.url(DEMO_URL_PATH), wait_until="commit", timeout=60_000)
     drawn = wait_for_color(page, 0, *ee_pixel(first), OKABE["yellow"], timeout=60_000)
     canvas_ms = page.evaluate("window.__firstCanvas")
+    assert canvas_ms is not None, "the arm was drawn, yet the page's observer saw no canvas inserted"
     phases = page.evaluate("""() => { const n = performance.getEntriesByType('navigation')[0];
         const r = performance.getEntriesByType('resource');
         const kernel = r.find(e => /\\/api\\/kernels\\/[0-9a-f-]{36}/.test(e.name));

@@ -3,9 +3,10 @@
 Stock Voila keeps every visitor's kernel (about 200 MB) for good: the page's shutdown beacon is
 refused for want of an _xsrf cookie and nothing culls. With the shipped configuration a closed
 page ends its kernel at once, a page that vanished without closing (no ``beforeunload``) loses
-its kernel to the idle culler, an open page keeps its kernel however long it idles, and one
-preheated spare makes the next visitor's page interactive within 3 s; the widgets' scripts are
-cached for good and unused extensions are not loaded.
+its kernel to the idle culler, an open page keeps its kernel however long it idles, and every
+visitor gets the preheated spare, a kernel that has already run the page (how fast that makes the
+page is measured in benchmarks/bench_kiosk.py, not here); the widgets' scripts are cached for good
+and unused extensions are not loaded.
 
 The culler's timings are shortened here through the config's own knobs
 (``--MappingKernelManager.cull_idle_timeout`` / ``cull_interval`` on the command line win over
@@ -106,7 +107,7 @@ def test_voila_runs_the_shipped_culler_and_accepts_a_pages_shutdown_beacon(tmp_p
 
 @pytest.mark.slow
 @pytest.mark.browser
-def test_twenty_visits_keep_memory_bounded_and_each_page_is_interactive_within_3_s(browser, tmp_path, artifacts):
+def test_twenty_visits_keep_memory_bounded_and_each_visitor_gets_the_preheated_spare(browser, tmp_path, artifacts):
     server = start_page_server(tmp_path, overrides=(f"--MappingKernelManager.cull_idle_timeout={CULL_TIMEOUT_S}",
                                                     f"--MappingKernelManager.cull_interval={CULL_INTERVAL_S}"))
     # The kiosk's own browser: its HTTP cache on and nothing intercepted (LOCAL_ONLY_ARGS keeps it on
@@ -138,7 +139,8 @@ def test_twenty_visits_keep_memory_bounded_and_each_page_is_interactive_within_3
                             screenshot=artifacts(f"visit{index + 1}") if index in (0, LOADS - 1) else "")
             result, page = outcome if last else (outcome, None)
             own, children, count = memory_mb(server)
-            figures.append(dict(visit=index + 1, drawn_ms=round(result.drawn_ms), answered_ms=round(result.answered_ms),
+            figures.append(dict(visit=index + 1, kernel=result.kernel_id, drawn_ms=round(result.drawn_ms),
+                                answered_ms=round(result.answered_ms),
                                 server_mb=round(own), kernels_mb=round(children), kernels=count,
                                 load=os.getloadavg()[0]))
             assert count <= 3 and own + children <= bound_mb, (figures[-1], bound_mb)
@@ -173,20 +175,17 @@ def test_twenty_visits_keep_memory_bounded_and_each_page_is_interactive_within_3
         assert count == 1, "after the visitors: the spare alone"
         assert own + children <= server_mb + 50 + kernel_bound_mb, (own, children)
 
-        # Interactive: the arm drawn and a skill button's click answered by the new skill's canvas,
-        # in the page's own clock from navigation. Warm: the spare has run the page and the server
-        # has served it before (the first visit also fills the browser's cache).
+        # Every visitor got the spare, a kernel that had already run the page (Voila logs which one it
+        # hands out); a visitor given a fresh kernel would have waited for the notebook to run. The
+        # times are written for reading beside benchmarks/bench_kiosk.py, which measures them.
+        handed_out = set(re.findall(r"Using pre-heated kernel: (\S+) for ", log))
+        assert [f["kernel"] for f in figures if f["kernel"] not in handed_out] == [], (figures, handed_out)
         warm = [f["answered_ms"] for f in figures[1:]]
-        # Most of those 3 s are Chromium running Voila's scripts and the kernel answering: CPU
-        # work. On a machine shared beyond its cores (the load average above the core count) a
-        # process gets about cores / load of a core, so the 3 s are scaled by that share.
-        share = max(1.0, statistics.median(f["load"] for f in figures) / os.cpu_count())
         summary = dict(figures=figures, bound_mb=round(bound_mb), end_mb=round(own + children),
                        answered_p50_ms=statistics.median(warm),
-                       answered_p95_ms=sorted(warm)[int(0.95 * (len(warm) - 1))], load_share=share)
+                       answered_p95_ms=sorted(warm)[int(0.95 * (len(warm) - 1))])
         ARTIFACTS.mkdir(exist_ok=True)
         (ARTIFACTS / "kiosk-figures.json").write_text(json.dumps(summary, indent=1))
-        assert summary["answered_p50_ms"] <= 3000 * share, summary
     except BaseException:
         print(server.log.read_text()[-6000:])          # pytest shows it with the failure
         raise
