@@ -246,12 +246,13 @@ class _Closing:
     def __init__(self, canvases, close: Callable[[], None], loop):
         self.canvases, self._close, self._loop = canvases, close, loop
         self._fallback = None
+        self._receipt = 0
         self.closed = False
 
     def start(self) -> None:
         self._fallback = self._loop.call_later(max(CLOSE_FALLBACK_S, _Queue.drained_in() + CLOSE_MARGIN_S),
-                                               self._finish)
-        RECEIPTS.request(self._on_drawn)
+                                               self._timed_out)
+        self._receipt = RECEIPTS.request(self._on_drawn)
 
     def _still_sending(self, number: int) -> bool:
         """Whether a canvas of the view got a chunk after receipt ``number`` was queued, or will get more."""
@@ -268,9 +269,14 @@ class _Closing:
             return
         if self._still_sending(number):
             # Drawn up to a point this view's canvases have gone past: ask again, behind what came since.
-            RECEIPTS.request(self._on_drawn)
+            self._receipt = RECEIPTS.request(self._on_drawn)
             return
         self._finish()
+
+    def _timed_out(self) -> None:
+        self._finish()
+        # The pages that never answered are gone (closed, reloaded): they hold no later close back.
+        RECEIPTS.give_up(self._receipt)
 
     def _finish(self) -> None:
         if self.closed:

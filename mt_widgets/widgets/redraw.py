@@ -20,6 +20,8 @@ from contextlib import contextmanager
 import ipycanvas
 from ipycanvas import hold_canvas
 
+from .pages import PAGES, current_page
+
 
 def _manager():
     # A private name of ipycanvas 0.14 (pinned below 0.15 in pyproject.toml), read at each use: a
@@ -59,6 +61,8 @@ def repaint_on_new_view(layer, paint: Callable[[], None]) -> None:
         raise TypeError(f"layer: expected an ipycanvas Canvas, got {type(layer).__name__}")
 
     def _on_client_ready():
+        # The page that made this model shows the kernel's widgets: closes of retired views wait for it.
+        PAGES.seen(current_page())
         with drawing_batch():
             paint()
 

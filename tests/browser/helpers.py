@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import time
 from contextlib import contextmanager
 
 import numpy as np
@@ -231,3 +232,22 @@ def mark_canvases(page) -> None:
 def wait_for_new_canvases(page) -> None:
     page.wait_for_function("() => { const all = document.querySelectorAll('canvas');"
                            " return all.length === 2 && [...all].every(c => !c.dataset.old); }", timeout=10_000)
+
+
+def watch_kernel_traffic(page, log: list) -> None:
+    """Appends (time.monotonic(), "sent" or "received", payload bytes) for every frame of the
+    page's websockets."""
+    def on_socket(socket):
+        def keep(direction):
+            def record(payload):
+                data = payload.encode() if isinstance(payload, str) else bytes(payload)
+                log.append((time.monotonic(), direction, data))
+            return record
+        socket.on("framesent", keep("sent"))
+        socket.on("framereceived", keep("received"))
+    page.on("websocket", on_socket)
+
+
+def model_errors(console) -> list[str]:
+    """The console's messages about a command for a widget model the page no longer has."""
+    return [text for text in console if "not found" in text.lower() or "could not find model" in text.lower()]

@@ -19,12 +19,14 @@ from .helpers import (
     OKABE,
     ee_pixel,
     mark_canvases,
+    model_errors,
     open_demo,
     reference,
     set_guidance,
     teach_by_numbers,
     wait_for_color,
     wait_for_new_canvases,
+    watch_kernel_traffic,
 )
 
 pytestmark = pytest.mark.browser
@@ -36,20 +38,6 @@ CPU_SLOWDOWN = 20
 CLOSED_WITHIN_S = 20.0
 
 
-def watch_kernel_traffic(page, log: list) -> None:
-    """Appends (time.monotonic(), "sent" or "received", payload bytes) for every frame of the
-    page's websockets."""
-    def on_socket(socket):
-        def keep(direction):
-            def record(payload):
-                data = payload.encode() if isinstance(payload, str) else bytes(payload)
-                log.append((time.monotonic(), direction, data))
-            return record
-        socket.on("framesent", keep("sent"))
-        socket.on("framereceived", keep("received"))
-    page.on("websocket", on_socket)
-
-
 def closes_after(log, since: float) -> int:
     return sum(1 for at, direction, data in log
                if at >= since and direction == "received" and b'"comm_close"' in data)
@@ -59,11 +47,6 @@ def receipts_after(log, since: float) -> int:
     """Pictures the page sent back to the kernel (only the receipt canvas syncs its image data)."""
     return sum(1 for at, direction, data in log
                if at >= since and direction == "sent" and b'"image_data"' in data)
-
-
-def model_errors(console) -> list[str]:
-    """The console's messages about a command for a widget model the page no longer has."""
-    return [text for text in console if "not found" in text.lower() or "could not find model" in text.lower()]
 
 
 def test_a_lagging_browser_draws_the_new_view_and_the_retired_one_is_closed_after_its_receipt(

@@ -12,7 +12,8 @@ from ipycanvas import Canvas
 from ipycanvas.canvas import _CANVAS_MANAGER
 from PIL import Image
 
-from mt_widgets.widgets import animation
+from mt_widgets.widgets import animation, receipt, redraw
+from mt_widgets.widgets.pages import Pages as KnownPages
 from mt_widgets.widgets.receipt import Receipts, number_colour, png_number
 
 
@@ -59,7 +60,7 @@ def picture_of(number: int, mode="RGBA") -> bytes:
 def kernel(monkeypatch):
     """A kernel's loop, fresh receipts, and every canvas message sent."""
     loop = RecordingLoop()
-    receipts = Receipts()
+    receipts = Receipts(KnownPages())
     sent = []
     monkeypatch.setattr(animation, "kernel_loop", lambda: loop)
     monkeypatch.setattr(animation, "RECEIPTS", receipts)
@@ -167,3 +168,96 @@ def test_without_a_kernel_retire_still_closes_at_once():
     view = Canvas(width=10, height=10)
     animation.retire(view)
     assert view.comm is None
+
+
+class Pages:
+    """Which page (kernel session) the kernel hears from: the header's session of the message handled."""
+
+    def __init__(self, monkeypatch):
+        self.now = None
+        monkeypatch.setattr(receipt, "current_page", lambda: self.now)
+
+    def opens(self, receipts, page):
+        self.now = page
+        page_opens(receipts)
+
+    def answers(self, receipts, page, number):
+        self.now = page
+        page_answers(receipts, number)
+
+
+def test_with_two_tabs_a_retired_canvas_closes_only_once_both_have_answered(kernel, monkeypatch):
+    # One notebook open in two tabs on one kernel: each tab runs its own command chain at its own pace.
+    loop, receipts, _ = kernel
+    pages = Pages(monkeypatch)
+    view = Canvas(width=10, height=10)
+    animation.retire(view)
+    pages.opens(receipts, "fast tab")
+    pages.opens(receipts, "slow tab")
+    number = receipts.issued
+    pages.answers(receipts, "fast tab", number)
+    assert view.comm is not None      # the slow tab may still hold commands for it
+    loop.due(animation.CLOSE_MARGIN_S)
+    assert view.comm is not None
+    pages.answers(receipts, "slow tab", number)
+    assert view.comm is None
+
+
+def test_a_tab_that_is_gone_holds_one_close_back_to_its_fallback_and_no_later_one(kernel, monkeypatch):
+    loop, receipts, _ = kernel
+    pages = Pages(monkeypatch)
+    first = Canvas(width=10, height=10)
+    animation.retire(first)
+    pages.opens(receipts, "closed tab")
+    pages.opens(receipts, "open tab")
+    pages.answers(receipts, "open tab", receipts.issued)
+    assert first.comm is not None
+    (fallback,) = [handle for handle in loop.calls if not handle.called]
+    loop.due(fallback.delay)          # the closed tab never answers: the fallback closes
+    assert first.comm is None and receipts.pages.live == ("open tab",)
+    second = Canvas(width=10, height=10)
+    animation.retire(second)
+    pages.answers(receipts, "open tab", receipts.issued)
+    assert second.comm is None        # the open tab's answer is enough now
+    # A tab thought gone that answers again is waited for again.
+    pages.answers(receipts, "closed tab", receipts.issued)
+    third = Canvas(width=10, height=10)
+    animation.retire(third)
+    pages.answers(receipts, "open tab", receipts.issued)
+    assert third.comm is not None
+    pages.answers(receipts, "closed tab", receipts.issued)
+    assert third.comm is None
+
+
+def test_a_page_picture_is_not_echoed_to_the_other_pages(kernel):
+    # Echoed, the fast tab's picture would reach the slow tab's model, and the slow tab's own equal
+    # picture would then be no change there: never sent.
+    _, receipts, _ = kernel
+    animation.retire(Canvas(width=10, height=10))
+    sent = []
+    receipts.canvas._send = lambda message, buffers=None: sent.append(message)
+    page_answers(receipts, receipts.issued)
+    assert not [message for message in sent if message.get("method") == "echo_update"], sent
+
+
+def test_a_tab_known_from_its_views_is_waited_for_before_it_has_made_its_receipt_canvas(kernel, monkeypatch):
+    # A lagging tab makes its model of the receipt canvas (made at the first retire) late: after the fast
+    # tab has answered. It is known from its models of the views' canvases, made long before.
+    loop, receipts, _ = kernel
+    pages = Pages(monkeypatch)
+    monkeypatch.setattr(redraw, "PAGES", receipts.pages)
+    monkeypatch.setattr(redraw, "current_page", lambda: pages.now)
+    layer = Canvas(width=10, height=10)
+    redraw.repaint_on_new_view(layer, lambda: None)
+    for tab in ("fast tab", "slow tab"):
+        pages.now = tab
+        layer._handle_frontend_event(None, {"event": "client_ready"}, [])
+    animation.retire(layer)
+    pages.opens(receipts, "fast tab")
+    pages.answers(receipts, "fast tab", receipts.issued)
+    assert layer.comm is not None
+    pages.opens(receipts, "slow tab")   # at last: a fresh receipt, which both tabs answer
+    pages.answers(receipts, "fast tab", receipts.issued)
+    assert layer.comm is not None
+    pages.answers(receipts, "slow tab", receipts.issued)
+    assert layer.comm is None
