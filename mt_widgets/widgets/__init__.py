@@ -36,7 +36,8 @@ from .theme import DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, Theme, 
 # (``mt_widgets.widgets.theme``, ``.legend``, ``.redraw``, ``.animation``, ...), imported from there.
 __all__ = [
     "DEFAULT_THEME", "PAPER_THEME", "PAPER_UARM_THEME", "THEMES", "ArmView", "DemoPage",
-    "DemonstrationRecord", "EffortProgress", "EpisodeController", "EpisodeResult", "EpisodeWidget", "GuidancePanel", "ReproductionPlayer",
+    "DemonstrationRecord", "EffortProgress", "EpisodeController", "EpisodeResult", "EpisodeWidget", "GuidancePanel",
+    "ReproductionPlayer",
     "RobotPainter", "TeachingCanvas", "Theme", "ViewTransform", "draw_arrow", "get_theme", "painter_for",
     "play_frames", "retire", "stop_animations", "SpaceTeachingCanvas",
 ]

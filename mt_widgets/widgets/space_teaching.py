@@ -27,7 +27,6 @@ drawn in space).
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import replace
 
 import numpy as np
