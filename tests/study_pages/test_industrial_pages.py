@@ -76,3 +76,43 @@ def test_the_online_page_builds_the_3d_canvas_for_industrial_sim_and_moves_on_af
     continue_button.disabled = False   # enabled once the reproduction has played (a timer in a kernel)
     continue_button.click()
     assert page.session.current_step().kind == "phase_intro" and page.session.current_step().phase == "P2"
+
+
+def test_a_new_kernel_resumes_a_3d_episode_mid_way_from_the_log(tmp_path):
+    # A reload in Voila is a new kernel: the page rebuilds the episode from the log, on the UR5 as on a planar arm.
+    def lab_page():
+        page = LabStudyPage("industrial-sim", tmp_path / "logs", "", experimenter_code="s3cret")
+        page.unlock("s3cret")
+        page.app.experimenter.participant.value = "I02"
+        return page
+    first = lab_page()
+    first.app.experimenter.start_button.click()
+    indices, followed = [], []
+    while not ((step := first.session.current_step()).kind == "demonstration" and step.episode == 2
+               and step.index == 2):
+        shown = first.app.participant_view.episode
+        if step.kind == "demonstration" and not any(shown is seen for seen in followed):
+            followed.append(shown)
+            shown.on_demonstration(lambda record: indices.append((record.episode_index, record.index)))
+        act(first.app.participant_view)
+    # Every 3-D demonstration carried its episode's index (0-based, the log's episode - 1), not 0 for all.
+    logged = [e for e in first.session.events if e["type"] == "demonstration"]
+    assert indices == [(e["episode"] - 1, e["index"]) for e in logged] and indices[-1] == (1, 1)
+    given = [e["action"] for e in logged[-2:]]
+    first.session.close()                                   # the old kernel ends
+    again = lab_page()
+    again.app.experimenter.resume_button.click()
+    assert again.session is not None, again.app.experimenter.message.value
+    episode = again.app.participant_view.episode
+    assert isinstance(episode.teaching, SpaceTeachingCanvas) and episode.episode is step_episode(again)
+    np.testing.assert_allclose(episode.demonstrations, given)
+    assert episode.state_index == 2 and episode.phase == "teaching" and episode.progress.demonstrations_done == 2
+    assert "State 3 of 4" in episode.teaching.describe()
+    step = again.session.current_step()
+    record = episode.demonstrate(SKILLS[step.skill].target_actions(step.state[None])[0])
+    assert record.index == 2 and record.episode_index == 1
+    assert again.session.events[-1]["type"] == "demonstration" and again.session.events[-1]["index"] == 2
+
+
+def step_episode(page):
+    return page.session.current_step().teaching_episode
