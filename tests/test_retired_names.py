@@ -18,6 +18,12 @@ RETIRED = [
     ("mt_widgets.widgets", "ConfirmedAction"),
     ("mt_widgets.widgets.teaching", "ConfirmedAction"),
     ("mt_widgets.study.session", "Session._record_logged_actions"),
+    # One teaching episode (issue 41): one EpisodeWidget and one EpisodeController serve every arm; no
+    # page asks whether a plant is drawn in space (the widget draws it as its drawing says).
+    ("mt_widgets.widgets", "SpaceEpisodeWidget"),
+    ("mt_widgets.widgets", "drawn_in_space"),
+    ("mt_widgets.widgets.teaching", "TeachingCanvas._record"),
+    ("mt_widgets.widgets.teaching", "InputTiming"),
 ]
 
 

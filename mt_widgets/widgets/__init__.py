@@ -1,8 +1,10 @@
 """Teaching widgets (ipycanvas + ipywidgets): draw demonstrations, see guidance, watch the robot.
 
-- ``EpisodeWidget``: a whole episode (the three-line entry point); ``SpaceEpisodeWidget`` the same
-  for a plant drawn in space (the UR5), ``drawn_in_space(skill)`` says which a skill needs.
-- ``TeachingCanvas``: query states one after another, an arrow drawn at each.
+- ``EpisodeWidget``: a whole episode (the three-line entry point), for every arm: planar or in
+  space (the UR5), as the plant's drawing says; its state machine is one ``EpisodeController``
+  (``mt_widgets.widgets.episode_controller``: no widget library, tested without a kernel).
+- ``TeachingCanvas``: query states one after another, an arrow drawn at each (the planar view);
+  ``SpaceTeachingCanvas`` the same in three linked views of a plant drawn in space.
 - ``ArmView``: the workspace, target and robot on layered canvases.
 - ``ReproductionPlayer``: the learnt skill's rollout as an animation.
 - ``DemoPage``: the visitors' one-click page (skill chooser, guidance switch, try again).
@@ -20,11 +22,11 @@ from .arrows import draw_arrow
 from .coords import ViewTransform
 from .demo import DemoPage
 from .episode import DemonstrationRecord, EpisodeResult, EpisodeWidget
+from .episode_controller import EpisodeController
 from .guidance import GuidancePanel
 from .progress import EffortProgress
 from .reproduction import ReproductionPlayer
 from .robots import RobotPainter, painter_for
-from .space_episode import SpaceEpisodeWidget, drawn_in_space
 from .space_teaching import SpaceTeachingCanvas
 from .teaching import TeachingCanvas
 from .theme import DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, Theme, get_theme
@@ -34,8 +36,8 @@ from .theme import DEFAULT_THEME, PAPER_THEME, PAPER_UARM_THEME, THEMES, Theme, 
 # (``mt_widgets.widgets.theme``, ``.legend``, ``.redraw``, ``.animation``, ...), imported from there.
 __all__ = [
     "DEFAULT_THEME", "PAPER_THEME", "PAPER_UARM_THEME", "THEMES", "ArmView", "DemoPage",
-    "DemonstrationRecord", "EffortProgress", "EpisodeResult", "EpisodeWidget", "GuidancePanel", "ReproductionPlayer",
+    "DemonstrationRecord", "EffortProgress", "EpisodeController", "EpisodeResult", "EpisodeWidget", "GuidancePanel",
+    "ReproductionPlayer",
     "RobotPainter", "TeachingCanvas", "Theme", "ViewTransform", "draw_arrow", "get_theme", "painter_for",
     "play_frames", "retire", "stop_animations", "SpaceTeachingCanvas",
-    "SpaceEpisodeWidget", "drawn_in_space",
 ]

@@ -2,9 +2,10 @@
 
 ``notebooks/demo.ipynb`` shows a ``DemoPage`` and nothing else, so Voila (or Binder with
 ``?urlpath=voila/render/notebooks/demo.ipynb``) gives a one-click page. The page only
-composes ``EpisodeWidget`` (``SpaceEpisodeWidget`` for a skill whose plant is drawn in space,
-``drawn_in_space``): choosing an arm or a skill, switching guidance or asking for new states
-starts a fresh episode; the teaching error comes from the episode's result.
+composes ``EpisodeWidget``, for every arm (it draws a plant in space in 3-D itself): choosing an
+arm or a skill, switching guidance or asking for new states starts a fresh episode (a guidance
+switch keeps the arrows given so far, on any arm); the teaching error comes from the episode's
+result.
 
 The visitor picks the arm first (``DEMO_ARMS``: the paper's planar arms, or the UR5 in 3-D); the
 skill chooser then offers that arm's skills.
@@ -20,7 +21,6 @@ from mt_widgets.core.validation import as_bool
 from .animation import retire
 from .episode import EpisodeResult, EpisodeWidget
 from .looks import plain, shared_layout, shared_style
-from .space_episode import SpaceEpisodeWidget, drawn_in_space
 
 #: The four skills of the paper, as a visitor reads them on the chooser.
 DEMO_SKILLS = (
@@ -42,9 +42,6 @@ DEMO_ARMS = (
     ("Planar arms", DEMO_SKILLS),
     ("UR5 arm (3-D)", UR5_DEMO_SKILLS),
 )
-
-#: Options of ``EpisodeWidget`` that a 3-D episode takes too (the others are the planar views').
-_SPACE_OPTIONS = ("lam", "theme", "duration")
 
 WELCOME = (
     "<h2 style='margin:2px 0'>Teach a robot by showing it what to do</h2>"
@@ -90,7 +87,7 @@ class DemoPage(VBox):
         arms: (label, skills) pairs for the arm chooser, ``skills`` as above; default ``DEMO_ARMS``
             (the paper's planar arms, the UR5 in 3-D) when ``skills`` is not given.
         episode_options: Further keyword arguments for every ``EpisodeWidget`` (e.g. ``duration``;
-            a 3-D episode takes ``lam``, ``theme`` and ``duration`` of them).
+            the planar views' own, such as ``ghost``, do not change a 3-D episode).
     """
 
     def __init__(self, skill: str | None = None, guidance: bool = True, seed: int = 0, skills=None, arms=None,
@@ -167,7 +164,7 @@ class DemoPage(VBox):
             self._switching_arm = False
         self.start_episode()
 
-    def start_episode(self, new_states: bool = False, keep=None) -> EpisodeWidget | SpaceEpisodeWidget:
+    def start_episode(self, new_states: bool = False, keep=None) -> EpisodeWidget:
         """Replace the episode with a fresh one for the chosen skill and guidance setting.
 
         ``keep``: (k, R) demonstrations already given on the same states, shown as given (the
@@ -180,14 +177,8 @@ class DemoPage(VBox):
             # The page's own widgets move to the next episode.
             shown.next_actions.children = []
         skill = self.skills[self.skill_chooser.value]
-        if drawn_in_space(skill):
-            # The plant is drawn in space: the 3-D episode (which keeps no arrows across a switch).
-            options = {name: value for name, value in self.episode_options.items() if name in _SPACE_OPTIONS}
-            self.episode = SpaceEpisodeWidget(skill, seed=self.seed, guidance=self.guidance_switch.value,
-                                              on_finished=self._on_finished, **options)
-        else:
-            self.episode = EpisodeWidget(skill, seed=self.seed, guidance=self.guidance_switch.value,
-                                         demonstrations=keep, on_finished=self._on_finished, **self.episode_options)
+        self.episode = EpisodeWidget(skill, seed=self.seed, guidance=self.guidance_switch.value,
+                                     demonstrations=keep, on_finished=self._on_finished, **self.episode_options)
         self.episode.next_actions.children = [self.result_line, self.new_states_button]
         self.episode_slot.children = [self.episode]
         if shown is not None:
@@ -201,14 +192,14 @@ class DemoPage(VBox):
         """Guidance on or off: the same states again, with every arrow confirmed so far (and the one
         drawn) kept, and a word saying so; after a finished episode, a fresh one."""
         old = self.episode
-        if not isinstance(old, EpisodeWidget) or old.phase == "finished" or not old.demonstrations:
+        if old is None or old.phase == "finished" or not old.demonstrations:
             self.start_episode()
             return
         kept = [list(a) for a in old.demonstrations]
-        pending = old.teaching.pending_action
+        pending = old.pending_action if old.phase == "teaching" else None
         episode = self.start_episode(keep=kept)
         if pending is not None and episode.phase == "teaching":
-            episode.teaching.set_action(pending, method="code")
+            episode.set_action(pending, method="code")
         n = len(kept)
         self.result_line.value = (f"<div style='margin:6px 0;max-width:400px'>Guidance is now "
                                   f"{'on' if self.guidance_switch.value else 'off'}; your {n} "

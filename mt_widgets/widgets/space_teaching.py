@@ -17,13 +17,16 @@ reproduction plays in all three panels: every frame is sent with ``canvas.sleep`
 (``animation.play_frames``), as the planar views do.
 
 Like every view here it holds no science: what it draws comes from the ``TeachingEpisode`` and the
-plant's ``drawing()`` / ``sketch()``; it never asks which robot it draws.
+plant's ``drawing()`` / ``sketch()``; it never asks which robot it draws. Nor does it hold the
+episode's state machine: that is the ``EpisodeController`` (``canvas.controller``,
+episode_controller.py) the planar ``TeachingCanvas`` renders too; this canvas takes input, hands
+it to the controller and draws what the controller says (``EpisodeWidget`` shows it for a plant
+drawn in space).
 """
 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import replace
 
 import numpy as np
@@ -37,8 +40,8 @@ from ..core.validation import as_bool
 from ..core.workspace import Box
 from .animation import frame_times, play_frames, sample_at, stop_animation
 from .arrows import draw_arrow_pair
-from .callbacks import Callbacks
 from .canvas_access import FINGER_RADIUS_CSS_PX, CanvasDescription
+from .episode_controller import EpisodeController
 from .legend import _arrow_svg, _dot_svg, _entry, _line_svg
 from .pointer_drag import ARROW_KEY_SIGNS, PointerDrag, confirm_or_clear
 from .redraw import drawing_batch, repaint_on_new_view
@@ -129,6 +132,9 @@ class SpaceTeachingCanvas(VBox):
         grab_radius: pixels around the tool (and an arrow's tip) where a mouse press starts a drag; a
             finger gets at least a 48 CSS px target.
         play: play the reproduction when the last demonstration is confirmed.
+        controller: the ``EpisodeController`` to render (an episode widget's): ``skill`` is then its
+            episode, ``guidance`` and ``play`` are the controller's (its ``guidance`` and
+            ``reproduce``). None: the canvas makes its own.
 
     Attributes:
         episode: the ``TeachingEpisode`` the demonstrations go to (the one place they live).
@@ -138,7 +144,13 @@ class SpaceTeachingCanvas(VBox):
     """
 
     def __init__(self, skill, query_states=None, *, seed=None, theme=None, guidance: bool = True,
-                 panel_size: int = 260, grab_radius: float = 22.0, play: bool = True):
+                 panel_size: int = 260, grab_radius: float = 22.0, play: bool = True,
+                 controller: EpisodeController | None = None):
+        if controller is not None:
+            if not isinstance(controller, EpisodeController):
+                raise TypeError(f"controller: expected an EpisodeController, got {type(controller).__name__}")
+            if skill is not controller.episode:
+                raise ValueError("skill: expected the controller's episode with a controller")
         self.episode = _as_episode(skill, query_states, seed)
         self.skill = self.episode.skill
         drawing = self.skill.plant.drawing()
@@ -149,8 +161,14 @@ class SpaceTeachingCanvas(VBox):
             raise ValueError(f"skill: expected a plant with 3 action components, got {self.skill.plant.action_dim}")
         self.drawing = drawing
         self.theme = get_theme(theme)
-        self.guidance = as_bool("guidance", guidance)
-        self.play_on_complete = as_bool("play", play)
+        made_here = controller is None
+        if made_here:
+            controller = EpisodeController(self.episode, guidance=as_bool("guidance", guidance),
+                                           reproduce=as_bool("play", play))
+        #: The episode's state machine (episode_controller.py); this canvas draws it.
+        self.controller = controller
+        self.guidance = controller.guidance
+        self.play_on_complete = controller.reproduce
         if isinstance(panel_size, bool) or not isinstance(panel_size, int) or panel_size < 120:
             raise ValueError(f"panel_size: expected an int of at least 120 pixels, got {panel_size!r}")
         self.panel_size = panel_size
@@ -158,20 +176,13 @@ class SpaceTeachingCanvas(VBox):
         perspective = drawing.projection("perspective")
         self.azimuth_deg, self.elevation_deg = perspective.azimuth_deg, perspective.elevation_deg
         self.action_length = drawing.action_length or 0.1 * float(np.max(drawing.bounds.high - drawing.bounds.low))
-        self.pending_action: np.ndarray | None = None
         self.active_component = "x"
-        self.showing_guidance = False
         self.animation = None
         self._drag = None  # what the pointer's drag moves: ("arrow", panel name) or ("orbit", last pointer)
         # An orbit goes on while guidance is shown; an arrow's drag ends when input stops being accepted.
         self._pointer = PointerDrag(self._press, lambda pointer: self._drag_to(pointer, final=False),
                                     lambda pointer: self._drag_to(pointer, final=True),
                                     lambda: self._drag is not None and (self._drag[0] == "orbit" or self._accepting()))
-        self._input_started = None
-        self._method = "code"
-        self._redraws = 0
-        self._state_shown_at = time.monotonic()
-        self._confirm_callbacks = Callbacks()
 
         size = 2 * panel_size
         self.canvas = MultiCanvas(2, width=size, height=size, layout=Layout(width="100%", max_width=f"{size}px",
@@ -215,18 +226,32 @@ class SpaceTeachingCanvas(VBox):
         self.add_class("mt-focus")
         for name, layer in self._layers.items():
             repaint_on_new_view(layer, lambda name=name: self._repaint(name))
+        controller.observe(self._on_event)
         self._redraw_scene()
-        self._redraw_robot()
-        self._update_words()
+        if made_here:
+            controller.resume()   # the episode as it stands (a resumed one: its demonstrations given)
+        else:
+            self._redraw_robot()
+            self._update_words()
 
     # -- public API ------------------------------------------------------------------------------------
     @property
     def current_state(self) -> np.ndarray | None:
-        """The query state being demonstrated, or None when all are done."""
-        index = self.episode.next_index
-        if self.showing_guidance:
-            index = len(self.episode.demonstrations) - 1
-        return None if index is None else self.episode.query_states[index]
+        """The query state shown (awaiting a demonstration, or its guidance shown), or None when all are done."""
+        return self.controller.current_state
+
+    @property
+    def pending_action(self) -> np.ndarray | None:
+        """The action drawn but not confirmed, (3,) floats (the confirmed one while guidance is shown), or None."""
+        return self.controller.pending_action
+
+    @property
+    def showing_guidance(self) -> bool:
+        """Whether the optimal arrow of the last confirmed demonstration is shown (the controller's pause)."""
+        return self.controller.phase == "guidance"
+
+    def _shown_index(self) -> int | None:
+        return None if self.current_state is None else self.controller.state_index
 
     def panel(self, name: str) -> _Panel:
         """The panel called ``name`` (one of ``SPACE_VIEWS``): its ``pixels(points)`` maps world points."""
@@ -239,23 +264,23 @@ class SpaceTeachingCanvas(VBox):
         return self.panel(name).pixels(self._tool())
 
     def on_confirm(self, callback, remove: bool = False) -> None:
-        """``callback(demonstration)`` after each confirmed demonstration is recorded."""
-        self._confirm_callbacks.register_callback(callback, remove)
+        """``callback(demonstration)`` at each confirmation, before it is recorded (the controller's
+        ``on_demonstration``: an error keeps the arrow pending and unrecorded)."""
+        self.controller.on_demonstration(callback, remove)
 
     def set_action(self, action, method: str = "code") -> None:
         """Draw ``action`` (3 finite numbers) as the pending arrow (not yet confirmed)."""
         action = check_space_action(action)
         if self.current_state is None or self.showing_guidance:
             raise RuntimeError("set_action: no query state awaits a demonstration")
-        self._note_input(method)
-        self.pending_action = action
+        self.controller.hold(action, method)
         self._after_change(final=True)
 
     def clear_action(self) -> None:
         if self.showing_guidance:
             return
         self._end_arrow_drag()   # Escape mid-drag: the pointer still moving must not redraw it
-        self.pending_action = None
+        self.controller.clear()
         self._after_change(final=True)
 
     def confirm(self) -> Demonstration:
@@ -265,34 +290,22 @@ class SpaceTeachingCanvas(VBox):
         # Enter mid-drag: the drag ends with the confirmation, so the still pressed pointer cannot
         # change the confirmed arrow or draw one at the next state.
         self._end_arrow_drag()
-        now = time.monotonic()
-        started = self._input_started
-        demonstration = self.episode.analyse(
-            self.pending_action, method=self._method,
-            time_to_first_input_s=None if started is None else started - self._state_shown_at,
-            drawing_duration_s=None if started is None else now - started, redraws=self._redraws,
-            confirmed_at=time.time(), guidance_shown=self.guidance)
-        self.episode.record(demonstration)
-        self._confirm_callbacks(demonstration)
-        if self.guidance:
-            self.showing_guidance = True
-            self._redraw_robot()
-            self._update_words()
-        else:
-            self.advance()
-        return demonstration
+        return self.controller.confirm()
 
     def advance(self) -> None:
-        """Leave the guidance and show the next query state (or play the reproduction when complete)."""
-        self.showing_guidance = False
-        self.pending_action = None
-        self._input_started, self._method, self._redraws = None, "code", 0
-        self._state_shown_at = time.monotonic()
-        for entry in self.entries:  # empty fields: "Set arrow" never re-applies the previous state's numbers
-            entry.value = 0.0
-        if self.episode.complete and self.play_on_complete:
+        """Leave the guidance: the next query state (or the reproduction when complete)."""
+        self.controller.next()
+
+    def _on_event(self, event: str) -> None:
+        """What the controller says (episode_controller.EVENTS), drawn."""
+        if event == "recorded":
+            return
+        if event == "state":
+            for entry in self.entries:  # empty fields: "Set arrow" never re-applies the previous state's numbers
+                entry.value = 0.0
+        if event == "reproduce" and self.play_on_complete:
             self.play()
-        else:
+        elif event != "finished":
             self._redraw_robot()
         self._update_words()
 
@@ -461,7 +474,7 @@ class SpaceTeachingCanvas(VBox):
         sketch = self.skill.plant.sketch(state[None])
         chain = sketch.chain[0]
         tool = chain[-1]
-        index = len(self.episode.demonstrations) - 1 if self.showing_guidance else self.episode.next_index
+        index = self._shown_index()
         user = optimal = None
         if self.showing_guidance:
             user = self.episode.demonstrations[index].action
@@ -539,10 +552,10 @@ class SpaceTeachingCanvas(VBox):
             goal = " " + fill_words("The goal is {target}.", target=self.theme.target_words(self.skill.target))
         head = (f"Three views of the robot: from the top, from the side and in 3-D (turned "
                 f"{self.azimuth_deg:.0f} degrees round, {self.elevation_deg:.0f} up).{goal}")
-        if self.episode.complete and not self.showing_guidance:
+        if self.current_state is None:
             played = " The robot replays what it learnt in all three views." if self.animation is not None else ""
             return f"{head} All {self.episode.n_states} demonstrations given.{played}"
-        index = len(self.episode.demonstrations) - 1 if self.showing_guidance else self.episode.next_index
+        index = self._shown_index()
         x, y, z = self._tool()
         words = (f"{head} State {index + 1} of {self.episode.n_states}: the robot's hand is at x {x:.2f}, "
                  f"y {y:.2f}, height {z:.2f} {units}.")
@@ -558,12 +571,6 @@ class SpaceTeachingCanvas(VBox):
         return words
 
     # -- input ----------------------------------------------------------------------------------------
-    def _note_input(self, method: str) -> None:
-        if self._input_started is None and method != "code":
-            self._input_started = time.monotonic()
-        self._method = method
-        self._redraws += 1
-
     def _accepting(self) -> bool:
         return self.current_state is not None and not self.showing_guidance
 
@@ -605,7 +612,7 @@ class SpaceTeachingCanvas(VBox):
                                f"or side view.</small>")
             return False
         self.hint.value = ""
-        self._note_input("pointer")
+        self.controller.note_input("pointer")
         self._drag = ("arrow", name)
         self._drag_to(pointer, final=False)
         return True
@@ -629,7 +636,7 @@ class SpaceTeachingCanvas(VBox):
             action[0], action[1] = du, dv
         else:
             action[0], action[2] = du, dv
-        self.pending_action = action
+        self.controller.hold(action, None)
         self._after_change(final)
 
     def _on_key_down(self, key, shift_key, ctrl_key, meta_key) -> None:

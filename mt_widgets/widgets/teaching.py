@@ -14,8 +14,11 @@ Input, three ways to the same pending action:
 An arrow can be redrawn any number of times; ``Confirm`` records it as the demonstration
 for the current state, a ``mt_widgets.core.Demonstration`` (the action, how it was given and
 when) kept by the canvas's ``TeachingEpisode`` (``canvas.episode``): the one place it lives.
-Everything observable is a trait: ``state_index``, ``demonstrations`` (the episode's actions,
-in order, written only from the episode) and ``pending_action``. A screen reader reads
+The canvas is the planar view of an ``EpisodeController`` (``canvas.controller``,
+episode_controller.py), which holds the episode's state machine for every arm: the canvas takes
+input, hands it to the controller and draws what the controller says. Everything observable is
+a trait, following the controller: ``state_index``, ``demonstrations`` (the episode's actions,
+in order) and ``pending_action``. A screen reader reads
 the canvas as its ``description`` says: the state, the velocity, the arrow and the guidance.
 """
 
@@ -26,7 +29,6 @@ import math
 import re
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 from ipywidgets import HTML, Button, FloatText, HBox, Layout, ToggleButtons, ToggleButtonsStyle, VBox
@@ -39,6 +41,7 @@ from .arm_view import ArmView
 from .arrows import draw_arrow_pair
 from .callbacks import Callbacks
 from .canvas_access import CanvasDescription
+from .episode_controller import EpisodeController
 from .looks import plain, shared_layout, shared_style
 from .pointer_drag import ARROW_KEY_SIGNS, PointerDrag, confirm_or_clear
 from .redraw import drawing_batch
@@ -51,17 +54,6 @@ READOUT_INTERVAL_S = 0.08
 #: (canvas_access.FINGER_RADIUS_CSS_PX, at most this), so a canvas shown small still gets a
 #: finger-sized target.
 TOUCH_RADIUS_FACTOR = 2.0
-
-
-@dataclass
-class InputTiming:
-    """When the user acted on one query state (``time.monotonic()`` seconds)."""
-
-    shown_at: float
-    first_input_at: float | None = None
-    last_input_at: float | None = None
-    method: str | None = None
-    redraws: int = 0
 
 
 def describe_action(action, units: str) -> str:
@@ -103,6 +95,9 @@ class TeachingCanvas(VBox):
             ``Demonstration`` as ``guidance_shown``; the episode widget shows it).
         episode_index: the episode's index, recorded with each ``Demonstration``.
         width, height, css_width, action_length: As for ``ArmView``.
+        controller: the ``EpisodeController`` to render (an episode widget's); then ``skill`` is
+            its episode and ``query_states``, ``auto_advance``, ``guidance``, ``episode_index``
+            are the controller's (leave them at their defaults). None: the canvas makes its own.
     """
 
     state_index = Int(0, help="Index of the query state shown (== number confirmed; N when done).")
@@ -112,7 +107,12 @@ class TeachingCanvas(VBox):
 
     def __init__(self, skill, query_states=None, theme=None, grab_radius: float = 28.0, auto_advance: bool = True,
                  width=None, height=None, css_width=None, action_length=None, target_label: str | None = "goal",
-                 guidance: bool = False, episode_index: int = 0):
+                 guidance: bool = False, episode_index: int = 0, controller: EpisodeController | None = None):
+        if controller is not None:
+            if not isinstance(controller, EpisodeController):
+                raise TypeError(f"controller: expected an EpisodeController, got {type(controller).__name__}")
+            if skill is not controller.episode or query_states is not None:
+                raise ValueError("skill, query_states: expected the controller's episode and None with a controller")
         if isinstance(skill, TeachingEpisode):
             if query_states is not None:
                 raise ValueError("query_states: expected None when a TeachingEpisode is given (it has its own), "
@@ -129,24 +129,30 @@ class TeachingCanvas(VBox):
         #: The ``TeachingEpisode`` the confirmed demonstrations go to (the one place they live).
         self.episode = episode
         skill, states = episode.skill, episode.query_states
-        self.guidance = as_bool("guidance", guidance)
-        self.episode_index = as_count("episode_index", episode_index, minimum=0)
+        self.auto_advance = as_bool("auto_advance", auto_advance)
+        made_here = controller is None
+        if made_here:
+            controller = EpisodeController(episode, guidance=as_bool("guidance", guidance),
+                                           pause=not self.auto_advance,
+                                           episode_index=as_count("episode_index", episode_index, minimum=0),
+                                           reproduce=False)
+        #: The episode's state machine (episode_controller.py); this canvas draws it.
+        self.controller = controller
+        self.guidance = controller.guidance
+        self.episode_index = controller.episode_index
         self.skill = skill
         #: R, the number of action components.
         self.action_dim = int(skill.plant.action_dim)
         self.query_states = states
         self.grab_radius = float(grab_radius)
-        self.auto_advance = as_bool("auto_advance", auto_advance)
         self.view = ArmView(skill, width=width, height=height, theme=theme, action_length=action_length,
                             css_width=css_width, target_label=target_label)
         self.theme = self.view.theme
-        self._confirm_callbacks = Callbacks()
         self._pointer = PointerDrag(self._press, self._drag_to, lambda pointer: self._drag_to(pointer, final=True),
                                     self._accepting)
         self._last_readout = 0.0
         self._guidance = None
         self._guidance_words = ""
-        self._timing = InputTiming(time.monotonic())
         self._enter_when_locked = Callbacks()
 
         units = skill.action_units
@@ -199,7 +205,11 @@ class TeachingCanvas(VBox):
                                                      layout=shared_layout(max_width="400px"))],
                                 layout=shared_layout(flex_flow="row wrap", align_items="flex-start"))])
         self.add_class("mt-focus")  # a visible focus on each control (canvas_access.py)
-        self._show_given()
+        controller.observe(self._on_event)
+        if made_here:
+            controller.resume()   # the episode as it stands (a resumed one: its demonstrations given)
+        else:
+            self._show_given()
 
     # -- public API ---------------------------------------------------------------------------------
     @property
@@ -214,13 +224,12 @@ class TeachingCanvas(VBox):
     def on_confirm(self, callback: Callable[[Demonstration], None], remove: bool = False) -> None:
         """Register ``callback(demonstration: Demonstration)``, called when an arrow is confirmed.
 
-        Callbacks run before the demonstration is recorded in the episode (and ``demonstrations``),
-        and an exception in one reaches the caller of ``confirm``: the arrow is then not recorded
-        and stays pending, to be confirmed again (a demonstration the study log could not write
-        is not counted). A callback may record it itself (``episode.record``) once its own work
-        succeeded: the canvas then finds it recorded.
+        The controller's ``on_demonstration`` (episode_controller.py): callbacks run before the
+        demonstration is recorded in the episode (and ``demonstrations``), and an exception in
+        one reaches the caller of ``confirm``: the arrow is then not recorded and stays pending,
+        to be confirmed again (a demonstration the study log could not write is not counted).
         """
-        self._confirm_callbacks.register_callback(callback, remove=remove)
+        self.controller.on_demonstration(callback, remove=remove)
 
     def on_enter_when_locked(self, callback: Callable[[], None], remove: bool = False) -> None:
         """Register ``callback()``, called when Enter is pressed on the canvas while input is locked
@@ -235,24 +244,22 @@ class TeachingCanvas(VBox):
 
     def set_action(self, action, method: str = "code") -> None:
         """Draw ``action`` (R,) in ``action_units`` as the pending arrow at the current state."""
-        try:
-            u = np.array(action, dtype=float).reshape(-1)
-        except (TypeError, ValueError):
-            u = None
-        if u is None or u.shape != (self.action_dim,) or not np.all(np.isfinite(u)):
-            raise ValueError(f"action: expected {self.action_dim} finite numbers in {self.skill.action_units}, "
-                             f"got {action!r}")
         if self.current_state is None:
             raise RuntimeError("set_action: every query state already has a demonstration")
-        self._note_input(method)
-        self.pending_action = [float(c) for c in u]
+        self._hold(action, method)
         self._draw_arrows()
         self._update_readout()
         self._sync_entries()
 
+    def _hold(self, action, method: str | None) -> None:
+        """The pending arrow, given to the controller (which checks it) and shown in the trait."""
+        u = self.controller.hold(action, method)
+        self.pending_action = [float(c) for c in u]
+
     def clear_action(self) -> None:
         """Remove the pending (unconfirmed) arrow."""
         self._pointer.cancel()  # Escape mid-drag: the pointer still moving must not redraw it
+        self.controller.clear()
         self.pending_action = None
         self._draw_arrows()
         self._update_readout()
@@ -262,34 +269,14 @@ class TeachingCanvas(VBox):
         """Record the pending arrow as the demonstration at the current state; returns its ``Demonstration``."""
         if self.locked:
             raise RuntimeError("confirm: input is locked (guidance is shown or the episode is over)")
-        if self.pending_action is None or self.current_state is None:
-            raise RuntimeError("confirm: draw an arrow first (pending_action is None)")
         # Enter mid-drag: the drag ends with the confirmation, so later moves of the still
         # pressed pointer cannot change the confirmed arrow or draw one at the next state.
         self._pointer.cancel()
-        now = time.monotonic()
-        timing = self._timing
-        demonstration = self.episode.analyse(
-            self.pending_action, method=timing.method or "code",
-            time_to_first_input_s=None if timing.first_input_at is None else timing.first_input_at - timing.shown_at,
-            drawing_duration_s=None if timing.first_input_at is None else now - timing.first_input_at,
-            redraws=timing.redraws, confirmed_at=time.time(), guidance_shown=self.guidance,
-            episode_index=self.episode_index)
-        self._confirm_callbacks(demonstration)  # an error propagates: nothing is recorded
-        self._record(demonstration)
-        if self.auto_advance and self.state_index == demonstration.index:
-            self.advance()
-        return demonstration
-
-    def _record(self, demonstration: Demonstration) -> None:
-        # Idempotent (Demonstration.record): a confirm callback may record it itself, once its
-        # own work succeeded and before it moves the view on (the episode widget does).
-        self.episode.record(demonstration)
-        self._show_demonstrations()
+        return self.controller.confirm()
 
     def _show_demonstrations(self) -> None:
         """The ``demonstrations`` trait, from the episode: the one place it is written."""
-        actions = [[float(a) for a in action] for action in self.episode.actions]
+        actions = self.controller.demonstrations
         if actions != self.demonstrations:
             self.demonstrations = actions
 
@@ -306,38 +293,50 @@ class TeachingCanvas(VBox):
         self._describe()
 
     def advance(self) -> None:
-        """Move on to the next query state (after a confirmation)."""
-        if len(self.demonstrations) <= self.state_index:
+        """Move on to the next query state (after a confirmation, while the episode pauses)."""
+        if self.controller.phase != "guidance":
             raise RuntimeError("advance: confirm the current arrow first")
-        self._pointer.cancel()
-        self.state_index += 1
-        self.pending_action = None
-        self._guidance = None
-        self._guidance_words = ""
-        self._show_current_state()
+        self.controller.next()
 
     def restore(self, actions) -> None:
         """Take already-given demonstrations (k, R) as confirmed, without callbacks (resuming).
 
         The episode's own demonstrations must be the first of them (``TeachingEpisode.extend_to``).
         """
-        self.episode.extend_to(actions)
-        self._show_given()
+        self.controller.restore(actions, name="actions")
+
+    def _on_event(self, event: str) -> None:
+        """What the controller says (episode_controller.EVENTS), drawn."""
+        if event == "recorded":
+            self._show_demonstrations()
+        elif event == "guidance":
+            self._set_locked(True)
+        elif event == "state":
+            self._show_given()
+        elif event == "reproduce":
+            if self.controller.reproduce:
+                # An episode widget plays the reproduction where this canvas was: no need to draw here.
+                self.state_index = self.controller.state_index
+                self._set_locked(True)
+            else:
+                self._show_given()   # drawing only: the canvas says every demonstration is given
 
     def _show_given(self) -> None:
-        """Show the episode as it stands: its demonstrations confirmed, the next state awaiting one."""
+        """Show the episode as the controller holds it: its demonstrations confirmed, the state shown."""
         self._pointer.cancel()
         self._show_demonstrations()
-        self.state_index = len(self.episode.demonstrations)
-        self.pending_action = None
+        controller = self.controller
+        self.state_index = controller.state_index
+        pending = controller.pending_action
+        self.pending_action = None if pending is None else [float(c) for c in pending]
         self._guidance = None
         self._guidance_words = ""
+        self._set_locked(controller.phase != "teaching", update=False)
         self._show_current_state()
 
     # -- drawing --------------------------------------------------------------------------------------
     def _show_current_state(self) -> None:
         state = self.current_state
-        self._timing = InputTiming(time.monotonic())
         # Confirm closes before the new state is drawn: a page that shows the new state never
         # offers the previous arrow's Confirm (a quick press would have confirmed nothing).
         self.confirm_button.disabled = True
@@ -438,14 +437,6 @@ class TeachingCanvas(VBox):
             self.second_entry.value = round(float(np.hypot(*u)), 4)
 
     # -- input ----------------------------------------------------------------------------------------
-    def _note_input(self, method: str) -> None:
-        now = time.monotonic()
-        if self._timing.first_input_at is None and method != "code":
-            self._timing.first_input_at = now
-        self._timing.last_input_at = now
-        self._timing.method = method
-        self._timing.redraws += 1
-
     def _accepting(self) -> bool:
         return not self.locked and self.current_state is not None
 
@@ -469,7 +460,7 @@ class TeachingCanvas(VBox):
             return False
         self.hint.value = ""
         self._pointer.active = True   # from here on a drag: the readout's words wait for the release
-        self._note_input("pointer")
+        self.controller.note_input("pointer")
         if near_tip and not near_origin:
             return True  # keep the arrow; the drag moves its tip
         self._drag_to(pointer)
@@ -478,7 +469,7 @@ class TeachingCanvas(VBox):
     def _drag_to(self, pointer, final: bool = False) -> None:
         origin, _ = self.view.painter.end_effector(self.current_state)
         action = self.view.transform.action_from_drag(origin, pointer)
-        self.pending_action = [float(action[0]), float(action[1])]
+        self._hold(action, None)
         self._draw_arrows(rubber_band=not final)
         now = time.monotonic()
         if final or now - self._last_readout >= READOUT_INTERVAL_S:
@@ -523,10 +514,11 @@ class TeachingCanvas(VBox):
         self.hint.value = ""
         self.set_action(action, method="numeric")
 
-    def _set_locked(self, locked: bool) -> None:
+    def _set_locked(self, locked: bool, update: bool = True) -> None:
         if locked:
             self._pointer.cancel()
         self.locked = locked
         for widget in (self.set_button, self.first_entry, self.second_entry, self.entry_mode):
             widget.disabled = locked
-        self._update_readout()
+        if update:
+            self._update_readout()

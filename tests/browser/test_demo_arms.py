@@ -37,7 +37,7 @@ def test_the_visitor_switches_arms_twice_quickly_and_teaches_the_ur5_in_3d(page,
     for label in (UR5, PLANAR, UR5):
         page.get_by_role("button", name=label, exact=True).click()
     canvases(page, 1)   # one 3-D canvas (ipycanvas composes its layers), the planar ones gone
-    canvas = ur5.canvas
+    canvas = ur5.teaching   # the one EpisodeWidget renders the UR5 with its 3-D canvas
     for view in ("top", "side", "perspective"):
         wait_for_color(page, 0, *canvas.tool_pixel(view), OKABE["yellow"], timeout=30_000)
     for label in ("UR5: reach the part", "UR5: place it", "UR5: follow the conveyor"):

@@ -241,8 +241,10 @@ def test_the_app_shows_arrows_only_to_the_target_group_when_the_protocol_says_ar
                 field.value = values.get(item_id, "")
             app.form.continue_button.click()
         elif step.kind == "practice":
-            from mt_widgets.widgets import TeachingCanvas
-            assert isinstance(app.episode, TeachingCanvas)  # drawing only: no reproduction
+            from mt_widgets.widgets import EpisodeWidget, TeachingCanvas
+            # drawing only: no reproduction
+            assert isinstance(app.episode, EpisodeWidget) and not app.episode.reproduce
+            assert isinstance(app.episode.teaching, TeachingCanvas)
             app._practice_done.disabled = False
             app._practice_done.click()
         elif step.kind in ("demonstration", "episode_end"):

@@ -81,11 +81,12 @@ def test_switching_guidance_mid_episode_keeps_the_arrows_and_says_so(recorder):
 
 
 def test_the_visitor_picks_the_ur5_and_back_and_each_arm_gets_its_own_widget_and_skills():
-    from mt_widgets.widgets import EpisodeWidget, SpaceEpisodeWidget
+    from mt_widgets.widgets import EpisodeWidget, SpaceTeachingCanvas, TeachingCanvas
     page = DemoPage(duration=1.0)
     assert page.arm_chooser.layout.display is None and page.arm_chooser.options == ("Planar arms",
                                                                                     "UR5 arm (3-D)")
     assert isinstance(page.episode, EpisodeWidget) and page.skill_chooser.value == "sim-point"
+    assert isinstance(page.episode.teaching, TeachingCanvas)   # the plant's drawing chose the renderer
     started = []
     original = page.start_episode
 
@@ -98,13 +99,14 @@ def test_the_visitor_picks_the_ur5_and_back_and_each_arm_gets_its_own_widget_and
     assert started == ["ur5-reach"] and [key for _, key in page.skill_chooser.options] == [
         "ur5-reach", "ur5-place", "ur5-conveyor"]
     episode = page.episode
-    assert isinstance(episode, SpaceEpisodeWidget) and episode.skill.key == "ur5-reach"
+    assert isinstance(episode, EpisodeWidget) and episode.skill.key == "ur5-reach"
+    assert isinstance(episode.teaching, SpaceTeachingCanvas)
     assert page.episode_slot.children == (episode,) and page.new_states_button in episode.next_actions.children
     # twice, quickly: back to the planar arms and to the UR5 again
     page.arm_chooser.value = "Planar arms"
     page.arm_chooser.value = "UR5 arm (3-D)"
     assert started == ["ur5-reach", "sim-point", "ur5-reach"]
-    assert isinstance(page.episode, SpaceEpisodeWidget) and page.episode is not episode
+    assert isinstance(page.episode.teaching, SpaceTeachingCanvas) and page.episode is not episode
     # the UR5 episode teaches and reports its error like the planar one
     page.skill_chooser.value = "ur5-place"
     shown = page.episode
@@ -123,3 +125,28 @@ def test_a_page_of_given_skills_has_no_arm_chooser_and_both_at_once_are_refused(
     assert page.arm_chooser.layout.display == "none" and list(page.skills) == ["sim-point"]
     with pytest.raises(ValueError, match="skills, arms: expected one of them"):
         DemoPage(skills=[("a", "sim-point")], arms=[("x", [("a", "sim-point")])])
+
+
+def test_switching_guidance_mid_episode_keeps_the_3d_arrows_too(recorder):
+    # One EpisodeWidget for every arm: the UR5's arrows (and the one drawn) survive the switch as the planar do.
+    page = DemoPage(skill="ur5-reach", duration=1.0)
+    first = page.episode
+    given = [[0.1, -0.2, 0.05], [0.0, 0.3, -0.1]]
+    for action in given:
+        first.demonstrate(action)
+        first.next()
+    first.set_action([0.2, 0.1, 0.0])                            # drawn, not confirmed
+    page.guidance_switch.value = False
+    episode = page.episode
+    assert episode is not first and episode.guidance is False and episode.skill.key == "ur5-reach"
+    np.testing.assert_array_equal(episode.query_states, first.query_states)
+    assert episode.demonstrations == given and episode.state_index == 2 and episode.phase == "teaching"
+    assert episode.progress.demonstrations_done == 2
+    assert episode.pending_action == [0.2, 0.1, 0.0]
+    assert "Guidance is now off; your 2 arrows so far are kept" in page.result_line.value
+    # Switched while guidance is shown: the confirmed arrow is kept, no arrow is pending.
+    page.guidance_switch.value = True
+    page.episode.demonstrate([0.1, 0.1, 0.1])
+    assert page.episode.phase == "guidance"
+    page.guidance_switch.value = False
+    assert page.episode.demonstrations == [*given, [0.1, 0.1, 0.1]] and page.episode.pending_action is None

@@ -234,11 +234,11 @@ def test_the_canvases_grow_with_the_window_unless_sized_or_fitted_to_a_screen():
     assert not any(c.startswith("mt-stage") for view in views for c in view.canvas._dom_classes)
 
 
-def test_the_planar_and_the_3d_episode_widgets_refuse_what_they_cannot_show_alike():
-    # One place (episode_to_show) decides what both show: the same refusals, word for word.
+def test_the_planar_and_the_3d_episode_refuse_what_they_cannot_show_alike():
+    # One widget for every arm (episode_to_show decides what it shows): the same refusals, word for word.
     from mt_widgets.core import TeachingEpisode
-    from mt_widgets.widgets.space_episode import SpaceEpisodeWidget
-    for widget, key in ((EpisodeWidget, "sim-point"), (SpaceEpisodeWidget, "ur5-reach")):
+    widget = EpisodeWidget
+    for key in ("sim-point", "ur5-reach"):
         with pytest.raises(TypeError, match=r"^skill: expected a Skill, a TeachingEpisode or a skill key, got int"):
             widget(3)
         with pytest.raises(ValueError, match=r"^skill: expected a Skill, a TeachingEpisode or one of \["):

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from mt_widgets import SKILLS
-from mt_widgets.widgets import ArmView, DemoPage, EpisodeWidget
+from mt_widgets.widgets import ArmView, DemoPage, EpisodeWidget, TeachingCanvas
 from user_plant import drift, park
 
 from .conftest import path_points, pointer
@@ -136,4 +136,6 @@ def test_a_plant_in_space_is_refused_by_the_planar_views_with_a_reason(key):
                                         r"drawn in space \(SpaceDrawing\)"):
         ArmView(SKILLS[key])
     with pytest.raises(TypeError, match="drawn in space"):
-        EpisodeWidget(key, seed=0)
+        TeachingCanvas(SKILLS[key])
+    # The one episode widget draws it with the 3-D renderer instead: the plant's drawing chooses.
+    assert type(EpisodeWidget(key, seed=0).teaching).__name__ == "SpaceTeachingCanvas"

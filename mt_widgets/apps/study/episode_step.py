@@ -7,32 +7,26 @@ from ipywidgets import HTML
 
 from mt_widgets.core import TeachingEpisode
 from mt_widgets.core.guidance import guidance_parts
-from mt_widgets.widgets import EpisodeWidget, SpaceEpisodeWidget, drawn_in_space, stop_animations
+from mt_widgets.widgets import EpisodeWidget, stop_animations
 
 from .controls import Choice, enable_after
 from .texts import guidance_arrow_words
 
 
 def build_episode(protocol, theme, skill, states, guidance: bool, index: int, total: int, on_demonstration=None,
-                  on_finished=None, guidance_modality: str = "none") -> EpisodeWidget | SpaceEpisodeWidget:
+                  on_finished=None, guidance_modality: str = "none") -> EpisodeWidget:
     """The blinded teaching widget of a study episode (or a practice round).
 
     ``skill``: a skill key (with ``states``), or the session's ``TeachingEpisode`` (``states``
     None), so the episode the participant teaches is the one the log records. Blinding: no
     group word on the canvas ("target" names a group), and neither the skill's formula (the
     answer), the target skill's ghost, nor the teaching error and the distance to the goal,
-    none of which the paper's participants saw.
-
-    A skill whose plant is drawn in space (``drawn_in_space``: the UR5) gets the 3-D
-    ``SpaceEpisodeWidget`` (the same blinding: no formula, no ghost, no error shown).
+    none of which the paper's participants saw. Any arm: the widget draws the plant as its
+    drawing says (in 3-D for the UR5), with the same blinding.
     """
     shown = skill if isinstance(skill, TeachingEpisode) else protocol.skill(skill)
     own = dict(lam=protocol.lam, duration=protocol.reproduction_duration_s, query_states=states) \
         if states is not None else {}
-    if drawn_in_space(shown):
-        return SpaceEpisodeWidget(shown, guidance=guidance, guidance_modality=guidance_modality, theme=theme, **own,
-                                  show_description=False, episode_index=index, episodes_total=total,
-                                  on_demonstration=on_demonstration, on_finished=on_finished, title="")
     return EpisodeWidget(shown, guidance=guidance, guidance_modality=guidance_modality, theme=theme,
                          ghost=False, target_label="goal", **own, show_description=False, show_outcome=False,
                          episode_index=index, episodes_total=total, on_demonstration=on_demonstration,

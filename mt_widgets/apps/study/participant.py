@@ -24,7 +24,7 @@ from ipywidgets import HTML, Button, HBox, Layout, VBox
 
 from mt_widgets.study import Session
 from mt_widgets.study.log import ContinuedElsewhereError
-from mt_widgets.widgets import EpisodeWidget, TeachingCanvas, retire
+from mt_widgets.widgets import EpisodeWidget, retire
 
 from .controls import Choice
 from .episode_step import EpisodeStep, build_episode
@@ -117,7 +117,7 @@ class ParticipantView(VBox):
         for child in change["old"]:
             if id(child) in staying or child is self.withdraw_button:  # it comes back after "No, continue"
                 continue
-            if isinstance(child, (EpisodeWidget, TeachingCanvas)):
+            if isinstance(child, EpisodeWidget):
                 continue  # a canvas view: ``retire_replaced`` closes it once its replacement is drawn
             # Only what the screen shows (its children, layouts and styles), never what its
             # attributes reach: a walk of those could reach parts the page still shows.

@@ -8,7 +8,7 @@ import time
 
 from ipywidgets import HTML, HBox
 
-from mt_widgets.widgets import SpaceEpisodeWidget, TeachingCanvas, drawn_in_space
+from mt_widgets.widgets import EpisodeWidget
 from mt_widgets.widgets.animation import kernel_loop
 
 from .controls import Choice, enable_after
@@ -62,24 +62,17 @@ class PracticeStep:
         if self.step.practice_reproduction:
             episode = view.build_episode(self.step.skill, states, guidance=False, index=0, total=1)
             episode.on_finished(lambda _: self._round_over())
-        elif drawn_in_space(skill):
-            # Drawing only, in 3-D: the round is over when its last arrow is confirmed.
-            episode = SpaceEpisodeWidget(skill, states, guidance=False, theme=view.theme, title="",
-                                         show_description=False, reproduce=False)
-            episode.observe(self._drawn_in_space, names="phase")
         else:
-            # Drawing only: nothing is learnt or played back; after the last state a new round.
-            episode = TeachingCanvas(skill, states, theme=view.theme, auto_advance=True, target_label="goal")
-            episode.observe(self._drawn, names="state_index")
+            # Drawing only (any arm): nothing is learnt or played back; once the last arrow is
+            # confirmed the round is over and a new one starts.
+            episode = EpisodeWidget(skill, states, guidance=False, theme=view.theme, title="", show_description=False,
+                                    reproduce=False, ghost=False, target_label="goal")
+            episode.observe(self._drawn, names="phase")
         view.episode = episode
         view.body.children = [self.text, self.left, HBox([self.done_button, self.again_button]), episode]
         view.retire_replaced(shown)
 
     def _drawn(self, change) -> None:
-        if change["new"] >= len(change["owner"].query_states) and change["owner"] is self.view.episode:
-            self.new_round()
-
-    def _drawn_in_space(self, change) -> None:
         if change["new"] == "finished" and change["owner"] is self.view.episode:
             self.new_round()
 
