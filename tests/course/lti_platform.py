@@ -107,7 +107,7 @@ class LTIPlatform:
         self.lock = threading.Lock()
         self._server = ThreadingHTTPServer(("127.0.0.1", 0), self._handler_class())
         self.url = f"http://127.0.0.1:{self._server.server_address[1]}"
-        self._thread = threading.Thread(target=self._server.serve_forever, daemon=True)
+        self._thread = threading.Thread(target=self._server.serve_forever, args=(0.05,), daemon=True)
 
     # -- the test's side ----------------------------------------------------------------------------
     def start(self) -> LTIPlatform:
@@ -160,7 +160,7 @@ class LTIPlatform:
         """The person leaves the course (the platform's memberships no longer list them)."""
         del self.members[sub]
 
-    def login_initiation(self, tool: Tool, sub: str, login_url: str) -> dict:
+    def login_initiation(self, tool: Tool, sub: str) -> dict:
         """The third-party initiated login's parameters the platform sends the tool's login URL."""
         return {"iss": self.url, "login_hint": sub, "target_link_uri": tool.target_link_uri,
                 "lti_message_hint": f"resource-link-1:{sub}", "client_id": tool.client_id,
