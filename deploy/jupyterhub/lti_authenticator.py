@@ -16,7 +16,8 @@ on top:
   cookie), and each nonce is accepted once (kept until its token expires).
 - **Refusals**: every refused launch gets a page saying what was wrong and what to do, and a log
   line with the reason and the claimed issuer and deployment; no token, nonce or launch is
-  logged (the library's own debug lines print the whole launch: the hub logs at INFO).
+  logged (the hub's request log hides the nonce and login hints of the redirect to the platform;
+  the library's own debug lines print the whole launch: the hub logs at INFO).
 
 ``LaunchVerifier`` is the check, usable without a hub (tests/course/test_lti.py).
 """
@@ -29,6 +30,7 @@ import threading
 import time
 from pathlib import Path
 
+import jupyterhub.log
 import jwt
 from jupyterhub.handlers import BaseHandler
 from jupyterhub.utils import url_path_join
@@ -284,6 +286,10 @@ def configure_lti(c, roster_path, state_path, environ) -> None:
         raise SystemExit("MT_HUB_LOGIN=lti needs the platform's settings (docs/guide/lms.md):\n  "
                          + "\n  ".join(missing))
     c.JupyterHub.authenticator_class = ClassLTIAuthenticator
+    # The hub's request log shows each redirect's URL with the parameters it knows to be secret
+    # hidden; the login initiation's redirect to the platform also carries the launch's nonce and
+    # the platform's login hints: hidden too (matched as substrings, as the hub's own are).
+    jupyterhub.log.SCRUB_PARAM_KEYS = (*jupyterhub.log.SCRUB_PARAM_KEYS, "nonce", "hint", "id_token")
     c.ClassLTIAuthenticator.issuer = environ["MT_HUB_LTI_ISSUER"]
     c.ClassLTIAuthenticator.client_id = {environ["MT_HUB_LTI_CLIENT_ID"]}
     c.ClassLTIAuthenticator.deployment_ids = {d.strip() for d in environ["MT_HUB_LTI_DEPLOYMENT_ID"].split(",")
