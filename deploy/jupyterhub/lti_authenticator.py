@@ -195,8 +195,11 @@ class ClassLTIConfigHandler(LTI13ConfigHandler):
             "public_jwk_url": url_path_join(hub, "lti13", "jwks"),
             "scopes": list(SCOPES),
             "extensions": [{"platform": "canvas.instructure.com", "privacy_level": "public", "settings": {
+                # A new window: in the course page's frame, browsers that block third-party cookies
+                # would drop the hub's state and nonce cookies, and every launch would be refused.
                 "placements": [{"placement": "course_navigation", "message_type": "LtiResourceLinkRequest",
-                                "target_link_uri": launch, "text": self.authenticator.tool_name}]}}],
+                                "target_link_uri": launch, "text": self.authenticator.tool_name,
+                                "windowTarget": "_blank"}]}}],
         }))
 
 
