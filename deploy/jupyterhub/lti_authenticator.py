@@ -292,7 +292,8 @@ def configure_lti(c, roster_path, state_path, environ) -> None:
     # The hub's request log shows each redirect's URL with the parameters it knows to be secret
     # hidden; the login initiation's redirect to the platform also carries the launch's nonce and
     # the platform's login hints: hidden too (matched as substrings, as the hub's own are).
-    jupyterhub.log.SCRUB_PARAM_KEYS = (*jupyterhub.log.SCRUB_PARAM_KEYS, "nonce", "hint", "id_token")
+    hidden = jupyterhub.log.SCRUB_PARAM_KEYS
+    jupyterhub.log.SCRUB_PARAM_KEYS = (*hidden, *(key for key in ("nonce", "hint", "id_token") if key not in hidden))
     c.ClassLTIAuthenticator.issuer = environ["MT_HUB_LTI_ISSUER"]
     c.ClassLTIAuthenticator.client_id = {environ["MT_HUB_LTI_CLIENT_ID"]}
     c.ClassLTIAuthenticator.deployment_ids = {d.strip() for d in environ["MT_HUB_LTI_DEPLOYMENT_ID"].split(",")

@@ -38,6 +38,8 @@ sys.path.insert(0, str(REPO / "deploy" / "jupyterhub"))
 from lti_services import login_for  # noqa: E402
 from nbgrader.api import Gradebook  # noqa: E402
 
+from mt_widgets.classroom.names import read_names  # noqa: E402
+
 pytestmark = [pytest.mark.slow,
               pytest.mark.skipif(os.geteuid() != 0, reason="the class hub makes system users: run as root")]
 
@@ -193,14 +195,20 @@ def test_the_roster_follows_the_platform_and_grades_go_back(course, monkeypatch)
     platform.drop(subs[2])
     platform.enrol(Member(LATE, "Eve Late"))
     env = dict(hub.env)
-    result = subprocess.run([sys.executable, str(LTI_ADMIN), "sync"], capture_output=True, text=True, env=env,
-                            timeout=120)
+    teacher = _login_of(hub, TEACHER)
+    names = hub.homes / teacher / "class-names.json"
+    result = subprocess.run([sys.executable, str(LTI_ADMIN), "sync", "--names", str(names), "--names-owner", teacher],
+                            capture_output=True, text=True, env=env, timeout=120)
     assert result.returncode == 0, result.stderr
     late = _login_of(hub, LATE)
     hub.students.append(late)
     roster = (hub.root / "roster.csv").read_text()
     assert late in roster and "Eve Late" in roster and dropped not in roster
     assert f"dropped {dropped}" in result.stdout and f"added {late} as student" in result.stdout
+    # The class view's names: the platform's, for the instructor's eyes only.
+    assert names.stat().st_uid == pwd.getpwnam(teacher).pw_uid and oct(names.stat().st_mode & 0o777) == "0o600"
+    shown = set(read_names(names).values())
+    assert {"Ann Lee", "Bo Chen", "Eve Late"} <= shown and "Cy Young" not in shown and "Dana Scully" not in shown
     # Their files are kept; their server and kernels are ended (dead, if the hub has not reaped them yet).
     assert (hub.homes / dropped).is_dir()
     assert all(process.status() == psutil.STATUS_ZOMBIE for process in hub.processes(dropped))
