@@ -24,6 +24,7 @@ on top:
 
 from __future__ import annotations
 
+import asyncio
 import fcntl
 import json
 import threading
@@ -50,7 +51,7 @@ from lti_services import (
 )
 from ltiauthenticator.lti13.auth import LTI13Authenticator
 from ltiauthenticator.lti13.error import MissingRequiredArgumentError, ValidationError
-from ltiauthenticator.lti13.handlers import LTI13CallbackHandler, LTI13ConfigHandler, get_nonce
+from ltiauthenticator.lti13.handlers import LTI13CallbackHandler, LTI13ConfigHandler, LTI13LoginInitHandler, get_nonce
 from ltiauthenticator.lti13.validator import LTI13LaunchValidator
 from tornado.web import HTTPError
 from traitlets import Integer, Set, Unicode
@@ -144,23 +145,53 @@ class LaunchVerifier:
         return claims
 
 
+def _refuse(handler, refusal: LaunchRefused) -> HTTPError:
+    """The log line and the page of a refused launch (the token itself is never logged)."""
+    handler.log.warning("LTI launch refused: %s (issuer %s, deployment %s)", refusal.reason,
+                        refusal.issuer or "-", refusal.deployment or "-")
+    return HTTPError(403, f"This launch was refused: {refusal.reason}. Open mt-widgets again from your "
+                          "course page; if this happens again, tell your instructor.")
+
+
+class ClassLTILoginInitHandler(LTI13LoginInitHandler):
+    """The platform's login initiation: only from this course's platform and tool, else a clear page."""
+
+    def post(self):
+        issuer, client_id = self.get_argument("iss", ""), self.get_argument("client_id", "")
+        if not issuer or not self.get_argument("login_hint", ""):
+            raise HTTPError(400, "This hub has no password login: open mt-widgets from your course page in the "
+                                 "learning platform.")
+        if issuer != self.authenticator.issuer:
+            raise _refuse(self, LaunchRefused(f"the launch comes from another platform ({issuer}), not this "
+                                              f"course's ({self.authenticator.issuer})", issuer))
+        if client_id and client_id not in self.authenticator.client_id:
+            raise _refuse(self, LaunchRefused("the launch is meant for another tool (its client id is not this "
+                                              "hub's)", issuer))
+        if not client_id and len(self.authenticator.client_id) == 1:
+            # LTI makes client_id optional here; the authentication request needs it.
+            self.request.arguments["client_id"] = [next(iter(self.authenticator.client_id)).encode()]
+        return super().post()
+
+    get = post
+
+
 class ClassLTICallbackHandler(LTI13CallbackHandler):
     """The launch: verified by the authenticator's ``LaunchVerifier``; a refusal is a page and a log line."""
 
     async def post(self):
         try:
-            claims = self.decode_and_validate_launch_request()
+            id_token, expected_nonce = self._launch()
+            # In a thread: the platform's key set may have to be fetched, which must not hold up the hub.
+            claims = await asyncio.to_thread(self.authenticator.verifier.verify, id_token, expected_nonce)
         except LaunchRefused as refusal:
-            self.log.warning("LTI launch refused: %s (issuer %s, deployment %s)", refusal.reason,
-                             refusal.issuer or "-", refusal.deployment or "-")
-            raise HTTPError(403, f"This launch was refused: {refusal.reason}. Open mt-widgets again from your "
-                                 "course page; if this happens again, tell your instructor.") from None
+            raise _refuse(self, refusal) from None
         user = await self.login_user(claims)
         if user is None:
             raise HTTPError(403, "This launch was refused.")
         await self.redirect_to_next_url(user)
 
-    def decode_and_validate_launch_request(self) -> dict:
+    def _launch(self) -> tuple[str, str | None]:
+        """The launch's id_token and the nonce this browser's login initiation sent (from its cookies)."""
         id_token, state = self.get_body_argument("id_token", ""), self.get_body_argument("state", "")
         if not id_token or not state:
             raise LaunchRefused("the launch carries no id_token or no state")
@@ -169,7 +200,7 @@ class ClassLTICallbackHandler(LTI13CallbackHandler):
             raise LaunchRefused("the launch's state is not the one this browser's login started (a forged or "
                                 "replayed launch, or the browser dropped the hub's cookie)")
         nonce_state = self._get_nonce_state_cookie()
-        return self.authenticator.verifier.verify(id_token, get_nonce(nonce_state) if nonce_state else None)
+        return id_token, get_nonce(nonce_state) if nonce_state else None
 
 
 class ToolKeysHandler(BaseHandler):
@@ -207,6 +238,7 @@ class ClassLTIAuthenticator(LTI13Authenticator):
     """LTI 1.3 launches from one platform as the class's login (see the module's docstring)."""
 
     login_service = "your course page"
+    login_handler = ClassLTILoginInitHandler
     callback_handler = ClassLTICallbackHandler
     config_handler = ClassLTIConfigHandler
 

@@ -169,6 +169,12 @@ def test_wrong_launches_are_refused_with_a_page_and_a_log_line(course):
     refused(hub, platform, tool, lambda nonce: platform.id_token(tool, ann, nonce, key=new_key()),
             "signature is wrong")
     refused(hub, platform, tool, lambda nonce: platform.id_token(tool, ann, None), "has no nonce")
+    # The login initiation itself: from another platform, or with no platform at all (the hub's login page).
+    initiation = dict(platform.login_initiation(tool, ann), iss="https://lms.example.org")
+    answer = requests.post(f"{hub.url}/hub/lti13/oauth_login", data=initiation, allow_redirects=False, timeout=60)
+    assert answer.status_code == 403 and "comes from another platform" in html.unescape(answer.text)
+    answer = requests.get(f"{hub.url}/hub/lti13/oauth_login", allow_redirects=False, timeout=60)
+    assert answer.status_code == 400 and "open mt-widgets from your course page" in html.unescape(answer.text)
     # A replay: the same launch posted again with the cookies of the browser that made it.
     browser, request = _login_initiation(hub, platform, tool, ann)
     cookies = browser.cookies.copy()
@@ -179,7 +185,7 @@ def test_wrong_launches_are_refused_with_a_page_and_a_log_line(course):
     answer = _post_launch(hub, replay, request["redirect_uri"], fields)
     assert answer.status_code == 403 and "used before" in html.unescape(answer.text)
     log = hub.tail(200_000)
-    assert log.count("LTI launch refused:") >= 6
+    assert log.count("LTI launch refused:") >= 7
     # Tokens and launches are never logged whole.
     assert fields["id_token"] not in log and fields["id_token"].split(".")[1] not in log
     assert request["nonce"] not in log
