@@ -32,7 +32,8 @@ MARKS = ("lint", "browser", "notebook", "hub", "slow", "docs", "install")
 LINT_TESTS = ("tests/test_lint.py",)
 # test_hub_config.py makes system users and needs the students' Python of scripts/install-hub.sh,
 # which run-tests.sh prepares only after the cheap tiers.
-HUB_TESTS = ("tests/course/test_hub.py", "tests/course/test_hub_config.py", "tests/course/test_server_template.py")
+HUB_TESTS = ("tests/course/test_hub.py", "tests/course/test_hub_config.py", "tests/course/test_server_template.py",
+             "tests/course/test_hub_lti.py")
 # The documentation site's build (./scripts/build-docs.sh, about a minute): a tier of its own, after
 # the cheap ones and before the browser, which it does not need.
 DOCS_TESTS = ("tests/docs/test_docs_build.py",)

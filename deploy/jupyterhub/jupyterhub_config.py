@@ -29,6 +29,8 @@ What it does (deploy/jupyterhub/README.md says why and how to change it):
 Settings (environment variables, so one file serves a course and the tests, tests/course/test_hub.py):
 
 - ``MT_HUB_ROSTER`` (required): the roster CSV (``mt_widgets/classroom/roster.py``).
+- ``MT_HUB_LOGIN`` (roster): ``lti`` takes LTI 1.3 launches from a learning platform as the login
+  (``lti_authenticator.py``, with ``MT_HUB_LTI_*``: docs/guide/lms.md); launches add people to the roster.
 - ``MT_HUB_STATE`` (./mt-hub-state): the hub's database, cookie secret, proxy token, password hashes.
 - ``MT_HUB_HOMES`` (/home): where each login's home is made.
 - ``MT_HUB_RUNTIME`` (/run/mt-hub): where each login's Jupyter runtime folder is made (kernel sockets).
@@ -146,6 +148,18 @@ if CULL_IDLE_S > 0:
         "scopes": ["list:users", "read:users:activity", "read:servers", "delete:servers"],
         "services": ["idle-culler"],
     })
+
+# -- who comes in from a learning platform: LTI 1.3 launches (MT_HUB_LOGIN=lti) ------------------------
+# One setting chooses the login: the roster's passwords (above) or launches from the course's page in
+# Canvas, Moodle... (lti_authenticator.py; the platform's settings: docs/guide/lms.md). Either way each
+# person is a roster login, so the accounts, isolation and limits below are the same.
+LOGIN = os.environ.get("MT_HUB_LOGIN", "roster")
+if LOGIN not in ("roster", "lti"):
+    raise SystemExit(f"MT_HUB_LOGIN: expected 'roster' or 'lti', got {LOGIN!r}")
+if LOGIN == "lti":
+    from lti_authenticator import configure_lti  # noqa: E402 - only an LTI hub needs jupyterhub-ltiauthenticator
+
+    configure_lti(c, ROSTER, STATE, os.environ)
 
 # -- limits ----------------------------------------------------------------------------------------
 LIMITS = None

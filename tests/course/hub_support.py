@@ -106,7 +106,7 @@ class ClassHub:
     """
 
     def __init__(self, students, admins=(), numba_template: Path | None = None, spawn_limit: int = 100,
-                 mem_limit: str = "1G", cpu_limit: str = "1.0", extra_roster: str = ""):
+                 mem_limit: str = "1G", cpu_limit: str = "1.0", extra_roster: str = "", env: dict | None = None):
         for login in (*students, *admins):
             if not login.startswith(TEST_PREFIX):
                 raise ValueError(f"test logins start with {TEST_PREFIX!r} (so cleanup finds them), got {login!r}")
@@ -136,7 +136,7 @@ class ClassHub:
                                + "".join(f"{login},Test Admin,,instructor\n" for login in self.admins)
                                + "".join(f"{login},Student {login},,student\n" for login in self.students)
                                + extra_roster)
-        env = dict(os.environ)
+        extra_env, env = env, dict(os.environ)
         env.update({
             "PATH": f"{proxy_folder()}{os.pathsep}{BIN}{os.pathsep}{env.get('PATH', '')}",
             "PYTHONPATH": str(REPO),
@@ -153,6 +153,7 @@ class ClassHub:
         env["MT_HUB_STUDENT_PYTHON"] = str(STUDENT_PYTHON if STUDENT_PYTHON.exists() else sys.executable)
         if numba_template is not None:
             env["MT_HUB_NUMBA_TEMPLATE"] = str(numba_template)
+        env.update(extra_env or {})  # an LTI hub's settings (tests/course/test_hub_lti.py)
         self.env = env
         self.log = self.root / "jupyterhub.log"
         self._log_file = open(self.log, "w")

@@ -333,3 +333,23 @@ def test_what_a_killed_run_left_is_removed_and_nothing_else():
         for path in (group, group.parent):
             if path.exists():
                 path.rmdir()
+
+
+def test_one_setting_chooses_the_learning_platforms_launches_as_the_login(setting):
+    platform = {"MT_HUB_LTI_ISSUER": "https://canvas.instructure.com", "MT_HUB_LTI_CLIENT_ID": "10000000000042",
+                "MT_HUB_LTI_DEPLOYMENT_ID": "7:abc, 8:def",
+                "MT_HUB_LTI_AUTH_URL": "https://sso.canvaslms.com/api/lti/authorize_redirect",
+                "MT_HUB_LTI_JWKS_URL": "https://sso.canvaslms.com/api/lti/security/jwks"}
+    config = setting(MT_HUB_LOGIN="lti", **platform)
+    assert config.JupyterHub.authenticator_class.__name__ == "ClassLTIAuthenticator"
+    lti = config.ClassLTIAuthenticator
+    assert (lti.issuer, lti.client_id, lti.deployment_ids) == (
+        "https://canvas.instructure.com", {"10000000000042"}, {"7:abc", "8:def"})
+    assert lti.roster_path == str(setting.roster.resolve()) and lti.login_prefix == "lti-"
+    # The roster's people are accounts as with the roster login: the isolation does not depend on the login.
+    assert config.Authenticator.admin_users == {TEACHER} and pwd.getpwnam(ANN).pw_gecos == class_hub.MARKER
+    with pytest.raises(SystemExit, match="MT_HUB_LTI_JWKS_URL: the platform's public keyset URL"):
+        setting(MT_HUB_LOGIN="lti", **dict(platform, MT_HUB_LTI_JWKS_URL=""))
+    with pytest.raises(SystemExit, match="MT_HUB_LOGIN: expected 'roster' or 'lti', got 'ldap'"):
+        setting(MT_HUB_LOGIN="ldap")
+    assert setting(MT_HUB_LOGIN="roster").JupyterHub.authenticator_class is RosterAuthenticator
