@@ -26,9 +26,9 @@ import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from .arm import SO101_IDS
 from .control_table import STEPS_PER_TURN
 from .errors import CalibrationError
-from .arm import SO101_IDS
 
 #: The steps of LeRobot's degrees normalisation: 4095 (its ``max_res``) steps a turn.
 _STEPS = STEPS_PER_TURN - 1

@@ -167,7 +167,7 @@ class SO101:
         """Into the servos' EEPROM, as LeRobot's write_calibration does (torque off first)."""
         with self._lock:
             self.torque(False)
-            for joint, c in calibration.items():
+            for c in calibration.values():
                 self._write_eeprom(c.id, {"homing_offset": c.homing_offset, "min_position_limit": c.range_min,
                                           "max_position_limit": c.range_max})
 
