@@ -42,7 +42,7 @@ def so101_chain() -> SerialChain:
     return SerialChain(chain["joints"], chain["inertials"], chain["tip"])
 
 
-def calibrated_bus(speed_scale: float = 20.0, calibration=None) -> SimulatedBus:
+def calibrated_bus(speed_scale: float = 50.0, calibration=None) -> SimulatedBus:
     """Six servos with ``calibration`` in their EEPROM (as LeRobot leaves them), each at the
     middle of its range."""
     calibration = CALIBRATION if calibration is None else calibration

@@ -19,6 +19,13 @@ from collections import deque
 
 import serial
 
+try:
+    import termios
+    # On POSIX a port whose device went away fails in tcflush with termios.error, not OSError.
+    _PORT_ERRORS: tuple[type[BaseException], ...] = (serial.SerialException, OSError, termios.error)
+except ImportError:  # Windows
+    _PORT_ERRORS = (serial.SerialException, OSError)
+
 from .control_table import BAUD
 from .errors import BusDisconnected, CorruptReply, ServoNotAnswering
 from .packet import BROADCAST_ID, OVERHEAD, Instruction, Packet, instruction_packet, split_packets
@@ -68,7 +75,7 @@ class FeetechBus:
             self._rest = b""
             self._queue.clear()
             self._serial.write(packet)
-        except (serial.SerialException, OSError, TypeError, AttributeError) as error:
+        except (*_PORT_ERRORS, TypeError, AttributeError) as error:
             raise BusDisconnected(f"the serial port {self.port!r} failed while sending: {error}. "
                                   f"Was the arm's USB cable pulled?") from error
 
@@ -92,7 +99,7 @@ class FeetechBus:
             try:
                 self._serial.timeout = remaining
                 chunk = self._serial.read(max(1, self._serial.in_waiting))
-            except (serial.SerialException, OSError, TypeError, AttributeError) as error:
+            except (*_PORT_ERRORS, TypeError, AttributeError) as error:
                 raise BusDisconnected(f"the serial port {self.port!r} failed while reading: {error}. "
                                       f"Was the arm's USB cable pulled?") from error
             self._rest += chunk
