@@ -264,10 +264,14 @@ class SO101:
                 raise SO101Stopped("the arm is stopped: call resume() before moving it")
             current = self.positions()
             full = {**current, **{j: float(v) for j, v in goal.items()}}
+            moving = list(goal)
             if any(j in goal for j in ARM_JOINTS):
                 self.envelope.check_path(current, full)
-            steps = {j: self.calibration[j].to_steps(full[j]) for j in goal}
-            travel = {j: abs(steps[j] - self.calibration[j].to_steps(current[j])) for j in goal}
+                # A new move replaces the last one whole: the joints not named stop where they
+                # are, so the arm follows the line checked, whatever it was doing.
+                moving = list(dict.fromkeys([*ARM_JOINTS, *goal]))
+            steps = {j: self.calibration[j].to_steps(full[j]) for j in moving}
+            travel = {j: abs(steps[j] - self.calibration[j].to_steps(current[j])) for j in moving}
             longest = max(travel.values()) or 1
             blocks = {}
             for j, target in steps.items():

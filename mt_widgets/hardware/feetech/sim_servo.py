@@ -58,6 +58,8 @@ class SimulatedServo:
     goals: list[int] = field(default_factory=list)
     #: Every goal position as written by the host, before clamping (for tests).
     goals_written: list[int] = field(default_factory=list)
+    #: For each of ``goals_written``: whether it was where the shaft already was (a hold, no motion).
+    holds: list[bool] = field(default_factory=list)
 
     def __post_init__(self):
         self.eeprom = bytearray(256)
@@ -151,6 +153,7 @@ class SimulatedServo:
         if "goal_position" in written:
             goal = self.value("goal_position")
             self.goals_written.append(goal)
+            self.holds.append(abs(goal - self._present(self.position)) <= 1)
             low, high = self.value("min_position_limit"), self.value("max_position_limit")
             if low or high:
                 goal = min(max(goal, low), high)
