@@ -51,7 +51,7 @@ def _goal_packets(bus):
 @given(st.lists(call, min_size=1, max_size=6))
 def test_no_sequence_of_calls_commands_a_goal_outside_the_envelope(calls):
     bus = calibrated_bus(speed_scale=200.0)
-    with SimulatedArmPort(bus) as server, SO101(server.path, CALIBRATION, so101_chain()) as arm:
+    with SimulatedArmPort(bus) as server, SO101(server.path, CALIBRATION, so101_chain(), timeout=0.1) as arm:
         for name, *args in calls:
             try:
                 if name == "move_joints":

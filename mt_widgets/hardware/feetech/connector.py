@@ -66,12 +66,12 @@ class SO101:
         kinematics: the arm's serial chain (:class:`mt_widgets.core.serial_chain.SerialChain`
             of the five arm joints to ``gripper_frame_link``) or an :class:`ArmKinematics`;
             without it the table cannot be checked and the arm does not move (it still reads).
-        timeout: seconds a servo may take to answer.
+        timeout: seconds a servo may take to answer (a USB adapter's latency timer is often 16 ms).
         envelope: keyword arguments of :class:`SO101Envelope` (table_height, clearance, margin,
             max_speed, max_acceleration).
     """
 
-    def __init__(self, port, calibration=None, kinematics=None, *, timeout: float = 0.02, **envelope):
+    def __init__(self, port, calibration=None, kinematics=None, *, timeout: float = 0.05, **envelope):
         if isinstance(calibration, dict):
             self._calibration_source: dict | None = calibration_from_dict(
                 {k: (v.__dict__ if isinstance(v, JointCalibration) else v) for k, v in calibration.items()})
