@@ -213,17 +213,15 @@ class SO101:
         samples = into if into is not None else []
         self.torque(False)
         start = time.monotonic()
-        k = 0
-        while True:
-            due = start + k / rate
-            if due - start > seconds:
-                return samples
-            time.sleep(max(0.0, due - time.monotonic()))
+        while time.monotonic() - start <= seconds:
             sample = (time.monotonic() - start, self.positions())
             samples.append(sample)
             if on_sample is not None:
                 on_sample(*sample)
-            k += 1
+            # The next tick of the clock start + k / rate; a tick missed is skipped, not caught up.
+            elapsed = time.monotonic() - start
+            time.sleep(max(0.0, (math.floor(elapsed * rate) + 1) / rate - elapsed))
+        return samples
 
     # ------------------------------------------------------------------ torque
     def torque(self, on: bool) -> None:
