@@ -92,8 +92,12 @@ def test_calibration_files_of_another_arm_are_refused(tmp_path):
 def test_an_uncalibrated_arm_asks_for_a_calibration():
     bus = calibrated_bus(calibration={j: dict(c, homing_offset=0, range_min=0, range_max=4095)
                                       for j, c in CALIBRATION.items()})
-    with SimulatedArmPort(bus) as server, pytest.raises(CalibrationError, match="not calibrated"):
-        SO101(server.path, timeout=0.1)
+    with SimulatedArmPort(bus) as server, SO101(server.path, timeout=0.1) as arm:
+        assert arm.read_steps()["elbow_flex"] == 2048   # the middle of the factory range
+        with pytest.raises(CalibrationError, match="not calibrated"):
+            arm.positions()
+        with pytest.raises(CalibrationError, match="not calibrated"):
+            arm.move_joints({"elbow_flex": 0.1})
 
 
 def test_a_wrong_port_a_missing_servo_and_another_model_are_named():
@@ -115,8 +119,6 @@ def test_calibrate_an_arm_of_its_own_in_lerobots_format(tmp_path):
     for servo in bus.servos.values():
         servo.position = 2500.0    # the middle pose, where the person holds the arm
     with SimulatedArmPort(bus) as server:
-        with pytest.raises(CalibrationError):   # an uncalibrated arm cannot connect without a calibration
-            SO101(server.path, timeout=0.1)
 
         def hand():
             time.sleep(0.05)
@@ -125,7 +127,7 @@ def test_calibrate_an_arm_of_its_own_in_lerobots_format(tmp_path):
             time.sleep(0.05)
             bus.hand_move({1: 3000, 2: 2900, 3: 3100, 4: 2600, 6: 3000}, now())
 
-        arm = SO101(server.path, CALIBRATION, timeout=0.1)   # connect with any calibration, then redo it
+        arm = SO101(server.path, timeout=0.1)   # uncalibrated: it reads steps, not angles
         thread = threading.Thread(target=hand)
         thread.start()
         result = arm.calibrate(tmp_path / "mine.json", seconds=0.2)

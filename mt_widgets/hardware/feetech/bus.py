@@ -1,6 +1,6 @@
 """The Feetech bus from the host's side: this suite's own client over pyserial.
 
-Why our own and not the SDK's ``PacketHandler`` (``docs/guide/so101.md``): the SDK keeps its
+Why our own and not the SDK's ``PacketHandler`` (``docs/user/so101.md``): the SDK keeps its
 byte order in a module global set by whoever built the last ``PacketHandler``; it reports a
 failure as a number and drops a servo's error byte in a sync read; and it waits 34 ms (twice a
 16 ms USB latency timer, plus 2) for an answer that takes 0.1 ms at 1 Mbit/s. Here every

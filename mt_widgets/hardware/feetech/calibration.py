@@ -106,7 +106,7 @@ def calibration_from_dict(data, source: str = "calibration") -> dict[str, JointC
 
 def read_calibration(path) -> dict[str, JointCalibration]:
     """Read a LeRobot calibration file (``lerobot-calibrate``'s JSON)."""
-    path = Path(path)
+    path = Path(path).expanduser()
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError as error:
@@ -120,7 +120,7 @@ def read_calibration(path) -> dict[str, JointCalibration]:
 def write_calibration(path, calibration: dict[str, JointCalibration]) -> Path:
     """Write ``calibration`` in LeRobot's format (so LeRobot reads it too)."""
     checked = calibration_from_dict({joint: asdict(c) for joint, c in calibration.items()})
-    path = Path(path)
+    path = Path(path).expanduser()
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps({joint: asdict(c) for joint, c in checked.items()}, indent=4) + "\n",
                     encoding="utf-8")

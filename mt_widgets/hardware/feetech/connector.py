@@ -142,8 +142,10 @@ class SO101:
             range_max=self._read_register(servo_id, "max_position_limit")) for name, servo_id in SO101_IDS.items()}
         if self._calibration_source is None:
             if all(c.homing_offset == 0 and (c.range_min, c.range_max) == (0, 4095) for c in stored.values()):
-                raise CalibrationError("the arm is not calibrated: run lerobot-calibrate, give its file as "
-                                       "SO101(port, calibration=...), or call SO101.calibrate()")
+                # Factory values: nothing to read angles with until calibrate() (read_steps works).
+                self.calibration = None
+                self.envelope = None
+                return
             self._set_calibration(stored)
         else:
             if any((stored[j].homing_offset, stored[j].range_min, stored[j].range_max) !=
@@ -190,8 +192,14 @@ class SO101:
                 raise self._fault(error) from error
         return {_NAMES[i]: decode(REGISTERS["present_position"], data) for i, (data, _) in answers.items()}
 
+    def _calibrated(self) -> None:
+        if self.calibration is None:
+            raise CalibrationError("the arm is not calibrated: run lerobot-calibrate and give its file as "
+                                   "SO101(port, calibration=...), or call calibrate()")
+
     def positions(self) -> dict[str, float]:
         """Every joint's angle (rad), the gripper's included."""
+        self._calibrated()
         return {joint: self.calibration[joint].to_radians(steps) for joint, steps in self.read_steps().items()}
 
     def tool_point(self) -> tuple[float, float, float]:
@@ -255,6 +263,7 @@ class SO101:
             raise ValueError(f"goal: expected a non-empty dict of joint angles (rad), got {goal!r}")
         if not isinstance(wait, bool):
             raise ValueError(f"wait: expected a bool, got {wait!r}")
+        self._calibrated()
         self.envelope.check_speed(speed, acceleration)
         self.envelope.check_joints(goal)
         with self._lock:
@@ -295,6 +304,7 @@ class SO101:
             if not (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)):
                 raise ValueError(f"{name}: expected a finite number of metres, got {value!r}")
             target.append(float(value))
+        self._calibrated()
         if self.kinematics is None:
             raise UnsafeMoveError("move_to: the arm has no kinematic model (SO101(kinematics=...))",
                                   coordinate="table", value=math.nan, limit=None)

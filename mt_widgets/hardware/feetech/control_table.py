@@ -2,7 +2,7 @@
 
 Addresses and sizes are Feetech's STS/SMS memory table, as LeRobot's
 ``lerobot/motors/feetech/tables.py`` (``STS_SMS_SERIES_CONTROL_TABLE``) and Feetech's manual
-give them (``docs/guide/so101.md`` cites both). Addresses below 40 are the EEPROM area (kept
+give them (``docs/user/so101.md`` cites both). Addresses below 40 are the EEPROM area (kept
 through a power cycle, written only while ``lock`` is 0); from 40 on, the RAM area (reset at
 power-on). A few registers hold a sign in one bit (sign-magnitude, not two's complement):
 ``homing_offset`` in bit 11, the speeds in bit 15, the load in bit 10.

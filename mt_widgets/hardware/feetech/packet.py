@@ -2,7 +2,7 @@
 
 The STS3215 speaks Feetech's "protocol 0" (a Dynamixel 1.0-like packet; the SDK's
 ``scservo_sdk/protocol_packet_handler.py`` and Feetech's STS/SMS manual, see
-``docs/guide/so101.md``)::
+``docs/user/so101.md``)::
 
     instruction  FF FF  id  length  instruction  parameters...  checksum
     status       FF FF  id  length  error        parameters...  checksum

@@ -3,7 +3,7 @@
 Pure Python and deterministic: time is passed in (``now``, seconds on any monotonic clock).
 The bus (:mod:`.sim_bus`) parses the packets and calls :meth:`SimulatedServo.read` and
 :meth:`SimulatedServo.write`; this module is what one servo does with them, as Feetech's
-STS/SMS manual describes (``docs/guide/so101.md``):
+STS/SMS manual describes (``docs/user/so101.md``):
 
 - the control table is 256 bytes; addresses below 40 are the EEPROM area, copied from the
   non-volatile EEPROM at power-on; a write there while ``lock`` (55) is 1 changes the value
