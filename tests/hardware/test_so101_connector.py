@@ -21,6 +21,7 @@ from mt_widgets.hardware.feetech import (
     ServoFault,
     ServoNotAnswering,
     SimulatedServo,
+    SO101Error,
     SO101Stopped,
     WrongServo,
     read_calibration,
@@ -121,16 +122,20 @@ def test_calibrate_an_arm_of_its_own_in_lerobots_format(tmp_path):
     with SimulatedArmPort(bus) as server:
 
         def hand():
-            time.sleep(0.05)
+            # Once the middle pose is taken (the last servo's offset written), move every joint
+            # to one end of its range and then to the other, while calibrate() reads.
+            deadline = time.monotonic() + 5.0
+            while bus.servos[6].value("homing_offset") != 453 and time.monotonic() < deadline:
+                time.sleep(0.005)
             now = time.monotonic
             bus.hand_move({1: 1000, 2: 1200, 3: 900, 4: 1500, 6: 2047}, now())
-            time.sleep(0.05)
+            time.sleep(0.15)
             bus.hand_move({1: 3000, 2: 2900, 3: 3100, 4: 2600, 6: 3000}, now())
 
         arm = SO101(server.path, timeout=0.1)   # uncalibrated: it reads steps, not angles
         thread = threading.Thread(target=hand)
         thread.start()
-        result = arm.calibrate(tmp_path / "mine.json", seconds=0.2)
+        result = arm.calibrate(tmp_path / "mine.json", seconds=0.4)
         thread.join()
         arm.close()
     assert read_calibration(tmp_path / "mine.json") == result
@@ -188,9 +193,18 @@ def test_goals_outside_the_envelope_send_nothing(sim, arm):
     assert goal_writes == []
 
 
+def test_a_move_with_the_torque_off_is_refused(sim, arm):
+    bus, _ = sim
+    sent = len(bus.received)
+    with pytest.raises(SO101Error, match="torque is off on shoulder_pan, shoulder_lift"):
+        arm.move_joints({"shoulder_pan": 0.1})
+    assert not [p for p in bus.received[sent:] if p.code == 0x83]
+
+
 def test_without_kinematics_the_arm_reads_but_does_not_move(sim):
     _, server = sim
     with SO101(server.path, CALIBRATION, timeout=0.1) as arm:
+        arm.torque(True)
         assert set(arm.positions()) == set(CALIBRATION)
         with pytest.raises(UnsafeMoveError, match="no kinematic model"):
             arm.move_joints({"shoulder_pan": 0.1})
@@ -229,15 +243,32 @@ def test_a_pulled_cable_while_teaching_keeps_the_samples(sim, arm):
 
 
 # ---------------------------------------------------------------- faults and the stop
+def move_in_a_thread(arm, goal, speed=1.0):
+    """Start ``arm.move_joints(goal)`` (waiting for arrival) in a thread: (thread, [its exception])."""
+    raised = []
+
+    def move():
+        try:
+            arm.move_joints(goal, speed=speed)
+        except Exception as error:  # noqa: BLE001 (handed to the test)
+            raised.append(error)
+
+    thread = threading.Thread(target=move)
+    thread.start()
+    time.sleep(0.02)   # the move is under way (it takes about 0.2 s)
+    return thread, raised
+
+
 def test_an_overload_mid_move_stops_the_arm_and_says_why(sim, arm):
     bus, _ = sim
     arm.torque(True)
-    arm.move_joints({"shoulder_pan": 0.8}, speed=1.0, wait=False)
-    time.sleep(0.01)
+    thread, raised = move_in_a_thread(arm, {"shoulder_pan": 0.8})
     bus.overload(1, time.monotonic())
-    with pytest.raises(ServoFault, match="shoulder_pan servo .id 1. stopped the move: it was blocked") as error:
-        arm.move_joints({"shoulder_pan": 0.8}, speed=1.0)
-    assert "holds where it is" in str(error.value) and arm.faults
+    thread.join()
+    (error,) = raised
+    assert isinstance(error, ServoFault)
+    assert "the shoulder_pan servo (id 1) stopped the move: it was blocked" in str(error)
+    assert "holds where it is" in str(error) and arm.faults
     arm.positions()   # a round trip: the simulated bus has taken the hold (a SYNC_WRITE has no answer)
     # Every servo was told to hold where it was (the overloaded one has no torque left to move).
     assert all(s.holds[-1] for i, s in bus.servos.items() if i != 1)
@@ -246,8 +277,12 @@ def test_an_overload_mid_move_stops_the_arm_and_says_why(sim, arm):
 def test_a_voltage_drop_stops_the_move(sim, arm):
     bus, _ = sim
     arm.torque(True)
+    thread, raised = move_in_a_thread(arm, {"wrist_flex": 0.6})
     bus.voltage_drop(3.2, time.monotonic())
-    with pytest.raises(ServoFault, match="power supply is too low"):
+    thread.join()
+    (error,) = raised
+    assert isinstance(error, ServoFault) and "stopped the move: its power supply is too low" in str(error)
+    with pytest.raises(ServoFault, match=r"shoulder_pan servo \(id 1\) cannot move: its power supply"):
         arm.move_joints({"wrist_flex": 0.3})
 
 

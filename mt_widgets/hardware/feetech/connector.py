@@ -250,6 +250,21 @@ class SO101:
                 raise self._fault(SO101Error(f"the servos {refused} did not turn their torque {'on' if on else 'off'}"))
 
     # ------------------------------------------------------------------ moves
+    def _check_ready(self) -> None:
+        """Every servo has its torque on and reports no error, or nothing is sent."""
+        try:
+            answers = self.bus.sync_read(list(SO101_IDS.values()), REGISTERS["torque_enable"].address, 1)
+        except SO101Error as error:
+            raise self._fault(error) from error
+        for servo_id, (_, error) in answers.items():
+            if error:
+                raise self._fault(ServoFault(f"the {_NAMES[servo_id]} servo (id {servo_id}) cannot move: "
+                                             f"{describe(error)}", servo_id=servo_id, error=error))
+        off = [_NAMES[i] for i, (data, _) in answers.items() if data[0] != 1]
+        if off:
+            raise SO101Error(f"the torque is off on {', '.join(off)}: call torque(True) first (the arm then "
+                             f"holds where it is), so nobody's hand is surprised by a move")
+
     def move_joints(self, goal: dict[str, float], speed: float = 0.5, acceleration: float = 2.0,
                     wait: bool = True, timeout: float = 30.0) -> None:
         """Move the joints named in ``goal`` to their angles (rad), the others staying.
@@ -269,6 +284,7 @@ class SO101:
         with self._lock:
             if self._stopped.is_set():
                 raise SO101Stopped("the arm is stopped: call resume() before moving it")
+            self._check_ready()
             current = self.positions()
             full = {**current, **{j: float(v) for j, v in goal.items()}}
             moving = list(goal)
