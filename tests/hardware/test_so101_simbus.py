@@ -125,3 +125,13 @@ def test_faults_silence_corrupt_overload_voltage_and_cable():
     bus.pull_cable()
     bus.write(instruction_packet(6, Instruction.PING), 3.0)
     assert bus.disconnected and bus.read_available(4.0) == b""
+
+
+def test_a_host_packet_with_a_wrong_checksum_is_ignored():
+    bus = SimulatedBus()
+    damaged = bytearray(write(2, "torque_enable", 1))
+    damaged[-1] ^= 0x01
+    bus.write(bytes(damaged), 0.0)
+    assert not bus.servos[2].torque and bus.next_due(0.0) is None and bus.received == []
+    bus.write(write(2, "torque_enable", 1), 0.1)   # the next good packet is read (resynchronised)
+    assert bus.servos[2].torque

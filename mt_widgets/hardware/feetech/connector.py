@@ -110,6 +110,8 @@ class SO101:
         found, missing, wrong = {}, [], []
         for name, servo_id in SO101_IDS.items():
             try:
+                # PING, then the model number (what the SDK's ping and LeRobot's handshake do).
+                self.bus.ping(servo_id)
                 data, _ = self.bus.read(servo_id, REGISTERS["model_number"].address, 2)
             except (ServoNotAnswering, CorruptReply):
                 missing.append(f"{name} (id {servo_id})")
