@@ -6,6 +6,7 @@ mechanism; the motion and safety policy, with :mod:`.envelope`), :mod:`.connecto
 (:class:`SwiftPro`), :mod:`.bridge` (the teaching plant on the arm, no Jupyter). Beside them,
 :mod:`.simdevice` (:class:`SimulatedSwiftPro`, made of the ``sim_*`` modules: kinematics,
 number grammars, the firmware loop, the shared, 4.x and 3.x command sets, the EEPROM).
+The SO-101 on its Feetech bus is the subpackage :mod:`.feetech`.
 
 Importing this package registers the pyserial URL handler ``uarm-sim://`` (also spelled
 ``uarmsim://``), so ``SwiftPro("uarm-sim://?firmware=4&latency=0.003")`` talks to the
