@@ -272,6 +272,12 @@ def test_an_overload_mid_move_stops_the_arm_and_says_why(sim, arm):
     arm.positions()   # a round trip: the simulated bus has taken the hold (a SYNC_WRITE has no answer)
     # Every servo was told to hold where it was (the overloaded one has no torque left to move).
     assert all(s.holds[-1] for i, s in bus.servos.items() if i != 1)
+    # Nothing moves until the torque is turned on again; then it does.
+    with pytest.raises(ServoFault, match="shoulder_pan servo .id 1. cannot move"):
+        arm.move_joints({"shoulder_pan": 0.3})
+    arm.torque(True)
+    arm.move_joints({"shoulder_pan": 0.3})
+    assert arm.positions()["shoulder_pan"] == pytest.approx(0.3, abs=2e-3)
 
 
 def test_a_voltage_drop_stops_the_move(sim, arm):

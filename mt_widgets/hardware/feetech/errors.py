@@ -17,7 +17,8 @@ _MEANINGS = {
     StatusError.SENSOR: "its position sensor failed",
     StatusError.OVERHEAT: "it is too hot (let the arm rest a few minutes)",
     StatusError.OVERCURRENT: "it drew too much current",
-    StatusError.OVERLOAD: "it was blocked or carried too much and let go (free the joint, then move again)",
+    StatusError.OVERLOAD: "it was blocked or carried too much and let go (free the joint, then turn the torque "
+                          "on again with torque(True))",
 }
 
 
