@@ -39,6 +39,7 @@ from .errors import (
     SwiftProUnreachable,
     UnsafeMoveError,
 )
+from .feetech import SO101, SO101Envelope, SO101Error, SO101Stopped
 from .protocol import Event
 from .sim_kinematics import is_reachable
 from .simdevice import SimulatedSwiftPro
@@ -54,6 +55,7 @@ sys.modules.setdefault(_HANDLERS + ".protocol_uarm-sim", protocol_uarmsim)
 
 __all__ = [
     "ERROR_CLASSES", "Event", "ExecutionReport", "SafetyEnvelope", "SimulatedSwiftPro", "StopSwitch", "SwiftPro",
+    "SO101", "SO101Envelope", "SO101Error", "SO101Stopped",
     "SwiftProBufferFull", "SwiftProCommandError", "SwiftProDisconnected", "SwiftProEncoderError", "SwiftProError",
     "SwiftProMotorsDetached", "SwiftProNotFound", "SwiftProOperationFailed", "SwiftProParameterError",
     "SwiftProPortBusy", "SwiftProPowerError", "SwiftProStopped", "SwiftProTimeout", "SwiftProUnknownCommand",
