@@ -70,7 +70,8 @@ def test_a_lerobot_calibration_file_is_read_and_written_into_the_servos(sim, tmp
     with SO101(server.path, path, so101_chain(), timeout=0.1) as arm:
         assert arm.calibration["elbow_flex"].range_min == 1000
     servo = bus.servos[3]
-    servo.power_on(time.monotonic())    # kept through a power cycle: written with the lock open
+    with bus.lock:   # the server's thread drives the bus too
+        servo.power_on(time.monotonic())    # kept through a power cycle: written with the lock open
     assert (servo.value("min_position_limit"), servo.value("max_position_limit")) == (1000, 3000)
     assert servo.value("lock") == 1
 

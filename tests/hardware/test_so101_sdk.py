@@ -22,6 +22,10 @@ def sdk():
     with SimulatedArmPort(bus) as server:
         port = scs.PortHandler(server.path)
         assert port.openPort()
+        # The SDK allows 34 ms an answer; the simulated bus is a thread that the SDK's own busy
+        # wait competes with for the CPU on a loaded test machine: 200 ms, the way LeRobot's
+        # FeetechMotorsBus replaces setPacketTimeout with its own.
+        port.setPacketTimeout = lambda packet_length: port.setPacketTimeoutMillis(200.0)
         yield bus, port, scs.PacketHandler(0)
         port.closePort()
 
@@ -65,7 +69,8 @@ def test_the_sdk_sees_the_eeprom_lock(sdk):
     assert handler.write1ByteTxRx(port, 2, 55, 0) == (scs.COMM_SUCCESS, 0)
     assert handler.write2ByteTxRx(port, 2, 9, 700) == (scs.COMM_SUCCESS, 0)
     assert handler.write1ByteTxRx(port, 2, 55, 1) == (scs.COMM_SUCCESS, 0)
-    bus.servos[2].power_on(time.monotonic())
+    with bus.lock:   # the server's thread drives the bus too
+        bus.servos[2].power_on(time.monotonic())
     assert handler.read2ByteTxRx(port, 2, 9) == (700, scs.COMM_SUCCESS, 0)
 
 
