@@ -130,13 +130,16 @@ def test_calibrate_an_arm_of_its_own_in_lerobots_format(tmp_path):
                 time.sleep(0.005)
             now = time.monotonic
             bus.hand_move({1: 1000, 2: 1200, 3: 900, 4: 1500, 6: 2047}, now())
-            time.sleep(0.15)
+            # Hold it until calibrate() has read the joints twice (SYNC_READs seen on the bus).
+            seen = sum(p.code == 0x82 for p in bus.received)
+            while sum(p.code == 0x82 for p in bus.received) < seen + 2 and time.monotonic() < deadline:
+                time.sleep(0.005)
             bus.hand_move({1: 3000, 2: 2900, 3: 3100, 4: 2600, 6: 3000}, now())
 
         arm = SO101(server.path, timeout=0.1)   # uncalibrated: it reads steps, not angles
         thread = threading.Thread(target=hand)
         thread.start()
-        result = arm.calibrate(tmp_path / "mine.json", seconds=0.4)
+        result = arm.calibrate(tmp_path / "mine.json", seconds=0.5)
         thread.join()
         arm.close()
     assert read_calibration(tmp_path / "mine.json") == result
@@ -224,7 +227,9 @@ def test_a_hand_moves_the_arm_with_torque_off_and_every_reading_is_kept(sim, arm
             bus.hand_move({1: 1500, 3: 2500}, time.monotonic())
 
     arm.follow_by_hand(0.2, rate=50.0, into=samples, on_sample=hand)
-    assert 9 <= len(samples) <= 11
+    # One reading a tick of 20 ms at most (a loaded machine may skip ticks: no lower bound here).
+    assert 5 <= len(samples) <= 11
+    assert np.all(np.diff(np.floor(np.array([t for t, _ in samples]) * 50.0 + 1e-9)) >= 1)
     assert samples[0][1]["shoulder_pan"] == pytest.approx(0.0, abs=2e-3)
     assert samples[-1][1]["shoulder_pan"] == pytest.approx(arm.calibration["shoulder_pan"].to_radians(1500))
     assert np.all(np.diff([t for t, _ in samples]) > 0)
