@@ -3,6 +3,7 @@ limits, motion, wire timing at 1 Mbit/s and the faults tests inject."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from mt_widgets.hardware.feetech.control_table import REGISTERS, encode
@@ -135,3 +136,17 @@ def test_a_host_packet_with_a_wrong_checksum_is_ignored():
     assert not bus.servos[2].torque and bus.next_due(0.0) is None and bus.received == []
     bus.write(write(2, "torque_enable", 1), 0.1)   # the next good packet is read (resynchronised)
     assert bus.servos[2].torque
+
+
+def test_servos_with_speed_and_acceleration_in_proportion_to_their_travel_arrive_together():
+    bus = SimulatedBus()
+    one, two = bus.servos[1], bus.servos[2]
+    for servo, speed, acceleration, goal in ((one, 2000, 40, 2048 + 800), (two, 500, 10, 2048 - 200)):
+        bus.write(write(servo.servo_id, "torque_enable", 1) + write(servo.servo_id, "acceleration", acceleration)
+                  + write(servo.servo_id, "goal_speed", speed) + write(servo.servo_id, "goal_position", goal), 0.0)
+    for t in np.linspace(0.01, 1.0, 40):   # a triangle of 0.89 s at 4000 steps/s^2
+        bus.present_positions(t)
+        a = (one.position - 2048) / 800
+        b = (2048 - two.position) / 200
+        assert a == pytest.approx(b, abs=0.02), t
+    assert one.value("present_position") == 2848 and two.value("present_position") == 1848
