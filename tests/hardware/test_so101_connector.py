@@ -170,12 +170,12 @@ def test_calibrate_an_arm_of_its_own_in_lerobots_format(tmp_path):
 # ---------------------------------------------------------------- moves and the envelope
 def test_joint_and_task_space_moves_arrive(arm):
     arm.torque(True)
-    arm.move_joints({"shoulder_pan": 0.4, "elbow_flex": -0.3}, speed=1.0)
+    arm.move_joints({"shoulder_pan": 0.4, "elbow_flex": -0.3}, speed=1.5, acceleration=6.0)
     q = arm.positions()
     assert q["shoulder_pan"] == pytest.approx(0.4, abs=2e-3) and q["elbow_flex"] == pytest.approx(-0.3, abs=2e-3)
-    arm.move_to(0.25, -0.05, 0.12)
+    arm.move_to(0.25, -0.05, 0.12, speed=1.5, acceleration=6.0)
     assert arm.tool_point() == pytest.approx((0.25, -0.05, 0.12), abs=3e-3)
-    arm.gripper(0.5)
+    arm.gripper(0.5, speed=1.5)
     assert arm.positions()["gripper"] == pytest.approx(0.5, abs=2e-3)
 
 
