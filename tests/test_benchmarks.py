@@ -16,6 +16,7 @@ EXPECTED = {
     "bench_core.py": ["agreement with MuJoCo", "(a) one 10 s rollout", "(b) 1000 rollouts", "fit + optimal_actions"],
     "bench_study.py": ["in-silico study, 32 participants", "power by simulation"],
     "bench_uarm.py": ["P2220 round trip", "worst overhead per round trip"],
+    "bench_so101.py": ["sync read round trip", "target 2 ms", "hand-teaching loop at rate=50"],
     "bench_ur5.py": ["agreement of 10 s reproductions", "pinocchio ABA stepped from Python",
                      "MuJoCo stepped from Python", "feedback: fit + optimal actions"],
     "bench_widgets.py": ["feedback latency", "animation message", "Chromium playback", "pointer-to-arrow latency"],

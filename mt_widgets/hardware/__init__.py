@@ -6,6 +6,7 @@ mechanism; the motion and safety policy, with :mod:`.envelope`), :mod:`.connecto
 (:class:`SwiftPro`), :mod:`.bridge` (the teaching plant on the arm, no Jupyter). Beside them,
 :mod:`.simdevice` (:class:`SimulatedSwiftPro`, made of the ``sim_*`` modules: kinematics,
 number grammars, the firmware loop, the shared, 4.x and 3.x command sets, the EEPROM).
+The SO-101 on its Feetech bus is the subpackage :mod:`.feetech`.
 
 Importing this package registers the pyserial URL handler ``uarm-sim://`` (also spelled
 ``uarmsim://``), so ``SwiftPro("uarm-sim://?firmware=4&latency=0.003")`` talks to the
@@ -38,6 +39,7 @@ from .errors import (
     SwiftProUnreachable,
     UnsafeMoveError,
 )
+from .feetech import SO101, SO101Envelope, SO101Error, SO101Stopped
 from .protocol import Event
 from .sim_kinematics import is_reachable
 from .simdevice import SimulatedSwiftPro
@@ -53,6 +55,7 @@ sys.modules.setdefault(_HANDLERS + ".protocol_uarm-sim", protocol_uarmsim)
 
 __all__ = [
     "ERROR_CLASSES", "Event", "ExecutionReport", "SafetyEnvelope", "SimulatedSwiftPro", "StopSwitch", "SwiftPro",
+    "SO101", "SO101Envelope", "SO101Error", "SO101Stopped",
     "SwiftProBufferFull", "SwiftProCommandError", "SwiftProDisconnected", "SwiftProEncoderError", "SwiftProError",
     "SwiftProMotorsDetached", "SwiftProNotFound", "SwiftProOperationFailed", "SwiftProParameterError",
     "SwiftProPortBusy", "SwiftProPowerError", "SwiftProStopped", "SwiftProTimeout", "SwiftProUnknownCommand",
