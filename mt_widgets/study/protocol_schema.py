@@ -380,7 +380,8 @@ def _parse_analysis(check, raw: dict, phase_ids: dict) -> AnalysisPlan:
     Without ``changes`` (or without the table), the paper's comparisons that fit the protocol's
     phases (``changes_that_fit``): the paper's P3E8 or P5 is never asked of a protocol without them.
     """
-    default_changes = changes_that_fit(PAPER_CHANGES, {phase_id: phase.episodes for phase_id, phase in phase_ids.items()})
+    episodes = {phase_id: phase.episodes for phase_id, phase in phase_ids.items()}
+    default_changes = changes_that_fit(PAPER_CHANGES, episodes)
     table = raw.get("analysis")
     if table is None:
         return AnalysisPlan(changes=default_changes)
