@@ -1,6 +1,6 @@
 """The Python examples of the README and of the documentation's user pages run as written (keeping
-them true). The README keeps a few; most moved with their text into docs/ (docs/user/*.md,
-docs/getting-started/*.md), where they run the same way."""
+them true). The README keeps a few; most moved with their text into docs/user/*.md, where they run
+the same way (the getting-started pages run top to bottom: tests/docs/test_getting_started.py)."""
 
 import re
 from pathlib import Path
@@ -9,8 +9,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
-PAGES = [README, *sorted((ROOT / "docs" / "user").glob("*.md")),
-         *sorted((ROOT / "docs" / "getting-started").glob("*.md"))]
+# The getting-started pages run page by page, top to bottom (tests/docs/test_getting_started.py).
+PAGES = [README, *sorted((ROOT / "docs" / "user").glob("*.md"))]
 BLOCKS = [(page.relative_to(ROOT).as_posix(), index, block) for page in PAGES
           for index, block in enumerate(re.findall(r"```python\n(.*?)```", page.read_text(), flags=re.S))]
 
