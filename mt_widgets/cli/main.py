@@ -129,7 +129,7 @@ def run(args: argparse.Namespace, server_args: list[str]) -> int:
     if args.command == "lab":
         if args.copy_only:
             copied, kept = servers.copy_notebooks(args.folder)
-            print(f"{Path(args.folder).resolve()}: {len(copied)} notebooks copied, {len(kept)} already there")
+            print(servers.copy_report(Path(args.folder).resolve(), copied, kept))
             return 0
         command, url = servers.lab_command(args.folder, args.port, not args.no_browser, server_args)
         if url:

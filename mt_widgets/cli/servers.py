@@ -19,7 +19,7 @@ from pathlib import Path
 
 from mt_widgets.study.protocol import load_protocol
 
-from .shipped import START_HERE, copy_notebooks, shipped_folder
+from .shipped import START_HERE, copy_notebooks, copy_report, shipped_folder
 
 #: The environment variable the experimenter's panel reads its code from.
 EXPERIMENTER_CODE_ENV = "MT_WIDGETS_EXPERIMENTER_CODE"
@@ -30,6 +30,17 @@ ONLINE_PAGES = ("study_sim.ipynb", "study_online.ipynb", "study_online_pilot.tom
 #: study the participants' page runs.
 PROTOCOL_ENV = "MT_WIDGETS_STUDY_PROTOCOL"
 LOGS_ENV = "MT_WIDGETS_STUDY_LOGS"
+#: JupyterLab, as ``python -m jupyterlab``, showing library DeprecationWarnings as Python does by
+#: default (not at all). Voila's import turns traitlets' on for the whole server (voila/__init__.py's
+#: filter), and notebook_shim, a JupyterLab dependency, reads every attribute of the server, the
+#: deprecated ServerApp.token among them: "ServerApp.token config is deprecated" at every start, about
+#: a setting this command never uses (it sets IdentityProvider.token). Voila is imported first and
+#: its filter taken out; the lab's own warnings and log are as they were.
+LAB_LAUNCHER = (
+    "import sys, warnings, voila; "
+    "warnings.filters[:] = [f for f in warnings.filters if not (f[0] == 'default' and f[2] is DeprecationWarning "
+    "and getattr(f[3], 'pattern', f[3]) == 'traitlets')]; "
+    "from jupyterlab.labapp import main; sys.exit(main())")
 #: Voila's own default port, used when it is free.
 VOILA_PORT = 8866
 
@@ -64,8 +75,8 @@ def lab_command(folder, port: int | None, browser: bool, extra: list[str]) -> tu
     port and token are chosen here, the start-here URL to print."""
     folder = Path(folder).expanduser().resolve()
     copied, kept = copy_notebooks(folder)
-    print(f"== {folder}: {len(copied)} notebooks copied, {len(kept)} already there (kept as they are)")
-    args = [sys.executable, "-m", "jupyterlab", f"--ServerApp.root_dir={folder}"]
+    print(f"== {copy_report(folder, copied, kept)}")
+    args = [sys.executable, "-c", LAB_LAUNCHER, f"--ServerApp.root_dir={folder}"]
     if hasattr(os, "getuid") and os.getuid() == 0:
         args.append("--allow-root")
     url = None

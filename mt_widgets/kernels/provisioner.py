@@ -33,6 +33,7 @@ import atexit
 import json
 import logging
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -108,6 +109,17 @@ class KernelTemplate(TemplateProcess):
         self.socket = os.path.join(self.folder, "s")
         self.process: subprocess.Popen | None = None
         self.started_at = 0.0
+
+    def ensure_started(self) -> None:
+        os.makedirs(self.folder, mode=0o700, exist_ok=True)   # removed by an earlier stop
+        super().ensure_started()
+
+    def stop(self) -> None:
+        """Ends the template and removes its socket's folder, made for it alone (an adopted
+        template's folder is the server template's, which removes its own)."""
+        super().stop()
+        if not isinstance(self.process, ChildProcess):
+            shutil.rmtree(self.folder, ignore_errors=True)
 
     @classmethod
     def adopt(cls, socket_path: str, pid: int, modules: list[str]) -> KernelTemplate:

@@ -175,6 +175,11 @@ def test_course_check_names_students_without_progress_and_damaged_files(a_class,
 def test_lab_copies_the_tutorials_into_an_empty_folder_and_keeps_the_users_files(tmp_path, capsys):
     folder = tmp_path / "mine"
     assert main(["lab", str(folder), "--copy-only"]) == 0
+    shipped = len(list((folder / "tutorials").iterdir())) + len(list((folder / "notebooks").iterdir()))
+    assert capsys.readouterr().out.strip() == f"{folder}: {shipped} files copied, 0 already there (kept as they are)"
+    (folder / "notebooks" / "demo.ipynb").unlink()
+    assert main(["lab", str(folder), "--copy-only"]) == 0
+    assert capsys.readouterr().out.strip() == f"{folder}: 1 file copied, {shipped - 1} already there (kept as they are)"
     tutorials = sorted(p.name for p in shipped_folder("tutorials").glob("*.ipynb"))
     assert sorted(p.name for p in (folder / "tutorials").glob("*.ipynb")) == tutorials
     assert (folder / "notebooks" / "demo.ipynb").read_bytes() == (REPO / "notebooks" / "demo.ipynb").read_bytes()

@@ -79,9 +79,10 @@ def test_lab_opens_jupyterlab_on_the_copied_tutorials(tmp_path):
         assert status == 200 and '"name": "00_start_here.ipynb"' in body.replace('":"', '": "')
         assert _get(port, "/api/contents/tutorials", server)[0] == 403  # no token, no notebooks
     finally:
-        _stop(server)
+        out = first + _stop(server)
     assert server.returncode in (0, -signal.SIGTERM)
     assert (tmp_path / "class" / "notebooks" / "demo.ipynb").exists()
+    assert "files copied" in first and "DeprecationWarning" not in out and "ServerApp.token" not in out, out
 
 
 @pytest.mark.slow
