@@ -95,6 +95,7 @@ def test_demo_serves_the_demo_page(tmp_path):
     finally:
         out = _stop(server)
     assert _ended_cleanly(server, out), out
+    assert "is not trusted" not in out and "Voila" in out, out   # deploy/voila/log_filters.py
 
 
 @pytest.mark.slow
