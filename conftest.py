@@ -10,7 +10,7 @@ import pytest
 import zmq
 from jupyter_client.manager import KernelManager
 
-from tests.notebook_parameters import inject
+from tests.notebook_parameters import ParametersError, inject
 
 
 def _start_kernel_keeping_every_message(startup_timeout=60, kernel_name="python", **kwargs):
@@ -50,4 +50,7 @@ def pytest_collection_modifyitems(config, items):
     """Each selected notebook's cell tagged ``parameters`` gets the test run's values
     (tests/notebook_parameters.py): the one switch that shortens notebook work under test. After
     the selection (``trylast``), so only the notebooks that will run get fresh scratch folders."""
-    inject(items, config.rootpath)
+    try:
+        inject(items, config.rootpath)
+    except ParametersError as error:
+        raise pytest.UsageError(str(error)) from error

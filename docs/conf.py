@@ -24,6 +24,7 @@ sys.path[:0] = [str(ROOT), str(DOCS / "_ext")]
 
 import api_names  # noqa: E402
 import benchmark_figures  # noqa: E402
+import mathjax  # noqa: E402 (the docs extra's django-static-mathjax: MathJax's files, below)
 
 project = "mt-widgets"
 author = "mt-widgets developers"
@@ -60,6 +61,31 @@ nb_merge_streams = True
 exclude_patterns = ["_build", "**/.ipynb_checkpoints", "jupyter_execute", "_ext", "README.md", "benchmarks/_generated"]
 templates_path = ["_templates"]
 html_static_path = ["_static"]
+
+# MathJax from the site itself, not a CDN: a classroom without internet reads the maths too. The
+# files come from the docs extra's django-static-mathjax (MathJax 3, its static files only, no
+# Django): the combined TeX component, its fonts and the parts it loads on demand (TeX extensions,
+# the menu, the accessibility helpers), copied at each build into _build and served as
+# _static/mathjax/ (the speech engine, 15 MB, is left out: the menu's speech options stay off).
+MATHJAX_FILES = ("tex-chtml.js", "input", "output/chtml", "ui", "a11y")
+mathjax_path = "mathjax/tex-chtml.js"
+
+
+def _ship_mathjax() -> Path:
+    """The folder whose mathjax/ holds the MathJax files the site serves (a static path)."""
+    source = Path(mathjax.__file__).parent / "static" / "mathjax" / "es5"
+    folder = DOCS / "_build" / "mathjax-static"
+    shutil.rmtree(folder, ignore_errors=True)
+    for name in MATHJAX_FILES:
+        if (source / name).is_dir():
+            shutil.copytree(source / name, folder / "mathjax" / name)
+        else:
+            (folder / "mathjax").mkdir(parents=True, exist_ok=True)
+            shutil.copy2(source / name, folder / "mathjax" / name)
+    return folder
+
+
+html_static_path.append(str(_ship_mathjax()))
 
 html_theme = "pydata_sphinx_theme"
 html_title = f"mt-widgets {release}"

@@ -8,7 +8,12 @@ runs, on smaller inputs. The library itself never asks whether it runs under tes
 
 A notebook without an entry here, or without a tagged cell, runs as it is. An entry whose notebook
 has no tagged cell, or which names a parameter the cell does not assign, stops the run
-(``pytest.UsageError``): a renamed parameter must not quietly make a test run a learner's hours.
+(``ParametersError``, which the root conftest.py reports as pytest's usage error): a renamed
+parameter must not quietly make a test run a learner's hours.
+
+The documentation's build (docs/conf.py) shortens the notebooks it executes with the same values, and
+runs with exactly the ``docs`` extra: this module imports nothing beyond the standard library
+(tests/docs/test_docs_sources.py checks it without the test extra's packages).
 """
 
 from __future__ import annotations
@@ -22,6 +27,11 @@ from pathlib import Path
 
 #: The tag of the cell whose values the test run overrides.
 TAG = "parameters"
+
+
+class ParametersError(ValueError):
+    """``NOTEBOOK_PARAMETERS`` does not fit a notebook: no single cell tagged ``parameters``, or a
+    value for a parameter the cell does not assign."""
 
 
 @dataclass(frozen=True)
@@ -69,13 +79,11 @@ def injected_source(source: str, values: dict[str, object], scratch_root: Path, 
     """The parameters cell's ``source`` with the test run's ``values`` assigned after it.
 
     Raises:
-        pytest.UsageError: a value names a parameter the cell does not assign.
+        ParametersError: a value names a parameter the cell does not assign.
     """
-    import pytest
-
     missing = sorted(set(values) - assigned_names(source))
     if missing:
-        raise pytest.UsageError(f"{notebook}: NOTEBOOK_PARAMETERS (tests/notebook_parameters.py) sets {missing}, "
+        raise ParametersError(f"{notebook}: NOTEBOOK_PARAMETERS (tests/notebook_parameters.py) sets {missing}, "
                                 f"which its cell tagged {TAG!r} does not assign")
     lines = [source.rstrip("\n"), "",
              "# Set by the test run (tests/notebook_parameters.py): the same work, shorter."]
@@ -97,9 +105,11 @@ def inject(items, rootpath: Path) -> None:
 
     Called once the items are selected: the scratch folders the selected notebooks name are made
     fresh (emptied), so a capstone run never continues an earlier test run's participant.
-    """
-    import pytest
 
+    Raises:
+        ParametersError: a notebook named here has not exactly one cell tagged ``parameters``, or its
+            cell does not assign a parameter named here.
+    """
     root = scratch_root(rootpath)
     tagged: dict[str, list] = {}
     for item in items:
@@ -118,7 +128,7 @@ def inject(items, rootpath: Path) -> None:
         if values is None:
             continue
         if len(cells) != 1:
-            raise pytest.UsageError(f"{notebook}: NOTEBOOK_PARAMETERS (tests/notebook_parameters.py) names it, so it "
+            raise ParametersError(f"{notebook}: NOTEBOOK_PARAMETERS (tests/notebook_parameters.py) names it, so it "
                                     f"needs exactly one code cell tagged {TAG!r}; it has {len(cells)}")
         for value in values.values():
             if isinstance(value, Scratch):

@@ -55,3 +55,21 @@ def test_shipped_configuration_culls_idle_unconnected_kernels_and_preheats_only_
         assert command in (REPO / "scripts" / script).read_text(), script
     served = voila_command(REPO / "notebooks" / "demo.ipynb", None, [])
     assert f"--Voila.config_file_paths={REPO / 'deploy' / 'voila'}" in served
+
+
+def test_the_log_leaves_out_only_the_notebook_trust_line_of_every_visit():
+    import logging
+    import logging.config
+
+    config = shipped()   # puts deploy/voila on sys.path, as the server does
+    logging_config = config.Voila.logging_config
+    assert logging_config["loggers"][Voila().log.name]["filters"] == ["notebook_trust"]
+    logging.config.dictConfig({"version": 1, "disable_existing_loggers": False,
+                               "filters": logging_config["filters"],
+                               "handlers": {}, "loggers": {"kiosk-test": {"filters": ["notebook_trust"]}}})
+    logger = logging.getLogger("kiosk-test")
+    kept = []
+    logger.addHandler(type("Keep", (logging.Handler,), {"emit": lambda self, record: kept.append(record)})())
+    logger.warning("Notebook %s is not trusted", "demo.ipynb")
+    logger.warning("Kernel %s died", "k1")
+    assert [record.getMessage() for record in kept] == ["Kernel k1 died"]

@@ -154,6 +154,17 @@ def test_a_forked_kernel_has_its_environment_folder_numba_cache_and_own_random_n
     asyncio.run(scenario())
 
 
+def test_a_stopped_template_leaves_no_folder_behind(template, tmp_path):
+    folder = template.folder
+    assert os.path.dirname(folder) == str(tmp_path) and os.path.basename(folder).startswith("mt-kt-")
+    deadline = time.monotonic() + 60
+    while not os.path.exists(template.socket):
+        assert time.monotonic() < deadline and template.process.poll() is None
+        time.sleep(0.05)
+    template.stop()
+    assert template.process.poll() is not None and not os.path.exists(folder)
+
+
 def test_the_templates_socket_is_its_users_alone(template):
     deadline = time.monotonic() + 60
     while not os.path.exists(template.socket) and time.monotonic() < deadline:

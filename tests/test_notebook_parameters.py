@@ -12,7 +12,15 @@ import pytest
 from mt_widgets.hardware import SwiftPro
 from mt_widgets.hardware.bridge import FAST_SIMULATOR_SPEED, FAST_SIMULATOR_URL, connect_arm, default_simulator_url
 from mt_widgets.hardware.connector import SIMULATOR_URL
-from notebook_parameters import NOTEBOOK_PARAMETERS, SIMULATED_ARM, TAG, Scratch, assigned_names, injected_source
+from notebook_parameters import (
+    NOTEBOOK_PARAMETERS,
+    SIMULATED_ARM,
+    TAG,
+    ParametersError,
+    Scratch,
+    assigned_names,
+    injected_source,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -51,7 +59,7 @@ def test_the_override_comes_after_the_cells_own_values_and_names_only_what_it_as
     exec(injected, namespace)
     assert namespace["N_STUDIES"] == 30 and namespace["FOLDER"] == str(tmp_path / "x")
     assert injected.startswith(source.rstrip("\n"))
-    with pytest.raises(pytest.UsageError, match=r"a.ipynb: .*\['N_STUDY'\].* does not assign"):
+    with pytest.raises(ParametersError, match=r"a.ipynb: .*\['N_STUDY'\].* does not assign"):
         injected_source(source, {"N_STUDY": 30}, tmp_path, "a.ipynb")
     assert assigned_names("%matplotlib inline\nA = 1\nB: int = 2\nC, (D, E) = 3, (4, 5)\nprint(F)\n") == set("ABCDE")
 

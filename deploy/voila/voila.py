@@ -135,7 +135,10 @@ c.VoilaConfiguration.extension_denylist = ["@jupyter/nbgrader", "@jupyter-notebo
 # the kernel manager) still builds a log record that the handler then drops: about a tenth of
 # the server's CPU per relayed widget message (py-spy on a skill click). INFO at the logger
 # skips them. To see debug lines, run with --Voila.logging_config='{}' --Voila.log_level=DEBUG.
-c.Voila.logging_config = {"loggers": {"Voila": {"level": "INFO"}}}
+# "Notebook ... is not trusted", logged at every visit, is left out: Voila shows no stored output,
+# which is all a notebook's trust decides (deploy/voila/log_filters.py).
+c.Voila.logging_config = {"filters": {"notebook_trust": {"()": "log_filters.NotebookTrustNoise"}},
+                          "loggers": {"Voila": {"level": "INFO", "filters": ["notebook_trust"]}}}
 
 # No tracebacks on a public page: errors go to the server's log.
 c.VoilaConfiguration.show_tracebacks = False

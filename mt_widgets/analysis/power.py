@@ -169,7 +169,7 @@ def simulated_power(n_per_group: int = 16, n_studies: int = 1000, alpha: float =
     share_states = as_bool("share_states", share_states)
     progress = as_bool("progress", progress, allow_none=True)
     protocol = resolve_protocol(protocol)
-    changes = protocol.analysis.changes if changes is None else tuple(changes)
+    changes = protocol.analysis.compared(protocol.name) if changes is None else tuple(changes)
     deltas = run_many_studies(n_studies, n_per_group, seed=seed, parameters=parameters, changes=changes,
                               progress=progress, protocol=protocol, share_states=share_states,
                               workers=workers, forgetting=forgetting, delays=delays)

@@ -321,7 +321,8 @@ def analyse_protocol(episodes, protocol, confidence: float = 0.95, **overrides) 
     unknown = sorted(set(overrides) - known)
     if unknown:
         raise TypeError(f"analyse_protocol: unexpected arguments {unknown}; expected some of {sorted(known)}")
-    values = {"changes": plan.changes, "alternative": plan.alternative, "alpha": plan.alpha, "test": plan.test,
+    values = {"changes": plan.changes if overrides.get("changes") is not None else plan.compared(protocol.name),
+              "alternative": plan.alternative, "alpha": plan.alpha, "test": plan.test,
               "baseline": plan.baseline}
     values.update({k: v for k, v in overrides.items() if v is not None})
     return analyse_changes(episodes, confidence=confidence, groups=protocol.groups[:2],

@@ -12,7 +12,7 @@ from mt_widgets.classroom.roster import RosterError
 from mt_widgets.study.erasure import erase_participant
 from mt_widgets.study.jsonl import LogError
 
-from . import classroom, servers, study
+from . import classroom, protocols, servers, study
 
 DEFAULT_LAB_FOLDER = "mt-widgets-tutorials"
 
@@ -64,6 +64,17 @@ def build_parser() -> argparse.ArgumentParser:
         f"experimenter's panel opens with ${servers.EXPERIMENTER_CODE_ENV} (made up and printed when unset).")
     serve.add_argument("--online", action="store_true", help="serve the online participant page")
     _server_options(serve, "voila")
+    study_commands.add_parser(
+        "protocols", help="list the shipped protocols and their files",
+        description="Lists the protocols shipped with mt-widgets (the paper's, the follow-up's, the online "
+        "pilot): name, title, groups, phases and the file, to read or to copy with copy-protocol.")
+    copy = study_commands.add_parser(
+        "copy-protocol", help="copy a shipped protocol into a folder to edit it",
+        description="Copies the shipped protocol NAME (see: mt-widgets study protocols) into FOLDER "
+        "(default: the current folder), never over an existing file. Edit the copy, then load it with "
+        "mt_widgets.study.load_protocol(PATH).")
+    copy.add_argument("name", help="a shipped protocol's name (mt-widgets study protocols)")
+    copy.add_argument("folder", nargs="?", default=".", help="where the copy goes (default: here)")
     status = study_commands.add_parser("status", help="each group's and participant's state (the groups shown)",
                                        description="Prints each group's counts and each participant's state.")
     status.add_argument("folder", help="the study folder (it holds study.json)")
@@ -118,7 +129,7 @@ def run(args: argparse.Namespace, server_args: list[str]) -> int:
     if args.command == "lab":
         if args.copy_only:
             copied, kept = servers.copy_notebooks(args.folder)
-            print(f"{Path(args.folder).resolve()}: {len(copied)} notebooks copied, {len(kept)} already there")
+            print(servers.copy_report(Path(args.folder).resolve(), copied, kept))
             return 0
         command, url = servers.lab_command(args.folder, args.port, not args.no_browser, server_args)
         if url:
@@ -134,7 +145,11 @@ def run(args: argparse.Namespace, server_args: list[str]) -> int:
                 return servers.serve_online(args.port, server_args)
             notebook = servers.shipped_folder("notebooks") / "study_sim.ipynb"
             servers.replace_process(servers.voila_command(notebook, args.port, server_args), notebook.parent)
-        if args.study_command == "status":
+        if args.study_command == "protocols":
+            print(protocols.protocols_text())
+        elif args.study_command == "copy-protocol":
+            print(f"wrote {protocols.copy_protocol(args.name, args.folder)}")
+        elif args.study_command == "status":
             print(study.status_text(args.folder))
         elif args.study_command == "export":
             print(f"wrote {study.export(args.folder, args.out)}")
@@ -163,6 +178,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"options after -- go to a server; {args.command} starts none")
     try:
         return run(args, server_args)
-    except (LogError, RosterError, ClassFolderError, FileNotFoundError, NotADirectoryError, ValueError) as error:
+    except (LogError, RosterError, ClassFolderError, FileNotFoundError, FileExistsError, NotADirectoryError,
+            ValueError) as error:
         print(f"mt-widgets: {error}", file=sys.stderr)
         return 1

@@ -57,3 +57,11 @@ def copy_notebooks(folder) -> tuple[list[Path], list[Path]]:
                 shutil.copyfile(source, destination)
                 copied.append(destination)
     return copied, kept
+
+
+def copy_report(folder, copied: list, kept: list) -> str:
+    """What ``copy_notebooks`` did, in words: "FOLDER: 1 file copied, 23 already there (kept as they are)"."""
+    def files(n: int) -> str:
+        return f"{n} file" if n == 1 else f"{n} files"
+
+    return f"{folder}: {files(len(copied))} copied, {len(kept)} already there (kept as they are)"

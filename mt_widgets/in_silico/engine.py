@@ -370,7 +370,7 @@ def simulate_changes(protocol, population: TeacherPopulation, n_studies: int, n_
         "before": (n_studies, 2 n_per_group) the earlier episode's errors}}.
     """
     shared = as_bool("shared", shared, allow_none=True)
-    changes = protocol.analysis.changes if changes is None else tuple(changes)
+    changes = protocol.analysis.compared(protocol.name) if changes is None else tuple(changes)
     plan = episode_plan(protocol)
     per_study = 2 * n_per_group
     if len(population) != n_studies * per_study:

@@ -33,7 +33,9 @@ import atexit
 import json
 import logging
 import os
+import shutil
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
@@ -108,6 +110,17 @@ class KernelTemplate(TemplateProcess):
         self.socket = os.path.join(self.folder, "s")
         self.process: subprocess.Popen | None = None
         self.started_at = 0.0
+
+    def ensure_started(self) -> None:
+        os.makedirs(self.folder, mode=0o700, exist_ok=True)   # removed by an earlier stop
+        super().ensure_started()
+
+    def stop(self) -> None:
+        """Ends the template and removes its socket's folder, made for it alone (an adopted
+        template's folder is the server template's, which removes its own)."""
+        super().stop()
+        if not isinstance(self.process, ChildProcess):
+            shutil.rmtree(self.folder, ignore_errors=True)
 
     @classmethod
     def adopt(cls, socket_path: str, pid: int, modules: list[str]) -> KernelTemplate:
@@ -213,22 +226,40 @@ class ChildProcess:
 
 
 class ForkedProcess:
-    """A forked kernel as jupyter_client's LocalProvisioner sees a ``Popen``."""
+    """A forked kernel as jupyter_client's LocalProvisioner sees a ``Popen``.
+
+    The template writes the kernel's exit status on the connection that asked for the fork. It is
+    read without the event loop, by a non-blocking ``recv`` at each ``poll``: a server that stops
+    (Voila, jupyter_server on SIGTERM) ends its event loop first and shuts its kernels down in
+    another one, where a read waiting in the first loop would never finish: each kernel's shutdown
+    then waited its 5 s ("Wait for final termination of kernel timed out") and the loop's close
+    left the reads pending ("Task was destroyed but it is pending").
+    """
 
     stdin = stdout = stderr = None
 
     def __init__(self, pid: int, reader: asyncio.StreamReader, writer: asyncio.StreamWriter):
         self.pid = pid
         self.returncode: int | None = None
-        self._writer = writer
-        self._status = asyncio.ensure_future(reader.readline())
+        # The connection's own socket, duplicated, and the asyncio transport closed (a Unix socket
+        # stays connected while a descriptor of it is open).
+        self._connection = socket.socket(fileno=os.dup(writer.get_extra_info("socket").fileno()))
+        self._connection.setblocking(False)
+        self._received = b""
+        writer.close()
 
     def poll(self) -> int | None:
-        if self.returncode is None and self._status.done():
-            line = self._status.result() if not self._status.cancelled() and self._status.exception() is None else b""
-            if line:
-                self.returncode = int(json.loads(line)["status"])
-            else:
+        if self.returncode is None:
+            try:
+                data = self._connection.recv(4096)
+            except BlockingIOError:
+                return None
+            except OSError:
+                data = b""
+            self._received += data
+            if b"\n" in self._received:
+                self.returncode = int(json.loads(self._received.split(b"\n", 1)[0])["status"])
+            elif not data:
                 # The template ended before the kernel; the kernel follows it (its parent poller)
                 # within a second. Alive until it is gone; its exit code nobody can learn.
                 try:
@@ -236,7 +267,7 @@ class ForkedProcess:
                 except ProcessLookupError:
                     self.returncode = UNKNOWN_EXIT
             if self.returncode is not None:
-                self._writer.close()
+                self._connection.close()
         return self.returncode
 
     def wait(self, timeout: float | None = None) -> int | None:

@@ -480,8 +480,8 @@ def settle(numba_packages: list[str]) -> None:
     for package in numba_packages:
         started = time.perf_counter()
         loaded = load_numba_caches(package)
-        print(f"template: {loaded} compiled versions of {package}'s functions loaded from "
-              f"{os.environ.get('NUMBA_CACHE_DIR') or 'numba`s default cache'} in "
+        cache = os.environ.get("NUMBA_CACHE_DIR") or "numba's default cache"
+        print(f"template: {loaded} compiled versions of {package}'s functions loaded from {cache} in "
               f"{time.perf_counter() - started:.1f} s", file=sys.stderr, flush=True)
     _CACHED_FUNCTIONS[:] = _cached_numba_functions() if "numba" in sys.modules else []
     gc.collect()

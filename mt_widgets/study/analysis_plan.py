@@ -40,6 +40,25 @@ PAPER_CHANGES = (
 )
 
 
+def changes_that_fit(changes, episodes_per_phase: dict) -> tuple:
+    """The ``changes`` whose two episodes a protocol has: both phases, each episode within its
+    phase's count (None, a phase's last episode, fits any phase).
+
+    A protocol without an ``[analysis]`` table is analysed on the paper's comparisons that fit
+    its phases: the online pilot's three-phase study (P1, P3 of two episodes, P4) keeps P1 -> P4
+    and has no P3E8 or P5 to compare.
+
+    Args:
+        changes: ``Change`` comparisons.
+        episodes_per_phase: {phase id: its number of episodes}, every session's phases.
+    """
+    def fits(point) -> bool:
+        phase, episode = point
+        return phase in episodes_per_phase and (episode is None or 1 <= episode <= episodes_per_phase[phase])
+
+    return tuple(change for change in changes if fits(change.before) and fits(change.after))
+
+
 #: The between-group tests an analysis plan can name as its primary test.
 TESTS = ("student", "welch", "mannwhitney")
 #: Sidedness of the tests, phrased as target minus control.
@@ -61,7 +80,9 @@ class AnalysisPlan:
         alpha: the significance level.
         effect_size: the Cohen's d the sample size was planned for.
         power: the power planned for.
-        changes: the comparisons (``Change``), by default the paper's three.
+        changes: the comparisons (``Change``), by default the paper's three; a protocol without
+            an ``[analysis]`` table gets those of the three that fit its phases
+            (``changes_that_fit``), none if none does.
         baseline: the two (phase, episode) episodes of the post-hoc baseline check (the
             paper's P1 against P2), or None for none; a protocol without those phases gets no
             check.
@@ -87,6 +108,22 @@ class AnalysisPlan:
             as_fraction(name, getattr(self, name))
         if as_finite("effect_size", self.effect_size) == 0:
             raise ValueError(f"effect_size: expected a non-zero number (Cohen's d), got {self.effect_size!r}")
+
+    def compared(self, protocol_name: str) -> tuple:
+        """The changes to analyse.
+
+        Raises:
+            ValueError: the plan compares nothing (a protocol whose phases fit none of the paper's
+                comparisons and whose ``[analysis]`` table names none), naming the protocol and
+                how to add its comparisons.
+        """
+        if not self.changes:
+            paper = ", ".join(change.label for change in PAPER_CHANGES)
+            raise ValueError(f"changes: protocol {protocol_name!r} has no comparisons to analyse: its phases fit none "
+                             f"of the paper's ({paper}); name them in its [analysis] table, e.g. changes = "
+                             f'[{{name = "guidance", before = ["P1", 1], after = ["P3", 2]}}] '
+                             f"(docs/user/analysis.md), or pass changes=")
+        return self.changes
 
     def as_dict(self) -> dict:
         return {"test": self.test, "alternative": self.alternative, "alpha": self.alpha,

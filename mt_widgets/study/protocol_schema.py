@@ -30,7 +30,7 @@ from mt_widgets.core.guidance import GUIDANCE_MODALITIES
 from mt_widgets.core.learner_teaching import LEARNERS
 from mt_widgets.core.validation import as_bool
 
-from .analysis_plan import ALTERNATIVES, PAPER_CHANGES, TESTS, AnalysisPlan, Change
+from .analysis_plan import ALTERNATIVES, PAPER_CHANGES, TESTS, AnalysisPlan, Change, changes_that_fit
 from .online import parse_online
 from .protocol_model import OPTIONAL_TEXTS, Phase, Practice, Protocol, ProtocolError
 from .protocol_source import SourceLocator, path_name
@@ -201,7 +201,6 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
     step_ids: set = set()
     before = parse_steps(check, raw, "before", folder, step_ids, check_files)
     after = parse_steps(check, raw, "after", folder, step_ids, check_files)
-    plan = _parse_analysis(check, raw)
 
     phases_raw = raw.get("phases")
     if not isinstance(phases_raw, list) or not phases_raw:
@@ -215,6 +214,7 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
     online = parse_online(check, raw)
     reproduce_after = check.get(raw, ("reproduce_after",), "text", default="episode", choices=REPRODUCTION_TIMINGS)
     matched = _parse_matched_difficulty(check, raw)
+    plan = _parse_analysis(check, raw, phase_ids)
     _check_changes(check, plan, phase_ids)
 
     data = copy.deepcopy(raw)
@@ -364,8 +364,6 @@ def _parse_sessions(check, raw, groups, skills, phase_ids, step_ids, folder, che
 
 def _check_changes(check, plan: AnalysisPlan, phase_ids: dict) -> None:
     """The analysis plan compares episodes that exist (phases of any session, episodes in range)."""
-    if plan.changes is PAPER_CHANGES and not all(c in phase_ids for c in ("P1", "P2", "P3", "P4", "P5")):
-        return  # the paper's default plan, for a protocol of other phases: the analysis says so itself
     for i, change in enumerate(plan.changes):
         for phase_id, episode in (change.before, change.after):
             if phase_id not in phase_ids:
@@ -376,11 +374,17 @@ def _check_changes(check, plan: AnalysisPlan, phase_ids: dict) -> None:
                                                     f"{phase_ids[phase_id].episodes}, got {episode}")
 
 
-def _parse_analysis(check, raw: dict) -> AnalysisPlan:
-    """The ``[analysis]`` table: the pre-registered test, sidedness, alpha and planned power."""
+def _parse_analysis(check, raw: dict, phase_ids: dict) -> AnalysisPlan:
+    """The ``[analysis]`` table: the pre-registered test, sidedness, alpha and planned power.
+
+    Without ``changes`` (or without the table), the paper's comparisons that fit the protocol's
+    phases (``changes_that_fit``): the paper's P3E8 or P5 is never asked of a protocol without them.
+    """
+    episodes = {phase_id: phase.episodes for phase_id, phase in phase_ids.items()}
+    default_changes = changes_that_fit(PAPER_CHANGES, episodes)
     table = raw.get("analysis")
     if table is None:
-        return AnalysisPlan()
+        return AnalysisPlan(changes=default_changes)
     table = check.get(raw, ("analysis",), "table")
     check.unknown(table, ("analysis",), ("test", "alternative", "alpha", "effect_size", "power", "changes",
                                          "baseline"))
@@ -410,7 +414,7 @@ def _parse_analysis(check, raw: dict) -> AnalysisPlan:
                                                     f"after = [phase, episode]}}, got {change!r}")
         values["changes"] = tuple(parsed)
     else:
-        values["changes"] = PAPER_CHANGES
+        values["changes"] = default_changes
     if "baseline" in table:
         baseline = table["baseline"]
         ok = (isinstance(baseline, list) and len(baseline) == 2 and all(

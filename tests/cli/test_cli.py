@@ -17,14 +17,15 @@ import mt_widgets
 from mt_widgets.classroom import ProgressRecorder
 from mt_widgets.cli import main
 from mt_widgets.cli.shipped import copy_notebooks, shipped_folder
-from mt_widgets.study import Session
+from mt_widgets.study import BUILTIN_PROTOCOLS, Session, load_protocol
 from mt_widgets.study.pseudonyms import code_of
 from mt_widgets.study.study_folder import StudyFolder
 from tests.study.scripted import STEPS, run_to_end, run_to_end_one, steps_protocol
 
 REPO = Path(__file__).resolve().parents[2]
 SUBCOMMANDS = [[], ["lab"], ["demo"], ["study"], ["study", "serve"], ["study", "status"], ["study", "export"],
-               ["study", "withdraw"], ["study", "erase"], ["course"], ["course", "check"], ["hub"], ["hub", "check"]]
+               ["study", "withdraw"], ["study", "erase"], ["study", "protocols"], ["study", "copy-protocol"],
+               ["course"], ["course", "check"], ["hub"], ["hub", "check"]]
 
 
 @pytest.mark.parametrize("words", SUBCOMMANDS, ids=lambda words: " ".join(words) or "mt-widgets")
@@ -174,6 +175,11 @@ def test_course_check_names_students_without_progress_and_damaged_files(a_class,
 def test_lab_copies_the_tutorials_into_an_empty_folder_and_keeps_the_users_files(tmp_path, capsys):
     folder = tmp_path / "mine"
     assert main(["lab", str(folder), "--copy-only"]) == 0
+    shipped = len(list((folder / "tutorials").iterdir())) + len(list((folder / "notebooks").iterdir()))
+    assert capsys.readouterr().out.strip() == f"{folder}: {shipped} files copied, 0 already there (kept as they are)"
+    (folder / "notebooks" / "demo.ipynb").unlink()
+    assert main(["lab", str(folder), "--copy-only"]) == 0
+    assert capsys.readouterr().out.strip() == f"{folder}: 1 file copied, {shipped - 1} already there (kept as they are)"
     tutorials = sorted(p.name for p in shipped_folder("tutorials").glob("*.ipynb"))
     assert sorted(p.name for p in (folder / "tutorials").glob("*.ipynb")) == tutorials
     assert (folder / "notebooks" / "demo.ipynb").read_bytes() == (REPO / "notebooks" / "demo.ipynb").read_bytes()
@@ -193,3 +199,27 @@ def test_the_clone_reads_its_own_notebooks():
     assert shipped_folder("deploy/voila") == REPO / "deploy" / "voila"
     with pytest.raises(ValueError, match="name: expected one of"):
         shipped_folder("tests")
+
+
+def test_study_protocols_lists_every_shipped_protocol_with_its_file(capsys):
+    assert main(["study", "protocols"]) == 0
+    out = capsys.readouterr().out
+    for name in [*BUILTIN_PROTOCOLS, "online-pilot"]:
+        [line] = [line for line in out.splitlines() if line.startswith(f"{name}: ")]
+        path = Path(out.splitlines()[out.splitlines().index(line) + 2].strip())
+        assert path.is_file() and load_protocol(path).name == name
+    assert "online-pilot: Machine-teaching study, online pilot" in out and "P1 (1), P3 (2), P4 (1)" in out
+
+
+def test_study_copy_protocol_copies_a_shipped_protocol_to_edit_and_never_overwrites(tmp_path, capsys):
+    assert main(["study", "copy-protocol", "online-pilot", str(tmp_path / "mine")]) == 0
+    copy = tmp_path / "mine" / "study_online_pilot.toml"
+    assert capsys.readouterr().out.strip() == f"wrote {copy}"
+    assert copy.read_text() == (REPO / "notebooks" / "study_online_pilot.toml").read_text()
+    assert main(["study", "copy-protocol", "paper-sim", str(tmp_path / "mine")]) == 0
+    assert load_protocol(tmp_path / "mine" / "paper_sim.toml").hash == load_protocol("paper-sim").hash
+    copy.write_text(copy.read_text() + "# my edit\n")
+    assert main(["study", "copy-protocol", "online-pilot", str(tmp_path / "mine")]) == 1
+    assert "exists already" in capsys.readouterr().err and copy.read_text().endswith("# my edit\n")
+    assert main(["study", "copy-protocol", "paper_sim", str(tmp_path)]) == 1
+    assert "expected a shipped protocol" in capsys.readouterr().err

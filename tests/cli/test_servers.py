@@ -15,7 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from mt_widgets.cli.servers import free_port
+from mt_widgets.cli.servers import free_port, online_study, participant_link
+from mt_widgets.study import load_protocol
 
 REPO = Path(__file__).resolve().parents[2]
 START_S = 120.0  # two cores shared with the rest of the suite: JupyterLab alone took 20 s here
@@ -78,9 +79,10 @@ def test_lab_opens_jupyterlab_on_the_copied_tutorials(tmp_path):
         assert status == 200 and '"name": "00_start_here.ipynb"' in body.replace('":"', '": "')
         assert _get(port, "/api/contents/tutorials", server)[0] == 403  # no token, no notebooks
     finally:
-        _stop(server)
+        out = first + _stop(server)
     assert server.returncode in (0, -signal.SIGTERM)
     assert (tmp_path / "class" / "notebooks" / "demo.ipynb").exists()
+    assert "files copied" in first and "DeprecationWarning" not in out and "ServerApp.token" not in out, out
 
 
 @pytest.mark.slow
@@ -93,6 +95,9 @@ def test_demo_serves_the_demo_page(tmp_path):
     finally:
         out = _stop(server)
     assert _ended_cleanly(server, out), out
+    assert "is not trusted" not in out and "Voila" in out, out   # deploy/voila/log_filters.py
+    # A clean stop: each forked kernel's end is read without the stopped event loop (ForkedProcess).
+    assert "Wait for final termination of kernel timed out" not in out and "Task was destroyed" not in out, out
 
 
 @pytest.mark.slow
@@ -101,9 +106,18 @@ def test_study_serve_online_serves_only_the_study_pages_and_cleans_up(tmp_path):
     # A temporary folder of its own (short: Voila's kernel sockets live there too, at most 107 bytes a path).
     own_tmp = Path(tempfile.mkdtemp(prefix="mtw-"))
     server = _start(["study", "serve", "--online", "--port", str(port), "--", "--Voila.ip=127.0.0.1"], cwd=tmp_path,
-                    env={"MT_WIDGETS_EXPERIMENTER_CODE": "", "TMPDIR": str(own_tmp)})
+                    env={"MT_WIDGETS_EXPERIMENTER_CODE": "", "TMPDIR": str(own_tmp),
+                         "MT_WIDGETS_STUDY_PROTOCOL": "", "MT_WIDGETS_STUDY_LOGS": str(tmp_path / "logs")})
     try:
         assert server.stdout.readline().startswith("Experimenter code for this server: ")
+        said = dict(server.stdout.readline().rstrip("\n").split(": ", 1) for _ in range(5))
+        assert said["Protocol"] == str(REPO / "notebooks" / "study_online_pilot.toml")
+        assert said["Logs"] == str(tmp_path / "logs")
+        link = said["Participant link to try (a made-up test ID)"]
+        assert link.startswith(f"http://localhost:{port}/voila/render/study_online.ipynb?PROLIFIC_PID=")
+        assert said["Experimenter's page"] == f"http://localhost:{port}/voila/render/study_sim.ipynb"
+        assert ("(PILOTDONE), then goes to the protocol's completion URL, "
+                "http://localhost/prolific/complete?cc=PILOTDONE") in said["At the end"]
         status, body = _get(port, "/voila/api/contents", server)  # what the served folder holds
         assert status == 200
         # Voila lists notebooks only (the pilot protocol beside them is read by the online page).
@@ -113,3 +127,18 @@ def test_study_serve_online_serves_only_the_study_pages_and_cleans_up(tmp_path):
     assert _ended_cleanly(server, out), out
     assert list(own_tmp.glob("mt-widgets-study-pages.*")) == []
     shutil.rmtree(own_tmp, ignore_errors=True)
+
+
+def test_the_online_study_served_is_the_pilot_unless_set_and_its_printed_link_enrols_a_test_participant(tmp_path):
+    protocol, logs = online_study({"HOME": str(tmp_path)})
+    assert protocol == str(REPO / "notebooks" / "study_online_pilot.toml")
+    assert logs == Path.home() / "mt-widgets-studies" / "online"
+    mine = tmp_path / "mine.toml"
+    assert online_study({"MT_WIDGETS_STUDY_PROTOCOL": str(mine), "MT_WIDGETS_STUDY_LOGS": "~/x"}) == (
+        str(mine), Path.home() / "x")
+    link = participant_link("http://localhost:8866", protocol)
+    assert link.startswith("http://localhost:8866/voila/render/study_online.ipynb?PROLIFIC_PID=")
+    query = dict(pair.split("=") for pair in link.split("?", 1)[1].split("&"))
+    arrival = load_protocol(protocol).online.participant_from_url(query)
+    assert len(arrival.participant_id) == 24 and set(arrival.parameters) == {"STUDY_ID", "SESSION_ID"}
+    assert participant_link("http://localhost:8866", protocol) != link   # each try a new participant

@@ -108,3 +108,15 @@ def test_the_guide_lists_every_guide_page(build):
         assert f'href="guide/{guide.stem}.html"' in page, f"guide.html does not link {guide.name}"
     if not guides:
         assert "No guide pages have been written yet." in page
+
+
+def test_the_maths_is_typeset_by_the_sites_own_mathjax(build):
+    # Offline (a classroom without internet): MathJax and its fonts come from the site, not a CDN.
+    science = (HTML / "science.html").read_text()
+    assert '<span class="math' in science or "\\(" in science, "docs/science.md shows no maths"
+    assert 'src="_static/mathjax/tex-chtml.js' in science, "science.html does not load the site's MathJax"
+    assert (HTML / "_static" / "mathjax" / "tex-chtml.js").is_file()
+    assert list((HTML / "_static" / "mathjax" / "output" / "chtml" / "fonts" / "woff-v2").glob("*.woff"))
+    cdn = [page.relative_to(HTML).as_posix() for page in HTML.rglob("*.html")
+           if re.search(r"https?://[^\"']*mathjax", page.read_text(errors="replace"), flags=re.I)]
+    assert not cdn, f"pages asking a CDN for MathJax: {cdn[:10]}"

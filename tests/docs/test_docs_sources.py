@@ -82,3 +82,63 @@ def test_the_benchmark_figures_are_drawn(tmp_path):
     assert sorted(path.name for path in written) == ["core.png", "hub.png", "kiosk.png", "online.png", "targets.png"]
     for path in written:
         assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and path.stat().st_size > 5000
+
+
+def _requirement_names(requirements: list[str]) -> set[str]:
+    return {re.split(r"[\[<>=!~;\s]", requirement, maxsplit=1)[0].lower().replace("_", "-")
+            for requirement in requirements}
+
+
+def test_what_docs_conf_imports_from_the_repository_runs_with_the_docs_extra_alone():
+    # `pip install -e ".[docs]"` then ./scripts/build-docs.sh: the modules of this repository that
+    # docs/conf.py imports (its _ext/ helpers, the notebooks' shortening) are imported, and the
+    # shortening applied, in a Python where every package only the test extra brings is missing.
+    import ast
+    import subprocess
+    from importlib.metadata import packages_distributions
+
+    try:
+        import tomllib
+    except ModuleNotFoundError:   # Python 3.10
+        import tomli as tomllib
+    extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"]
+    docs = _requirement_names(extras["docs"])
+    for extra in ("lab", "widgets", "analysis", "uarm"):
+        docs |= _requirement_names(extras[extra])
+    test_only = _requirement_names(extras["test"]) - docs
+    blocked = sorted(module for module, dists in packages_distributions().items()
+                     if {d.lower().replace("_", "-") for d in dists} & test_only)
+    assert "pytest" in blocked and "nbval" in blocked
+
+    tree = ast.parse((ROOT / "docs" / "conf.py").read_text())
+    local = {path.stem for path in (ROOT / "docs" / "_ext").glob("*.py")} | {"tests"}
+    imported = sorted({node.module if isinstance(node, ast.ImportFrom) else alias.name
+                       for node in ast.walk(tree) if isinstance(node, (ast.Import, ast.ImportFrom))
+                       for alias in node.names
+                       if ((node.module if isinstance(node, ast.ImportFrom) else alias.name) or "").split(".")[0]
+                       in local})
+    assert "tests.notebook_parameters" in imported, imported
+    script = f"""
+import importlib, importlib.abc, sys
+from pathlib import Path
+BLOCKED = {blocked!r}
+class Missing(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in BLOCKED:
+            raise ModuleNotFoundError(f"No module named {{name!r}} (not in the docs extra)")
+sys.meta_path.insert(0, Missing())
+sys.path[:0] = [{str(ROOT)!r}, {str(ROOT / "docs" / "_ext")!r}]
+for name in {imported!r}:
+    importlib.import_module(name)
+parameters = importlib.import_module("tests.notebook_parameters")
+source = parameters.injected_source("N = 300\\n", {{"N": 3}}, Path("/tmp"), "a.ipynb")
+assert source.rstrip().endswith("N = 3"), source
+try:
+    parameters.injected_source("N = 300\\n", {{"M": 3}}, Path("/tmp"), "a.ipynb")
+except parameters.ParametersError:
+    pass
+else:
+    raise AssertionError("a parameter the cell does not assign was accepted")
+"""
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 0, run.stderr

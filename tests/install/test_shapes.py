@@ -17,6 +17,11 @@ import tarfile
 import zipfile
 from pathlib import Path
 
+try:
+    import tomllib
+except ModuleNotFoundError:   # Python 3.10
+    import tomli as tomllib
+
 import pytest
 
 pytestmark = pytest.mark.install
@@ -70,6 +75,17 @@ def test_the_sdist_and_the_wheel_hold_the_package_and_its_data(distributions):
         assert path in in_wheel and path in in_sdist, path
     assert {"pyproject.toml", "LICENSE"} <= in_sdist
     assert not any(name.startswith(("tests/", "notebooks/")) for name in in_wheel)
+
+
+def test_the_sdist_and_the_wheel_are_versioned_and_pass_twine_check(distributions):
+    # What a release uploads (docs/release.md): the version of pyproject.toml in both names, and the
+    # metadata and README the package index would render (twine check --strict: warnings fail too).
+    sdist, wheel = distributions
+    version = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]["version"]
+    assert sdist.name == f"mt_widgets-{version}.tar.gz" and wheel.name == f"mt_widgets-{version}-py3-none-any.whl"
+    check = subprocess.run([sys.executable, "-m", "twine", "check", "--strict", str(sdist), str(wheel)],
+                           capture_output=True, text=True, timeout=120)
+    assert check.returncode == 0 and check.stdout.count("PASSED") == 2, check.stdout + check.stderr
 
 
 @pytest.mark.parametrize("shape", list(SHAPES))

@@ -72,6 +72,17 @@ def test_an_unwritable_log_folder_is_refused_before_the_participant_starts(tmp_p
     assert app.children == (app.experimenter,)
 
 
+def test_list_participants_lists_a_study_and_creates_none(tmp_path, protocol_file):
+    app = StudyApp(protocol=protocol_file, log_folder=tmp_path / "logs")
+    app.experimenter.list_button.click()
+    assert not (tmp_path / "logs").exists()
+    assert "No study in" in app.experimenter.message.value and app.experimenter.listing.value == ""
+    app.start_participant("P01", group="target")
+    again = StudyApp(protocol=protocol_file, log_folder=tmp_path / "logs")
+    again.experimenter.list_button.click()
+    assert "P01" in again.experimenter.listing.value and "target" in again.experimenter.listing.value
+
+
 def test_a_bad_protocol_file_is_named_in_the_panel(tmp_path):
     path = tmp_path / "bad.toml"
     path.write_text(SHORT_PROTOCOL.replace('skill = "uarm-line"', 'skill = "uarm-circle"'))

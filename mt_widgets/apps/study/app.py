@@ -25,6 +25,7 @@ from mt_widgets.study import (
     StudyFolder,
     load_protocol,
 )
+from mt_widgets.study.study_folder import STUDY_FILE
 from mt_widgets.widgets import EpisodeWidget
 
 from .panel import RANDOMISED, ExperimenterPanel
@@ -71,7 +72,7 @@ class StudyApp(VBox):
         panel.start_button.on_click(lambda _: self._guarded(self._start_from_panel))
         panel.resume_button.on_click(lambda _: self._guarded(self._resume_from_panel))
         panel.lesson_button.on_click(lambda _: self._guarded(self._lesson_from_panel))
-        panel.list_button.on_click(lambda _: self._guarded(lambda: panel.list_study(self._study())))
+        panel.list_button.on_click(lambda _: self._guarded(self._list_participants))
         self._on_protocol({"new": protocol})
         super().__init__([panel])
 
@@ -124,6 +125,16 @@ class StudyApp(VBox):
         self.experimenter.show_groups(protocol.groups)
         self.experimenter.say(f"Protocol {protocol.name!r}: {len(protocol.phases)} phases, "
                               f"{protocol.n_episodes} episodes.")
+
+    def _list_participants(self) -> None:
+        """Lists the study in the panel's log folder; a folder without a study stays as it is (the
+        study is made when the first participant starts, with the protocol chosen then)."""
+        folder = Path(self.experimenter.log_folder.value.strip()).expanduser()
+        if not (folder / STUDY_FILE).is_file():
+            self.experimenter.listing.value = ""
+            self.experimenter.say(f"No study in {folder} yet: it is made when the first participant starts.")
+            return
+        self.experimenter.list_study(StudyFolder(folder))
 
     def _study(self) -> StudyFolder:
         protocol = load_protocol(self.experimenter.protocol.value.strip())
