@@ -151,4 +151,9 @@ class GaussianProcessLearner(_RBFSmoother):
         X = as_float_array("X", X, ndim=2)
         X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, X.shape[1]))
         cross = self._gram(X_star, X)
-        return self.signal_variance - np.einsum("mn,nk,mk->m", cross, self._inverse(X), cross)
+        # The prior variance at x* is the covariance's own diagonal s2 k(x*, x*), which the linear
+        # part raises to s2 (1 + c (1 + |x*|^2)): the RBF's 1 alone is right only for c = 0.
+        prior = self.signal_variance * (1.0 + self.linear_weight * (1.0 + np.sum(X_star * X_star, axis=1)))
+        explained = np.einsum("mn,nk,mk->m", cross, self._inverse(X), cross)
+        # Exactly, explained <= prior; what exceeds it is round-off of a variance near zero.
+        return np.maximum(prior - explained, 0.0)

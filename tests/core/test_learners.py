@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 from sklearn.gaussian_process import GaussianProcessRegressor
-from sklearn.gaussian_process.kernels import RBF, ConstantKernel
+from sklearn.gaussian_process.kernels import RBF, ConstantKernel, DotProduct
 from sklearn.kernel_ridge import KernelRidge
 
 from mt_widgets.core import SKILLS, RidgeLearner, Skill, optimal_actions
@@ -37,15 +37,47 @@ def test_kernel_ridge_is_scikit_learns(seed, lam):
     np.testing.assert_allclose(ours.smoother(X, X_star) @ U, theirs.predict(X_star), rtol=1e-7, atol=1e-9)
 
 
+def _scikit_learn_gp(length_scale, noise_variance, signal_variance, linear_weight):
+    """scikit-learn's regressor with our covariance ``s2 (rbf + c (1 + x.x'))``, fixed (no optimiser)."""
+    kernel = RBF(length_scale, length_scale_bounds="fixed")
+    if linear_weight:   # DotProduct(sigma_0=1) is 1 + x.x'
+        kernel = kernel + ConstantKernel(linear_weight, constant_value_bounds="fixed") * DotProduct(
+            1.0, sigma_0_bounds="fixed")
+    kernel = ConstantKernel(signal_variance, constant_value_bounds="fixed") * kernel
+    return GaussianProcessRegressor(kernel, alpha=noise_variance, optimizer=None, normalize_y=False)
+
+
 @pytest.mark.parametrize("seed", range(5))
-def test_gaussian_process_mean_is_scikit_learns(seed):
+@pytest.mark.parametrize("linear_weight", [0.0, 0.3, 1.0])
+def test_gaussian_process_mean_and_variance_are_scikit_learns(seed, linear_weight):
     X, U, X_star = _data(seed)
-    ours = GaussianProcessLearner(1.3, noise_variance=1e-3, signal_variance=2.5, inputs="state")
-    kernel = ConstantKernel(2.5, constant_value_bounds="fixed") * RBF(1.3, length_scale_bounds="fixed")
-    theirs = GaussianProcessRegressor(kernel, alpha=1e-3, optimizer=None, normalize_y=False).fit(X, U)
+    ours = GaussianProcessLearner(1.3, noise_variance=1e-3, signal_variance=2.5, inputs="state",
+                                  linear_weight=linear_weight)
+    theirs = _scikit_learn_gp(1.3, 1e-3, 2.5, linear_weight).fit(X, U)
     mean, std = theirs.predict(X_star, return_std=True)
     np.testing.assert_allclose(ours.predict(ours.fit(X, U), X_star), mean, rtol=1e-7, atol=1e-9)
     np.testing.assert_allclose(ours.posterior_variance(X, X_star), std[:, 0] ** 2, rtol=1e-6, atol=1e-9)
+
+
+@pytest.mark.parametrize("key", ["uarm-point", "sim-point"])
+def test_gaussian_process_variance_by_name_is_scikit_learns_and_never_negative(key):
+    # By name the GP has the linear part (linear_weight 1) on task-space inputs in cm (uArm) or m:
+    # a prior variance of order |x|^2 that the RBF's 1 alone missed by up to 900 on the uArm.
+    skill = SKILLS[key]
+    ours = make_learner("gaussian-process", skill)
+    assert ours.linear_weight > 0
+    X = learner_inputs(ours, skill, skill.query_states(seed=1))
+    X_star = learner_inputs(ours, skill, evaluation_states(skill, 64))
+    U = skill.target_actions(skill.query_states(seed=1))
+    theirs = _scikit_learn_gp(ours.length_scale, ours.noise_variance, ours.signal_variance, ours.linear_weight)
+    _, std = theirs.fit(X, U).predict(X_star, return_std=True)
+    variance = ours.posterior_variance(X, X_star)
+    assert np.all(variance >= 0)
+    np.testing.assert_allclose(variance, std[:, 0] ** 2, rtol=1e-6, atol=1e-9 * ours.signal_variance)
+    # At the query states it is below the noise variance (the prior there is up to 1e6 times larger).
+    at_query = ours.posterior_variance(X, X)
+    np.testing.assert_allclose(at_query, theirs.predict(X, return_std=True)[1][:, 0] ** 2, rtol=0, atol=1e-9)
+    assert np.all((at_query >= 0) & (at_query <= ours.noise_variance))
 
 
 def test_ridge_implements_the_interface_with_its_figures_unchanged():
