@@ -49,8 +49,9 @@ class _RBFSmoother(Learner):
 
     def _kernel(self, A, B) -> np.ndarray:
         """The RBF, plus ``linear_weight (1 + a.b)`` when asked: the linear part on task-space inputs
-        is the paper's features (position, velocity, a bias), so the learner is ridge plus a
-        nonlinear correction, and learns a linear skill as ridge does."""
+        is the paper's features (position, velocity, a bias). It does not make the learner learn a
+        linear skill as ridge does: the RBF part adds bumps at the query states, so at the paper's
+        5 or 3 query states MT leaves a risk far above ridge's (docs/guide/learners.md)."""
         gram = rbf_kernel(A, B, self.length_scale)
         return gram + self.linear_weight * (1.0 + A @ B.T) if self.linear_weight else gram
 

@@ -102,8 +102,9 @@ def make_learner(name: str, skill=None, **parameters) -> Learner:
                              f"typical one from, got neither")
         parameters["length_scale"] = typical_length_scale(skill, parameters.get("inputs", "task"))
     if cls in (KernelRidgeLearner, GaussianProcessLearner):
-        # By name, a kernel learner is the paper's features' linear kernel plus the RBF: it learns
-        # a linear skill as ridge does and a nonlinear one beyond it (``KernelRidgeLearner``).
+        # By name, a kernel learner is the paper's features' linear kernel plus the RBF, so that with
+        # enough states it learns a nonlinear skill beyond ridge's best linear policy; at a few states
+        # it does not learn a linear skill as ridge does (docs/guide/learners.md gives the figures).
         parameters.setdefault("linear_weight", 1.0)
     try:
         return cls(**parameters)

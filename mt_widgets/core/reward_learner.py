@@ -9,20 +9,24 @@ is reproduced and what is assumed):
 
 - The plant is kinematic in the plane, ``r <- r + u`` (the uArm; inputs are positions r).
 - The reward of an action is quadratic: ``R(r, u) = -1/2 (r + u - g)^T W (r + u - g) - 1/2 |u|^2``,
-  a cost of the distance to where the skill leads (W symmetric positive semi-definite, b = W g)
-  and of the action's size. The action cost's weight is fixed to 1: a reward's scale cannot be
+  a cost of the distance to where the skill leads (W symmetric, b = W g; the paper's skills have
+  W positive semi-definite) and of the action's size. The action cost's weight is fixed to 1: a reward's scale cannot be
   told from demonstrations, and fixing it rules out the trivial zero reward.
 - Learning the reward is inverse optimal control by the optimality condition: a demonstration
   is optimal when ``dR/du = 0``, i.e. ``W (r_n + u_n) - b + u_n = 0``, linear in (W, b); the
   learner takes the least-squares (W, b) over the demonstrations, with a small ridge ``lam``,
-  and projects W onto the positive semi-definite matrices (a reward with a maximum).
+  and raises W's eigenvalues to at least ``MIN_EIGENVALUE`` = -1/2, so that the reward is concave
+  in the action (``W + I`` at least ``I / 2``) and has one best action. The floor lies below the
+  eigenvalue 0 of a singular W (the line skill), so the fit is smooth around every skill whose W
+  is positive semi-definite and machine teaching reaches machine precision there.
 - The robot executes the policy optimal for the learnt reward, ``u(r) = (W + I)^-1 (b - W r)``.
 
 The learnt reward depends on the demonstrated actions through the design of the least squares
 (``r_n + u_n``): the learner is not linear in the actions, and machine teaching for it is
 approximate (``learner_teaching.approximate_teaching``). The paper's point-reaching and
 line-reaching uArm skills are in its policy class (W = 0.25 I, and W = 0.25 n n^T), so the
-target is representable and MT can teach it to near machine precision.
+target is representable; with 8 query states MT teaches each to machine precision (risk below
+1e-9) in 100 of 100 random query sets (tests/core/test_reward_learner.py).
 """
 
 from __future__ import annotations
@@ -32,6 +36,14 @@ import numpy as np
 from .kernel_learners import SingularFitError
 from .learner import Learner, check_demonstrations
 from .validation import as_float_array, as_positive
+
+
+#: The least eigenvalue the learnt W may have. The policy needs only ``W + I`` positive definite
+#: (the reward concave in the action, so its maximiser is unique); the floor keeps it at least
+#: ``I / 2``. It is not 0: a skill whose W is singular (the line, W = 0.25 n n^T) sits on the
+#: floor's edge with 0, where the clip ``max(w, 0)`` made the fit non-smooth in the demonstrated
+#: actions, and machine teaching stopped between 1e-12 and 5e-6 in 44 of 100 query sets of 8.
+MIN_EIGENVALUE = -0.5
 
 
 class RewardLearner(Learner):
@@ -66,7 +78,7 @@ class RewardLearner(Learner):
         gram = design.T @ design + self.lam * np.eye(5)
         w11, w12, w22, b1, b2 = np.linalg.solve(gram, design.T @ target)
         values, vectors = np.linalg.eigh(np.array([[w11, w12], [w12, w22]]))
-        W = (vectors * np.maximum(values, 0.0)) @ vectors.T
+        W = (vectors * np.maximum(values, MIN_EIGENVALUE)) @ vectors.T
         return W, np.array([b1, b2])
 
     def predict(self, fitted, X_star) -> np.ndarray:
