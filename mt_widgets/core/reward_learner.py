@@ -37,7 +37,6 @@ from .kernel_learners import SingularFitError
 from .learner import Learner, check_demonstrations
 from .validation import as_float_array, as_positive
 
-
 #: The least eigenvalue the learnt W may have. The policy needs only ``W + I`` positive definite
 #: (the reward concave in the action, so its maximiser is unique); the floor keeps it at least
 #: ``I / 2``. It is not 0: a skill whose W is singular (the line, W = 0.25 n n^T) sits on the
