@@ -54,16 +54,16 @@ class RewardLearner(Learner):
 
     name = "reward"
     inputs = "state"
-    linear_in_actions = False
 
     def __init__(self, lam: float = 1e-3):
-        self.lam = as_positive("lam", lam)
+        self.lam = lam
 
-    def __repr__(self) -> str:
-        return f"RewardLearner(lam={self.lam:.4g})"
+    def check_params(self) -> None:
+        as_positive("lam", self.lam)
 
     def fit(self, X, U):
         """Learns the reward (W (2, 2), b (2,)) from positions X (N, 2) and actions U (N, 2)."""
+        self.check_params()
         X, U = check_demonstrations(X, U)
         if X.shape[1] != 2 or U.shape[1] != 2:
             raise ValueError(f"X, U: expected planar positions and actions (N, 2) for the reward learner, "

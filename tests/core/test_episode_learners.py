@@ -15,8 +15,12 @@ def test_ridge_given_as_a_learner_is_the_papers_episode():
     plain, given = TeachingEpisode(skill, states, lam=0.05), TeachingEpisode(skill, states, learner=RidgeLearner(0.05))
     np.testing.assert_array_equal(plain.optimal_actions, given.optimal_actions)
     assert given.lam == 0.05 and given.ridge and plain.rho1 == given.rho1
-    with pytest.raises(ValueError, match="lam: expected the ridge learner's own lam 0.05"):
+    with pytest.raises(ValueError, match="lam: expected none \\(or the ridge learner's own lam 0.05\\)"):
         TeachingEpisode(skill, states, lam=0.2, learner=RidgeLearner(0.05))
+    # The default's value given explicitly is a second source too: refused, not overridden.
+    with pytest.raises(ValueError, match="got 0.01: the learner's lam is the one source"):
+        TeachingEpisode(skill, states, lam=0.01, learner=RidgeLearner(0.5))
+    assert TeachingEpisode(skill, states, lam=0.05, learner=RidgeLearner(0.05)).lam == 0.05
     with pytest.raises(TypeError, match="learner: expected a mt_widgets.core Learner"):
         TeachingEpisode(skill, states, learner="ridge")
 

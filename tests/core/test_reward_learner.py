@@ -60,7 +60,7 @@ def test_mt_beats_the_target_and_random_actions_over_query_sets_of_8(key):
 
 def test_bad_input_is_named():
     with pytest.raises(ValueError, match="lam: expected a positive finite number"):
-        RewardLearner(lam=0.0)
+        RewardLearner(lam=0.0).fit(np.ones((8, 2)), np.ones((8, 2)))
     with pytest.raises(ValueError, match="expected planar positions and actions"):
         RewardLearner().fit(np.ones((8, 3)), np.ones((8, 3)))
     learner = RewardLearner()
