@@ -156,8 +156,8 @@ def exact_teaching(learner: Learner, skill, query_states, eval_states=None) -> L
     """The least-squares demonstration ``pinv(S) Y*`` for a linear smoother (module docstring)."""
     if not is_linear_smoother(learner):
         raise TypeError(f"learner: expected a linear smoother (a learner with a smoother matrix, "
-                        f"learner.LinearSmoother) for exact teaching, got {learner!r}, which is not linear in the demonstrated actions; "
-                        f"its machine teaching is approximate (approximate_teaching)")
+                        f"learner.LinearSmoother) for exact teaching, got {learner!r}, which is not linear in the "
+                        f"demonstrated actions; its machine teaching is approximate (approximate_teaching)")
     query_states = as_float_array("query_states", query_states, ndim=2, shape=(None, skill.state_dim))
     eval_states = evaluation_states(skill) if eval_states is None else eval_states
     X_eval = learner_inputs(learner, skill, eval_states)
