@@ -63,7 +63,7 @@ class Learner:
     def _parameter_names(cls) -> list[str]:
         signature = inspect.signature(cls.__init__)
         return [name for name, parameter in signature.parameters.items()
-                if name != "self" and parameter.kind is not parameter.VAR_KEYWORD]
+                if name != "self" and parameter.kind not in (parameter.VAR_POSITIONAL, parameter.VAR_KEYWORD)]
 
     def get_params(self, deep: bool = True) -> dict:
         """The hyper-parameters, by the constructor's argument names (``deep`` is scikit-learn's

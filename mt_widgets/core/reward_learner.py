@@ -63,31 +63,45 @@ class RewardLearner(Learner):
 
     def fit(self, X, U):
         """Learns the reward (W (2, 2), b (2,)) from positions X (N, 2) and actions U (N, 2)."""
-        self.check_params()
         X, U = check_demonstrations(X, U)
-        if X.shape[1] != 2 or U.shape[1] != 2:
+        W, b = self.fit_batch(X, U[None])
+        return W[0], b[0]
+
+    def fit_batch(self, X, U_batch):
+        """Learns B rewards (W (B, 2, 2), b (B, 2)) at positions X (N, 2) from actions U_batch (B, N, 2)."""
+        self.check_params()
+        X = as_float_array("X", X, ndim=2)
+        U_batch = as_float_array("U_batch", U_batch, ndim=3, shape=(X.shape[0], None))
+        if X.shape[1] != 2 or U_batch.shape[2] != 2:
             raise ValueError(f"X, U: expected planar positions and actions (N, 2) for the reward learner, "
-                             f"got {X.shape} and {U.shape}")
-        reached = X + U
-        n = len(X)
-        design = np.zeros((2 * n, 5))            # unknowns (w11, w12, w22, b1, b2)
-        design[0::2, 0], design[0::2, 1], design[0::2, 3] = reached[:, 0], reached[:, 1], -1.0
-        design[1::2, 1], design[1::2, 2], design[1::2, 4] = reached[:, 0], reached[:, 1], -1.0
-        target = -U.reshape(-1)
-        gram = design.T @ design + self.lam * np.eye(5)
-        w11, w12, w22, b1, b2 = np.linalg.solve(gram, design.T @ target)
-        values, vectors = np.linalg.eigh(np.array([[w11, w12], [w12, w22]]))
-        W = (vectors * np.maximum(values, MIN_EIGENVALUE)) @ vectors.T
-        return W, np.array([b1, b2])
+                             f"got {X.shape} and {U_batch.shape[1:]}")
+        reached = X[None] + U_batch                                 # (B, N, 2)
+        B, n = U_batch.shape[:2]
+        design = np.zeros((B, 2 * n, 5))                            # unknowns (w11, w12, w22, b1, b2)
+        design[:, 0::2, 0], design[:, 0::2, 1], design[:, 0::2, 3] = reached[..., 0], reached[..., 1], -1.0
+        design[:, 1::2, 1], design[:, 1::2, 2], design[:, 1::2, 4] = reached[..., 0], reached[..., 1], -1.0
+        target = -U_batch.reshape(B, -1, 1)
+        transposed = np.swapaxes(design, 1, 2)
+        gram = transposed @ design + float(self.lam) * np.eye(5)
+        w11, w12, w22, b1, b2 = np.moveaxis(np.linalg.solve(gram, transposed @ target)[..., 0], -1, 0)
+        values, vectors = np.linalg.eigh(np.stack([np.stack([w11, w12], -1), np.stack([w12, w22], -1)], -2))
+        W = (vectors * np.maximum(values, MIN_EIGENVALUE)[:, None, :]) @ np.swapaxes(vectors, 1, 2)
+        return W, np.stack([b1, b2], axis=-1)
 
     def predict(self, fitted, X_star) -> np.ndarray:
         """The optimal actions ``(W + I)^-1 (b - W r)`` (M, 2) at positions X_star (M, 2)."""
         W, b = fitted
+        return self.predict_batch((np.asarray(W, dtype=float)[None], np.asarray(b, dtype=float)[None]), X_star)[0]
+
+    def predict_batch(self, fitted, X_star) -> np.ndarray:
+        """(B, M, 2): the optimal actions of B learnt rewards (``fit_batch``) at positions X_star (M, 2)."""
+        W, b = fitted
         X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, 2))
         system = W + np.eye(2)
-        if np.linalg.cond(system) > 1e12:
+        if np.any(np.linalg.cond(system) > 1e12):
             raise SingularFitError(f"{self!r}: the learnt reward has no unique best action (W + I is singular)")
-        return np.linalg.solve(system, (b[None, :] - X_star @ W).T).T
+        right = b[:, :, None] - np.swapaxes(X_star @ W, 1, 2)       # (B, 2, M)
+        return np.swapaxes(np.linalg.solve(system, right), 1, 2)
 
     def reward(self, fitted, X, U) -> np.ndarray:
         """The learnt reward R(r, u) (N,) of actions U at positions X; its goal is ``pinv(W) b``."""
