@@ -189,6 +189,7 @@ class TeachingEpisode:
         self.demonstrations: list[Demonstration] = []
         self._reproduction = None
         self._analysis = None
+        self._policy_risk = None
         if not isinstance(self.learner, RidgeLearner):
             self._init_learner()
             return
@@ -393,6 +394,25 @@ class TeachingEpisode:
                 self._analysis = policy_risk(policy(self._evaluation), self.skill.target_actions(self._evaluation))
             return self._analysis
         return self.analysis.risk
+
+    @property
+    def theta_error(self) -> float | None:
+        """||vec(Theta_hat) - vec(Theta)||_2 where the learner has a Theta (ridge), else None."""
+        self._require_complete("theta_error")
+        return self.analysis.risk if self.ridge else None
+
+    @property
+    def policy_risk(self) -> float:
+        """The policy risk of what the learner learnt (``learner_teaching``), for every learner:
+        the root-mean-square distance to the target's actions over the skill's evaluation states."""
+        self._require_complete("policy_risk")
+        if not self.ridge:
+            return self.error
+        if self._policy_risk is None:
+            evaluation = evaluation_states(self.skill)
+            policy = learnt_policy(self.learner, self.skill, self.query_states, self.actions)
+            self._policy_risk = policy_risk(policy(evaluation), self.skill.target_actions(evaluation))
+        return self._policy_risk
 
     @property
     def rho2(self) -> float:

@@ -68,3 +68,14 @@ def test_a_network_episode_has_linearised_gains_and_its_error_falls_with_mt():
     episode.restore(episode.optimal_actions)
     own = risk_of_actions(learner, skill, states, skill.target_actions(states), evaluation_states(skill))
     assert episode.error < own
+
+
+def test_the_episode_reports_theta_error_where_a_theta_exists_and_policy_risk_always():
+    skill = SKILLS["uarm-point"]
+    states = skill.query_states(seed=2)
+    actions = skill.target_actions(states) + 0.3
+    ridge = TeachingEpisode.from_actions(skill, states, actions)
+    assert ridge.theta_error == ridge.error > 0
+    assert ridge.policy_risk == pytest.approx(risk_of_actions(RidgeLearner(), skill, states, actions), rel=1e-12)
+    kernel = TeachingEpisode.from_actions(skill, states, actions, learner=make_learner("kernel-ridge", skill))
+    assert kernel.theta_error is None and kernel.policy_risk == kernel.error > 0
