@@ -38,7 +38,9 @@ def test_guidance_helps_the_teachers_of_each_learner_and_each_study_runs_its_lea
 
 
 @pytest.mark.parametrize("protocol, learner", [("reward-sim", None), ("paper-uarm", "kernel-ridge"),
-                                               ("paper-uarm", "gaussian-process")])
+                                               ("paper-uarm", "gaussian-process"),
+                                               # Approximate MT per set and a batched fit: about 5 s.
+                                               pytest.param("paper-uarm", "neural-network", marks=pytest.mark.slow)])
 def test_the_batched_engine_scores_every_learner_as_its_teaching_episode_does(protocol, learner):
     import json
 
