@@ -13,6 +13,13 @@ Run: ``.venv/bin/python benchmarks/bench_learners.py`` (needs the ``bench`` extr
 4. How much guidance helps per learner in silico: the same synthetic teachers through paper-uarm
    with each learner (``mt_widgets.analysis.guidance_by_learner``): each group's change in percent of
    its baseline error, and Hedges' g of guided against unguided.
+5. The batched in-silico engine per learner: one study of 1,000 synthetic participants through
+   paper-uarm with each learner (reward-sim for the reward learner), teaching only (no rollouts),
+   against the issue's 60 s for a linear smoother, ridge's figure beside; and power by simulation
+   for reward-sim (1,000 studies of 2 x 16 against 10 minutes; ``--power-studies`` measures fewer
+   and extrapolates linearly, and says so).
+
+``--batched-only`` runs part 5 alone.
 """
 
 from __future__ import annotations
@@ -72,17 +79,53 @@ def guidance(n_participants: int) -> None:
     print(f"  ({time.perf_counter() - started:.1f} s)")
 
 
+def batched(n_participants: int, power_studies: int) -> None:
+    from mt_widgets.analysis import protocol_with_learner
+    from mt_widgets.analysis.power import simulated_power
+    from mt_widgets.core.learner import is_linear_smoother
+    from mt_widgets.in_silico.engine import run_in_silico
+    from mt_widgets.in_silico.plan import episode_plan, resolve_protocol
+
+    print(f"\nbatched in-silico study per learner ({n_participants} participants, teaching only, no rollouts; "
+          f"target 60 s for a linear smoother)")
+    run_in_silico(2, protocol="paper-uarm", reproduce=False, progress=False)   # warm-up: compiled kernels
+    for name in LEARNERS:
+        protocol = resolve_protocol("reward-sim") if name == "reward" else \
+            protocol_with_learner(resolve_protocol("paper-uarm"), name)
+        skill = protocol.skill(episode_plan(protocol)[0]["skill"])
+        smoother = is_linear_smoother(make_learner(name, skill))
+        started = time.perf_counter()
+        run_in_silico(n_participants, protocol=protocol, reproduce=False, progress=False)
+        seconds = time.perf_counter() - started
+        verdict = f"; ratio to 60 s {seconds / 60:.2f}" if smoother else ""
+        kind = "linear smoother" if smoother else "batched fit"
+        print(f"  {protocol.name:<30} {name:<17} {kind:<16} {seconds:7.2f} s{verdict}")
+    started = time.perf_counter()
+    simulated_power(n_per_group=16, n_studies=power_studies, seed=0, progress=False, protocol="reward-sim")
+    seconds = time.perf_counter() - started
+    note = "" if power_studies == 1000 else f" (measured with {power_studies} studies, extrapolated linearly)"
+    per_1000 = seconds * 1000 / power_studies
+    print(f"power by simulation, reward-sim, {power_studies} studies of 2 x 16: {seconds:.1f} s; 1,000 studies: "
+          f"{per_1000:.0f} s{note}; target 600 s, ratio {per_1000 / 600:.2f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="every part small (a smoke run)")
+    parser.add_argument("--batched-only", action="store_true", help="only the batched in-silico engine (part 5)")
+    parser.add_argument("--power-studies", type=int, default=1000, help="reward-sim power: simulated studies")
     args = parser.parse_args()
     print(f"cores available: {os.cpu_count()}; load average {os.getloadavg()[0]:.1f}")
+    if args.batched_only:
+        batched(20 if args.quick else 1000, 4 if args.quick else args.power_studies)
+        return
     baselines(2 if args.quick else 100)
     from bench_core import bench_learners
 
     bench_learners(3 if args.quick else 40)
     latencies(1 if args.quick else 10)
     guidance(4 if args.quick else 16)
+    batched(20 if args.quick else 1000, 4 if args.quick else args.power_studies)
 
 
 if __name__ == "__main__":

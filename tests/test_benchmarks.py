@@ -22,7 +22,8 @@ EXPECTED = {
     "bench_widgets.py": ["feedback latency", "animation message", "Chromium playback", "pointer-to-arrow latency"],
     "bench_install.py": ["build sdist + wheel", "size MB", "import + first fit and optimal actions"],
     "bench_learners.py": ["MT against the target's and random actions", "machine teaching per learner",
-                          "feedback latency per learner", "guidance per learner in silico"],
+                          "feedback latency per learner", "guidance per learner in silico",
+                          "batched in-silico study per learner", "power by simulation, reward-sim"],
 }
 # Shorter runs where a full one takes minutes (the figures are reported, never asserted).
 ARGS = {"bench_kiosk.py": ["--loads", "2", "--no-study"], "bench_online.py": ["--participants", "2", "--think", "1"],

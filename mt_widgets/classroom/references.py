@@ -148,7 +148,7 @@ def one_sided_welch_p(target, control) -> float:
 
 def kernel_smoother(X, X_star, length_scale, lam) -> np.ndarray:
     """S (M, N) of kernel ridge regression with an RBF kernel: k(X*, X) (K + lam I)^-1."""
-    return KernelRidgeLearner(length_scale, lam).smoother(X, X_star)
+    return KernelRidgeLearner(length_scale, lam, linear_weight=0.0).smoother(X, X_star)
 
 
 def smoother_teaching_actions(S, Y) -> np.ndarray:

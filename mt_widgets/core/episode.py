@@ -133,7 +133,9 @@ class TeachingEpisode:
             ``skill.query_states(seed=seed)`` (N = S, the rank condition's minimum).
         seed: seed of the default query states (int, ``SeedSequence``, ``Generator`` or None);
             only when ``query_states`` is not given.
-        lam: the learner's ridge parameter (>= 0), also used for the optimal actions.
+        lam: the ridge learner's parameter (>= 0; default ``DEFAULT_LAMBDA``), also used for the
+            optimal actions. With a ``RidgeLearner`` given, its own ``lam`` is the one source: a
+            different explicit ``lam`` beside it is refused.
         duration: seconds of the reproduction (default: the skill's ``default_duration``).
         learner: another learner than the paper's ridge (``mt_widgets.core.LEARNERS``; None: ridge
             with ``lam``). Then the optimal actions are its machine teaching's (``teach``),
@@ -156,14 +158,20 @@ class TeachingEpisode:
             place they live (a view, a session and a study step read this list).
     """
 
-    def __init__(self, skill: Skill, query_states=None, *, seed=None, lam: float = DEFAULT_LAMBDA,
+    def __init__(self, skill: Skill, query_states=None, *, seed=None, lam: float | None = None,
                  duration: float | None = None, learner: Learner | None = None):
         if learner is not None and not isinstance(learner, Learner):
             raise TypeError(f"learner: expected a mt_widgets.core Learner or None, got {type(learner).__name__}")
         if not isinstance(skill, Skill):
             raise TypeError(f"skill: expected a mt_widgets.core.Skill, got {type(skill).__name__}")
         self.skill = skill
-        self.lam = as_positive("lam", lam, allow_zero=True)
+        if isinstance(learner, RidgeLearner):
+            learner.check_params()
+            if lam is not None and as_positive("lam", lam, allow_zero=True) != float(learner.lam):
+                raise ValueError(f"lam: expected none (or the ridge learner's own lam {learner.lam}) beside "
+                                 f"{learner!r}, got {lam}: the learner's lam is the one source")
+            lam = learner.lam
+        self.lam = as_positive("lam", DEFAULT_LAMBDA if lam is None else lam, allow_zero=True)
         self.duration = skill.default_duration if duration is None else as_positive("duration", duration)
         if query_states is None:
             states = skill.query_states(seed=seed)
@@ -181,13 +189,10 @@ class TeachingEpisode:
         self.demonstrations: list[Demonstration] = []
         self._reproduction = None
         self._analysis = None
+        self._policy_risk = None
         if not isinstance(self.learner, RidgeLearner):
             self._init_learner()
             return
-        if learner is not None:
-            if self.lam not in (DEFAULT_LAMBDA, learner.lam):
-                raise ValueError(f"lam: expected the ridge learner's own lam {learner.lam} (or none), got {self.lam}")
-            self.lam = learner.lam
         operator = ridge_operator(self.features, self.lam)
         self._operator = operator
         self._A = operator.matrix()                      # (S, N)
@@ -220,7 +225,7 @@ class TeachingEpisode:
                                     f"{self.learner!r}: use error (the policy risk) and reproduction")
 
     @classmethod
-    def from_actions(cls, skill: Skill, query_states, actions, *, lam: float = DEFAULT_LAMBDA,
+    def from_actions(cls, skill: Skill, query_states, actions, *, lam: float | None = None,
                      duration: float | None = None, learner: Learner | None = None) -> TeachingEpisode:
         """An episode resumed with actions already given (k, R), k <= N (complete when k = N)."""
         episode = cls(skill, query_states, lam=lam, duration=duration, learner=learner)
@@ -389,6 +394,25 @@ class TeachingEpisode:
                 self._analysis = policy_risk(policy(self._evaluation), self.skill.target_actions(self._evaluation))
             return self._analysis
         return self.analysis.risk
+
+    @property
+    def theta_error(self) -> float | None:
+        """||vec(Theta_hat) - vec(Theta)||_2 where the learner has a Theta (ridge), else None."""
+        self._require_complete("theta_error")
+        return self.analysis.risk if self.ridge else None
+
+    @property
+    def policy_risk(self) -> float:
+        """The policy risk of what the learner learnt (``learner_teaching``), for every learner:
+        the root-mean-square distance to the target's actions over the skill's evaluation states."""
+        self._require_complete("policy_risk")
+        if not self.ridge:
+            return self.error
+        if self._policy_risk is None:
+            evaluation = evaluation_states(self.skill)
+            policy = learnt_policy(self.learner, self.skill, self.query_states, self.actions)
+            self._policy_risk = policy_risk(policy(evaluation), self.skill.target_actions(evaluation))
+        return self._policy_risk
 
     @property
     def rho2(self) -> float:

@@ -27,7 +27,7 @@ import numpy as np
 from numba import njit
 
 from .learner import DEFAULT_LAMBDA
-from .ridge_kernels import rank_of
+from .ridge_kernels import rank_of, ridge_gain
 from .skills import Skill
 from .validation import as_float_array, as_positive
 
@@ -41,13 +41,16 @@ def batched_ridge_maps(Phi, theta_t, lam):
     """
     left, singular, right_t = np.linalg.svd(Phi, full_matrices=False)
     ranks = np.asarray(rank_of(singular, Phi.shape[1:]), dtype=np.int64).reshape(len(Phi))
-    A, optimal, rho1 = _maps_from_svd(left, singular, right_t, ranks, theta_t, float(lam))
+    with np.errstate(divide="ignore", invalid="ignore"):   # a zero singular value is beyond the rank
+        gains = ridge_gain(singular, float(lam))
+    A, optimal, rho1 = _maps_from_svd(left, gains, right_t, ranks, theta_t)
     return A, optimal, rho1, ranks
 
 
 @njit(cache=True)
-def _maps_from_svd(left, singular, right_t, ranks, theta_t, lam):
-    """(A, U_bar, rho1) of ``batched_ridge_maps`` from the K thin SVDs and their ranks."""
+def _maps_from_svd(left, gains, right_t, ranks, theta_t):
+    """(A, U_bar, rho1) of ``batched_ridge_maps`` from the K thin SVDs' vectors, the ridge gains of
+    their singular values (``ridge_kernels.ridge_gain``) and their ranks."""
     K, N, _ = left.shape
     S = right_t.shape[2]
     R = theta_t.shape[1]
@@ -56,8 +59,8 @@ def _maps_from_svd(left, singular, right_t, ranks, theta_t, lam):
     rho1 = np.zeros(K)
     for k in range(K):
         for i in range(ranks[k]):
-            gain = singular[k, i] / (singular[k, i] * singular[k, i] + lam)
-            inverse_gain = (singular[k, i] * singular[k, i] + lam) / singular[k, i]
+            gain = gains[k, i]
+            inverse_gain = 1.0 / gain
             if gain > rho1[k]:
                 rho1[k] = gain
             for s in range(S):

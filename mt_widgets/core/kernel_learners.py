@@ -40,17 +40,16 @@ def _check_inputs(inputs) -> str:
 class _RBFSmoother(Learner):
     """The shared machinery: an RBF Gram matrix, its regularised inverse, the smoother."""
 
-    linear_in_actions = True
-
-    def __init__(self, length_scale: float, inputs: str, linear_weight: float = 0.0):
-        self.length_scale = as_positive("length_scale", length_scale)
-        self.inputs = _check_inputs(inputs)
-        self.linear_weight = as_positive("linear_weight", linear_weight, allow_zero=True)
+    def check_params(self) -> None:
+        as_positive("length_scale", self.length_scale)
+        _check_inputs(self.inputs)
+        as_positive("linear_weight", self.linear_weight, allow_zero=True)
 
     def _kernel(self, A, B) -> np.ndarray:
         """The RBF, plus ``linear_weight (1 + a.b)`` when asked: the linear part on task-space inputs
-        is the paper's features (position, velocity, a bias), so the learner is ridge plus a
-        nonlinear correction, and learns a linear skill as ridge does."""
+        is the paper's features (position, velocity, a bias). It does not make the learner learn a
+        linear skill as ridge does: the RBF part adds bumps at the query states, so at the paper's
+        5 or 3 query states MT leaves a risk far above ridge's (docs/guide/learners.md)."""
         gram = rbf_kernel(A, B, self.length_scale)
         return gram + self.linear_weight * (1.0 + A @ B.T) if self.linear_weight else gram
 
@@ -62,6 +61,7 @@ class _RBFSmoother(Learner):
 
     def _inverse(self, X) -> np.ndarray:
         """(G + r I)^-1 for the Gram matrix G of the query inputs, refused when singular."""
+        self.check_params()
         gram = self._gram(X, X)
         values, vectors = np.linalg.eigh(gram)
         shifted = np.maximum(values, 0.0) + self._regulariser()   # G is PSD: negative values are round-off
@@ -75,14 +75,16 @@ class _RBFSmoother(Learner):
     def fit(self, X, U):
         """Learns from inputs X (N, D) and actions U (N, R); returns (X, weights (N, R))."""
         X, U = check_demonstrations(X, U)
-        return X, self._inverse(X) @ U
+        return X, self._inverse(X) @ U   # _inverse checks the hyper-parameters
 
     def predict(self, fitted, X_star) -> np.ndarray:
+        self.check_params()
         X, weights = fitted
         X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, X.shape[1]))
         return self._gram(X_star, X) @ weights
 
     def smoother(self, X, X_star) -> np.ndarray:
+        self.check_params()
         X = as_float_array("X", X, ndim=2)
         X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, X.shape[1]))
         return self._gram(X_star, X) @ self._inverse(X)
@@ -95,18 +97,18 @@ class KernelRidgeLearner(_RBFSmoother):
         length_scale: the kernel width l (> 0), in the units of the inputs (m, cm, rad).
         lam: the regularisation (> 0).
         inputs: "task" (end-effector position and velocity, the default), "state" or "features".
-        linear_weight: c >= 0 adds ``c (1 + x.x')`` to the kernel (a linear part; 0: the RBF alone).
+        linear_weight: c >= 0 adds ``c (1 + x.x')`` to the kernel (a linear part; 0: the RBF alone,
+            scikit-learn's ``KernelRidge(kernel="rbf")``).
     """
 
     name = "kernel-ridge"
 
-    def __init__(self, length_scale: float, lam: float = 1e-3, inputs: str = "task", linear_weight: float = 0.0):
-        super().__init__(length_scale, inputs, linear_weight)
-        self.lam = as_positive("lam", lam)
+    def __init__(self, length_scale: float, lam: float = 1e-3, inputs: str = "task", linear_weight: float = 1.0):
+        self.length_scale, self.lam, self.inputs, self.linear_weight = length_scale, lam, inputs, linear_weight
 
-    def __repr__(self) -> str:
-        return (f"KernelRidgeLearner(length_scale={self.length_scale:.4g}, lam={self.lam:.4g}, inputs={self.inputs!r}, "
-                f"linear_weight={self.linear_weight:.4g})")
+    def check_params(self) -> None:
+        super().check_params()
+        as_positive("lam", self.lam)
 
     def _gram(self, A, B):
         return self._kernel(A, B)
@@ -124,21 +126,21 @@ class GaussianProcessLearner(_RBFSmoother):
         noise_variance: n2 (> 0), the variance of a demonstrated action's noise.
         signal_variance: s2 (> 0), the prior variance of an action.
         inputs: "task" (the default), "state" or "features".
-        linear_weight: c >= 0 adds ``c (1 + x.x')`` to the covariance (a linear prior trend).
+        linear_weight: c >= 0 adds ``c (1 + x.x')`` to the covariance (a linear prior trend; 0: the
+            RBF alone).
     """
 
     name = "gaussian-process"
 
     def __init__(self, length_scale: float, noise_variance: float = 1e-4, signal_variance: float = 1.0,
-                 inputs: str = "task", linear_weight: float = 0.0):
-        super().__init__(length_scale, inputs, linear_weight)
-        self.noise_variance = as_positive("noise_variance", noise_variance)
-        self.signal_variance = as_positive("signal_variance", signal_variance)
+                 inputs: str = "task", linear_weight: float = 1.0):
+        self.length_scale, self.noise_variance, self.signal_variance = length_scale, noise_variance, signal_variance
+        self.inputs, self.linear_weight = inputs, linear_weight
 
-    def __repr__(self) -> str:
-        return (f"GaussianProcessLearner(length_scale={self.length_scale:.4g}, "
-                f"noise_variance={self.noise_variance:.4g}, signal_variance={self.signal_variance:.4g}, "
-                f"inputs={self.inputs!r}, linear_weight={self.linear_weight:.4g})")
+    def check_params(self) -> None:
+        super().check_params()
+        as_positive("noise_variance", self.noise_variance)
+        as_positive("signal_variance", self.signal_variance)
 
     def _gram(self, A, B):
         return self.signal_variance * self._kernel(A, B)
@@ -148,7 +150,13 @@ class GaussianProcessLearner(_RBFSmoother):
 
     def posterior_variance(self, X, X_star) -> np.ndarray:
         """The posterior variance of the policy (M,) at X_star, the same for every action component."""
+        self.check_params()
         X = as_float_array("X", X, ndim=2)
         X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, X.shape[1]))
         cross = self._gram(X_star, X)
-        return self.signal_variance - np.einsum("mn,nk,mk->m", cross, self._inverse(X), cross)
+        # The prior variance at x* is the covariance's own diagonal s2 k(x*, x*), which the linear
+        # part raises to s2 (1 + c (1 + |x*|^2)): the RBF's 1 alone is right only for c = 0.
+        prior = self.signal_variance * (1.0 + self.linear_weight * (1.0 + np.sum(X_star * X_star, axis=1)))
+        explained = np.einsum("mn,nk,mk->m", cross, self._inverse(X), cross)
+        # Exactly, explained <= prior; what exceeds it is round-off of a variance near zero.
+        return np.maximum(prior - explained, 0.0)

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .kernel_learners import GaussianProcessLearner, KernelRidgeLearner
-from .learner import DEFAULT_LAMBDA, Learner, RidgeLearner
+from .learner import Learner, RidgeLearner, has_batched_fit, is_linear_smoother
 from .network_learner import NeuralNetworkLearner
 from .reward_learner import RewardLearner
 from .ridge_kernels import svd_with_rank
@@ -55,6 +55,7 @@ EVALUATION_SIZE = 256
 
 def learner_inputs(learner: Learner, skill, states) -> np.ndarray:
     """What ``learner`` learns from at states (N, state_dim): features, states or task space (N, D)."""
+    learner.check_params()   # its inputs among them
     states = as_float_array("states", states, ndim=2, shape=(None, skill.state_dim))
     if learner.inputs == "features":
         return skill.features(states)
@@ -88,27 +89,23 @@ def typical_length_scale(skill, inputs: str = "task") -> float:
 
 
 def make_learner(name: str, skill=None, **parameters) -> Learner:
-    """The learner called ``name`` (one of ``LEARNERS``) with ``parameters``; a kernel learner's
-    ``length_scale`` defaults to ``typical_length_scale(skill)`` when a skill is given, its
-    ``linear_weight`` to 1."""
+    """The learner called ``name`` (one of ``LEARNERS``) with ``parameters``, checked; a kernel
+    learner's ``length_scale`` defaults to ``typical_length_scale(skill)`` when a skill is given.
+    Every other hyper-parameter has its class's default (one default per hyper-parameter)."""
     if name not in LEARNERS:
         raise UnknownKeyError(f"learner: expected one of the available learners ({', '.join(LEARNERS)}), got {name!r}")
     cls = LEARNERS[name]
-    if cls is RidgeLearner:
-        parameters.setdefault("lam", DEFAULT_LAMBDA)
-    elif cls in (KernelRidgeLearner, GaussianProcessLearner) and "length_scale" not in parameters:
+    if cls in (KernelRidgeLearner, GaussianProcessLearner) and "length_scale" not in parameters:
         if skill is None:
             raise ValueError(f"length_scale: expected a kernel width for {name!r}, or a skill to take the "
                              f"typical one from, got neither")
         parameters["length_scale"] = typical_length_scale(skill, parameters.get("inputs", "task"))
-    if cls in (KernelRidgeLearner, GaussianProcessLearner):
-        # By name, a kernel learner is the paper's features' linear kernel plus the RBF: it learns
-        # a linear skill as ridge does and a nonlinear one beyond it (``KernelRidgeLearner``).
-        parameters.setdefault("linear_weight", 1.0)
     try:
-        return cls(**parameters)
+        learner = cls(**parameters)
     except TypeError as error:
         raise TypeError(f"{name}: {error}") from None
+    learner.check_params()   # a protocol's or a notebook's bad value fails here, by name
+    return learner
 
 
 def policy_risk(predicted, target) -> float:
@@ -150,13 +147,17 @@ class LearnerTeaching:
 def teach(learner: Learner, skill, query_states, eval_states=None, **options) -> LearnerTeaching:
     """Machine teaching for ``learner``: ``exact_teaching`` for a linear smoother, otherwise
     ``approximate_teaching`` (``options`` go to it)."""
-    if learner.linear_in_actions:
+    if is_linear_smoother(learner):
         return exact_teaching(learner, skill, query_states, eval_states)
     return approximate_teaching(learner, skill, query_states, eval_states, **options)
 
 
 def exact_teaching(learner: Learner, skill, query_states, eval_states=None) -> LearnerTeaching:
     """The least-squares demonstration ``pinv(S) Y*`` for a linear smoother (module docstring)."""
+    if not is_linear_smoother(learner):
+        raise TypeError(f"learner: expected a linear smoother (a learner with a smoother matrix, "
+                        f"learner.LinearSmoother) for exact teaching, got {learner!r}, which is not linear in the "
+                        f"demonstrated actions; its machine teaching is approximate (approximate_teaching)")
     query_states = as_float_array("query_states", query_states, ndim=2, shape=(None, skill.state_dim))
     eval_states = evaluation_states(skill) if eval_states is None else eval_states
     X_eval = learner_inputs(learner, skill, eval_states)
@@ -176,8 +177,8 @@ def approximate_teaching(learner: Learner, skill, query_states, eval_states=None
     """Levenberg-Marquardt on the actions against the policy risk (module docstring); approximate.
 
     Args:
-        learner: any learner; one with ``fit_batch`` and ``predict_batch`` (``NeuralNetworkLearner``)
-            fits the Jacobian's perturbed demonstrations in one pass.
+        learner: any learner; one with a batched fit (``learner.BatchedFit``: the network) fits the
+            Jacobian's perturbed demonstrations in one pass.
         skill, query_states, eval_states: as for ``exact_teaching``.
         iterations: Jacobian evaluations at most.
         start: (N, R) the actions to start from (default: the target's at the query states).
@@ -209,7 +210,7 @@ def approximate_teaching(learner: Learner, skill, query_states, eval_states=None
         np.linalg.norm(residuals(target_actions[None])[0]))
     # A learner that trains a batch in one pass gets the trial points' Jacobians with them (one
     # pass an iteration); another fits them one by one, so only the accepted point's is taken.
-    batched = hasattr(learner, "fit_batch")
+    batched = has_batched_fit(learner)
     damping, accepted = 1e-3, 0
     for _ in range(iterations):
         gram = jacobian.T @ jacobian
@@ -233,7 +234,7 @@ def approximate_teaching(learner: Learner, skill, query_states, eval_states=None
 
 def _predict_many(learner: Learner, X, batch, X_eval) -> np.ndarray:
     """(B, M, R): what ``learner`` learns from each of B action sets (B, N, R) at X, at X_eval."""
-    if hasattr(learner, "fit_batch"):   # B fits in one pass (the network)
+    if has_batched_fit(learner):   # B fits in one pass (the network)
         return learner.predict_batch(learner.fit_batch(X, batch), X_eval)
     return np.stack([learner.predict(learner.fit(X, actions), X_eval) for actions in batch])
 
@@ -252,7 +253,7 @@ def action_sensitivity(learner: Learner, skill, query_states, actions, eval_stat
     eval_states = evaluation_states(skill) if eval_states is None else eval_states
     X, X_eval = learner_inputs(learner, skill, query_states), learner_inputs(learner, skill, eval_states)
     M = len(X_eval)
-    if learner.linear_in_actions:
+    if is_linear_smoother(learner):
         S = learner.smoother(X, X_eval) / np.sqrt(M)
         return float(np.linalg.norm(S, 2)), np.linalg.norm(S, axis=0)
     actions = as_float_array("actions", actions, ndim=2, shape=(len(X), None))

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .learner import DEFAULT_LAMBDA, check_demonstrations
-from .ridge_kernels import optimal_actions_kernel, svd_with_rank
+from .ridge_kernels import optimal_actions_kernel, ridge_gain, svd_with_rank
 from .validation import as_float_array, as_positive
 
 
@@ -53,7 +53,7 @@ class RidgeOperator:
         """s / (s^2 + lam), zero for directions Phi does not span."""
         kept = np.arange(len(self.singular)) < self.rank
         with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(kept, self.singular / (self.singular**2 + self.lam), 0.0)
+            return np.where(kept, ridge_gain(self.singular, self.lam), 0.0)
 
     def matrix(self) -> np.ndarray:
         """A = (Phi^T Phi + lam I)^-1 Phi^T, (S, N)."""
@@ -87,8 +87,7 @@ def optimal_from(operator: RidgeOperator, theta: np.ndarray) -> np.ndarray:
     for a bare Phi.
     """
     kept = slice(0, operator.rank)
-    s = operator.singular[kept]
-    inverse_gains = (s**2 + operator.lam) / s
+    inverse_gains = 1.0 / ridge_gain(operator.singular[kept], operator.lam)
     return (operator.left[:, kept] * inverse_gains) @ (operator.right_t[kept] @ theta.T)
 
 

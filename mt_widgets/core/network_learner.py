@@ -33,20 +33,19 @@ class NeuralNetworkLearner(Learner):
     """
 
     name = "neural-network"
-    linear_in_actions = False
 
     def __init__(self, hidden: int = 16, steps: int = 150, learning_rate: float = 0.05, weight_decay: float = 1e-3,
                  seed: int = 0, inputs: str = "task"):
-        self.hidden = as_count("hidden", hidden)
-        self.steps = as_count("steps", steps)
-        self.learning_rate = as_positive("learning_rate", learning_rate)
-        self.weight_decay = as_positive("weight_decay", weight_decay)
-        self.seed = as_count("seed", seed, minimum=0)
-        self.inputs = _check_inputs(inputs)
+        self.hidden, self.steps, self.learning_rate = hidden, steps, learning_rate
+        self.weight_decay, self.seed, self.inputs = weight_decay, seed, inputs
 
-    def __repr__(self) -> str:
-        return (f"NeuralNetworkLearner(hidden={self.hidden}, steps={self.steps}, learning_rate={self.learning_rate}, "
-                f"weight_decay={self.weight_decay}, seed={self.seed}, inputs={self.inputs!r})")
+    def check_params(self) -> None:
+        as_count("hidden", self.hidden)
+        as_count("steps", self.steps)
+        as_positive("learning_rate", self.learning_rate)
+        as_positive("weight_decay", self.weight_decay)
+        as_count("seed", self.seed, minimum=0)
+        _check_inputs(self.inputs)
 
     def fit(self, X, U):
         """Learns from inputs X (N, D) and actions U (N, R); returns the trained network."""
@@ -55,6 +54,7 @@ class NeuralNetworkLearner(Learner):
 
     def fit_batch(self, X, U_batch):
         """Trains B networks at the same inputs X (N, D) on actions U_batch (B, N, R)."""
+        self.check_params()
         X = as_float_array("X", X, ndim=2)
         U_batch = as_float_array("U_batch", U_batch, ndim=3, shape=(X.shape[0], None))
         centre, scale = X.mean(axis=0), X.std(axis=0)

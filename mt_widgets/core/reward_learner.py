@@ -9,20 +9,24 @@ is reproduced and what is assumed):
 
 - The plant is kinematic in the plane, ``r <- r + u`` (the uArm; inputs are positions r).
 - The reward of an action is quadratic: ``R(r, u) = -1/2 (r + u - g)^T W (r + u - g) - 1/2 |u|^2``,
-  a cost of the distance to where the skill leads (W symmetric positive semi-definite, b = W g)
-  and of the action's size. The action cost's weight is fixed to 1: a reward's scale cannot be
+  a cost of the distance to where the skill leads (W symmetric, b = W g; the paper's skills have
+  W positive semi-definite) and of the action's size. The action cost's weight is fixed to 1: a reward's scale cannot be
   told from demonstrations, and fixing it rules out the trivial zero reward.
 - Learning the reward is inverse optimal control by the optimality condition: a demonstration
   is optimal when ``dR/du = 0``, i.e. ``W (r_n + u_n) - b + u_n = 0``, linear in (W, b); the
   learner takes the least-squares (W, b) over the demonstrations, with a small ridge ``lam``,
-  and projects W onto the positive semi-definite matrices (a reward with a maximum).
+  and raises W's eigenvalues to at least ``MIN_EIGENVALUE`` = -1/2, so that the reward is concave
+  in the action (``W + I`` at least ``I / 2``) and has one best action. The floor lies below the
+  eigenvalue 0 of a singular W (the line skill), so the fit is smooth around every skill whose W
+  is positive semi-definite and machine teaching reaches machine precision there.
 - The robot executes the policy optimal for the learnt reward, ``u(r) = (W + I)^-1 (b - W r)``.
 
 The learnt reward depends on the demonstrated actions through the design of the least squares
 (``r_n + u_n``): the learner is not linear in the actions, and machine teaching for it is
 approximate (``learner_teaching.approximate_teaching``). The paper's point-reaching and
 line-reaching uArm skills are in its policy class (W = 0.25 I, and W = 0.25 n n^T), so the
-target is representable and MT can teach it to near machine precision.
+target is representable; with 8 query states MT teaches each to machine precision (risk below
+1e-9) in 100 of 100 random query sets (tests/core/test_reward_learner.py).
 """
 
 from __future__ import annotations
@@ -32,6 +36,13 @@ import numpy as np
 from .kernel_learners import SingularFitError
 from .learner import Learner, check_demonstrations
 from .validation import as_float_array, as_positive
+
+#: The least eigenvalue the learnt W may have. The policy needs only ``W + I`` positive definite
+#: (the reward concave in the action, so its maximiser is unique); the floor keeps it at least
+#: ``I / 2``. It is not 0: a skill whose W is singular (the line, W = 0.25 n n^T) sits on the
+#: floor's edge with 0, where the clip ``max(w, 0)`` made the fit non-smooth in the demonstrated
+#: actions, and machine teaching stopped between 1e-12 and 5e-6 in 44 of 100 query sets of 8.
+MIN_EIGENVALUE = -0.5
 
 
 class RewardLearner(Learner):
@@ -43,40 +54,54 @@ class RewardLearner(Learner):
 
     name = "reward"
     inputs = "state"
-    linear_in_actions = False
 
     def __init__(self, lam: float = 1e-3):
-        self.lam = as_positive("lam", lam)
+        self.lam = lam
 
-    def __repr__(self) -> str:
-        return f"RewardLearner(lam={self.lam:.4g})"
+    def check_params(self) -> None:
+        as_positive("lam", self.lam)
 
     def fit(self, X, U):
         """Learns the reward (W (2, 2), b (2,)) from positions X (N, 2) and actions U (N, 2)."""
         X, U = check_demonstrations(X, U)
-        if X.shape[1] != 2 or U.shape[1] != 2:
+        W, b = self.fit_batch(X, U[None])
+        return W[0], b[0]
+
+    def fit_batch(self, X, U_batch):
+        """Learns B rewards (W (B, 2, 2), b (B, 2)) at positions X (N, 2) from actions U_batch (B, N, 2)."""
+        self.check_params()
+        X = as_float_array("X", X, ndim=2)
+        U_batch = as_float_array("U_batch", U_batch, ndim=3, shape=(X.shape[0], None))
+        if X.shape[1] != 2 or U_batch.shape[2] != 2:
             raise ValueError(f"X, U: expected planar positions and actions (N, 2) for the reward learner, "
-                             f"got {X.shape} and {U.shape}")
-        reached = X + U
-        n = len(X)
-        design = np.zeros((2 * n, 5))            # unknowns (w11, w12, w22, b1, b2)
-        design[0::2, 0], design[0::2, 1], design[0::2, 3] = reached[:, 0], reached[:, 1], -1.0
-        design[1::2, 1], design[1::2, 2], design[1::2, 4] = reached[:, 0], reached[:, 1], -1.0
-        target = -U.reshape(-1)
-        gram = design.T @ design + self.lam * np.eye(5)
-        w11, w12, w22, b1, b2 = np.linalg.solve(gram, design.T @ target)
-        values, vectors = np.linalg.eigh(np.array([[w11, w12], [w12, w22]]))
-        W = (vectors * np.maximum(values, 0.0)) @ vectors.T
-        return W, np.array([b1, b2])
+                             f"got {X.shape} and {U_batch.shape[1:]}")
+        reached = X[None] + U_batch                                 # (B, N, 2)
+        B, n = U_batch.shape[:2]
+        design = np.zeros((B, 2 * n, 5))                            # unknowns (w11, w12, w22, b1, b2)
+        design[:, 0::2, 0], design[:, 0::2, 1], design[:, 0::2, 3] = reached[..., 0], reached[..., 1], -1.0
+        design[:, 1::2, 1], design[:, 1::2, 2], design[:, 1::2, 4] = reached[..., 0], reached[..., 1], -1.0
+        target = -U_batch.reshape(B, -1, 1)
+        transposed = np.swapaxes(design, 1, 2)
+        gram = transposed @ design + float(self.lam) * np.eye(5)
+        w11, w12, w22, b1, b2 = np.moveaxis(np.linalg.solve(gram, transposed @ target)[..., 0], -1, 0)
+        values, vectors = np.linalg.eigh(np.stack([np.stack([w11, w12], -1), np.stack([w12, w22], -1)], -2))
+        W = (vectors * np.maximum(values, MIN_EIGENVALUE)[:, None, :]) @ np.swapaxes(vectors, 1, 2)
+        return W, np.stack([b1, b2], axis=-1)
 
     def predict(self, fitted, X_star) -> np.ndarray:
         """The optimal actions ``(W + I)^-1 (b - W r)`` (M, 2) at positions X_star (M, 2)."""
         W, b = fitted
+        return self.predict_batch((np.asarray(W, dtype=float)[None], np.asarray(b, dtype=float)[None]), X_star)[0]
+
+    def predict_batch(self, fitted, X_star) -> np.ndarray:
+        """(B, M, 2): the optimal actions of B learnt rewards (``fit_batch``) at positions X_star (M, 2)."""
+        W, b = fitted
         X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, 2))
         system = W + np.eye(2)
-        if np.linalg.cond(system) > 1e12:
+        if np.any(np.linalg.cond(system) > 1e12):
             raise SingularFitError(f"{self!r}: the learnt reward has no unique best action (W + I is singular)")
-        return np.linalg.solve(system, (b[None, :] - X_star @ W).T).T
+        right = b[:, :, None] - np.swapaxes(X_star @ W, 1, 2)       # (B, 2, M)
+        return np.swapaxes(np.linalg.solve(system, right), 1, 2)
 
     def reward(self, fitted, X, U) -> np.ndarray:
         """The learnt reward R(r, u) (N,) of actions U at positions X; its goal is ``pinv(W) b``."""

@@ -38,11 +38,17 @@ def svd_with_rank(Phi):
     return left, singular, right_t, rank_of(singular, Phi.shape)
 
 
+def ridge_gain(singular, lam):
+    """s / (s^2 + lam): the ridge learner's gain along each singular direction of Phi, the one place
+    the formula is written (the fit, machine teaching, rho1 and the batched maps all take it)."""
+    return singular / (singular * singular + lam)
+
+
 def ridge_fit(Phi, U, lam):
     """Theta_hat (R, S) = ((Phi^T Phi + lam I)^-1 Phi^T U)^T, minimum-norm where Phi is deficient."""
     left, singular, right_t, rank = svd_with_rank(Phi)
     singular = singular[:rank]
-    projected = (left[:, :rank].T @ U) * (singular / (singular * singular + lam))[:, None]   # (rank, R)
+    projected = (left[:, :rank].T @ U) * ridge_gain(singular, lam)[:, None]   # (rank, R)
     return (right_t[:rank].T @ projected).T.copy()
 
 
@@ -50,5 +56,5 @@ def optimal_actions_kernel(Phi, theta, lam):
     """(U_bar (N, R), rank): U_bar = pinv(A) theta^T with A the ridge learner's map."""
     left, singular, right_t, rank = svd_with_rank(Phi)
     singular = singular[:rank]
-    projected = (right_t[:rank] @ theta.T) * ((singular * singular + lam) / singular)[:, None]  # (rank, R)
+    projected = (right_t[:rank] @ theta.T) / ridge_gain(singular, lam)[:, None]  # (rank, R)
     return left[:, :rank] @ projected, rank

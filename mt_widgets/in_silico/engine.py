@@ -7,10 +7,21 @@ so the analysis cannot tell them apart. ``run_many_studies`` runs thousands of s
 together for power by simulation. ``run_through_sessions`` (``mt_widgets.in_silico.sessions``)
 drives the session engine, one demonstration at a time, to write real logs.
 
-Each episode is the batched form of a teaching episode (``mt_widgets.core.episode_batch``): for
-one episode every participant of a study answers the same query states (the paper's
-"pre-determined" states), so one SVD of Phi gives the learner's map and the optimal arrows for
-all of them, and the fit and its scores are one batched product.
+Each episode is the batched form of a teaching episode: for one episode every participant of a
+study answers the same query states (the paper's "pre-determined" states). For the paper's ridge
+(``mt_widgets.core.episode_batch``) one SVD of Phi gives the learner's map and the optimal arrows
+for all of them, and the fit and its scores (``||Theta_hat - Theta||``) are one batched product.
+Every other learner of ``LEARNERS`` goes through ``mt_widgets.core.learner_batch``: a linear
+smoother's matrix depends on the query states only, so it batches as ridge does; a learner with a
+batched fit (the network, the reward learner) fits each set's teachers in one call. Its teaching
+error is the policy risk, as in a real study with that learner (``TeachingEpisode``).
+
+**The synthetic teachers' assumption per learner.** The teacher model (``teachers``) was fitted to
+the paper's ridge studies: a teacher's action blends their own idea of the skill with the arrows
+shown. With another learner the arrows shown are that learner's machine teaching, and the model
+assumes that novices blend them into theirs alike, with the same parameters: for kernel ridge and
+the GP (exact MT; arrows close to ridge's on a linear skill), for the network and the reward
+learner (approximate MT). No study with those learners has measured it.
 """
 
 from __future__ import annotations
@@ -25,8 +36,11 @@ import numpy as np
 import pandas as pd
 
 from mt_widgets.core.episode_batch import EpisodeBatch
+from mt_widgets.core.learner_batch import LearnerEpisodeBatch
+from mt_widgets.core.learner_teaching import learnt_policy
 from mt_widgets.core.validation import as_bool, as_count
 from mt_widgets.study.participants import block_assignment
+from mt_widgets.study.study_learners import study_learner
 
 from .plan import (
     default_parameters,
@@ -50,13 +64,14 @@ from .teachers import (
 
 # -- the batched engine ----------------------------------------------------------------------------
 
-def _ridge_protocol(protocol):
-    """The protocol, if its learner is ridge: the batched episode fits the paper's learner only."""
-    if protocol.learner != "ridge":
-        raise ValueError(f"protocol: expected a protocol whose learner is ridge (the batched engine fits the paper's "
-                         f"learner), got {protocol.name!r} with learner {protocol.learner!r}; run other learners "
-                         f"through the session engine (run_through_sessions, analysis.guidance_by_learner)")
-    return protocol
+def _episode_batch(protocol, skill, states):
+    """The batched episode of ``skill`` on states (K, N, state_dim) with the protocol's learner: the
+    paper's ridge (``EpisodeBatch``, with the protocol's lambda) or any other (``LearnerEpisodeBatch``,
+    the learner made as the study makes it: ``study_learner``)."""
+    learner = study_learner(protocol.learner, skill)
+    if learner is None:
+        return EpisodeBatch.of(skill, states, protocol.lam, protocol.reproduction_duration_s)
+    return LearnerEpisodeBatch.of(skill, states, learner, protocol.reproduction_duration_s)
 
 
 @dataclass
@@ -66,11 +81,11 @@ class _BatchOutcome:
 
     actions: np.ndarray       # (B, N, R)
     optimal: np.ndarray       # (B, N, R)
-    theta_hat: np.ndarray     # (B, R, S)
+    theta_hat: np.ndarray | None   # (B, R, S); None for a learner without a Theta
     error: np.ndarray         # (B,)
     rho1: np.ndarray          # (B,)
     rho2: np.ndarray          # (B,)
-    batch: EpisodeBatch       # the episode's query states, learner map and optimal arrows
+    batch: EpisodeBatch | LearnerEpisodeBatch   # the episode's query states, learner and optimal arrows
     first_input: np.ndarray   # (B, N) s
     drawing: np.ndarray       # (B, N) s
 
@@ -103,7 +118,7 @@ def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study
         skill = protocol.skill(step["skill"])
         guided = np.isin(groups, list(step["guidance"]))
         states = states_by_episode[e]
-        batch = EpisodeBatch.of(skill, states, protocol.lam, protocol.reproduction_duration_s)
+        batch = _episode_batch(protocol, skill, states)
         positions, _ = skill.end_effector(states)
         offsets = target_offsets(skill, states)[study_of]                          # (B, N, R)
         anchor = imagined_line_target(protocol, step["phase_index"], step["session"])
@@ -184,7 +199,7 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
     """
     reproduce = as_bool("reproduce", reproduce)
     progress = as_bool("progress", progress, allow_none=True)
-    protocol = _ridge_protocol(resolve_protocol(protocol))
+    protocol = resolve_protocol(protocol)
     n_participants = as_count("n_participants", n_participants)
     parameters = default_parameters(protocol) if parameters is None else parameters
     if groups is None:
@@ -212,7 +227,18 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
 
     started = time.perf_counter()
     reproductions, diverged = {}, np.zeros((n_participants, len(plan)), dtype=bool)
-    if reproduce:
+    if reproduce and protocol.learner != "ridge":
+        # Another learner's policy is rolled out one participant at a time (the plant's generic
+        # integrator, as a TeachingEpisode's reproduction with that learner).
+        for e, step in enumerate(plan):
+            batch = results[e].batch
+            for p in range(n_participants):
+                policy = learnt_policy(batch.learner, batch.skill, batch.query_states[study_of[p]],
+                                       results[e].actions[p])
+                trajectory = batch.skill.reproduce_policy(policy, batch.duration, record_every)
+                diverged[p, e] = bool(trajectory.diverged)
+                reproductions[(participant_id(p), step["phase"], step["episode"])] = trajectory
+    elif reproduce:
         for skill_key in dict.fromkeys(step["skill"] for step in plan):
             columns = [e for e, step in enumerate(plan) if step["skill"] == skill_key]
             thetas = np.concatenate([results[e].theta_hat for e in columns])
@@ -234,14 +260,16 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
             pid = participant_id(p)
             guided = groups[p] in step["guidance"]
             duration = float(np.sum(r.first_input[p] + r.drawing[p]))
-            theta_hats[(pid, step["phase"], step["episode"])] = r.theta_hat[p]
+            if r.theta_hat is not None:
+                theta_hats[(pid, step["phase"], step["episode"])] = r.theta_hat[p]
             episode_rows.append({
                 "study": name, "participant": pid, "group": groups[p], "session": step["session"],
                 "phase": step["phase"], "phase_index": step["phase_index"], "episode": step["episode"],
                 "skill": step["skill"],
                 "guidance": int(guided), "n_demonstrations": step["demonstrations"],
                 "teaching_error": float(r.error[p]), "rho1": float(r.rho1[p]), "rho2": float(r.rho2[p]),
-                "theta_hat": json.dumps(np.round(r.theta_hat[p], 12).tolist()),
+                # Only ridge has a Theta_hat (another learner's is empty, as in a real study's tidy file).
+                "theta_hat": None if r.theta_hat is None else json.dumps(np.round(r.theta_hat[p], 12).tolist()),
                 "reproduction_diverged": bool(diverged[p, e]) if reproduce else None,
                 "started_at": clock, "duration_s": duration})
             clock += duration
@@ -289,7 +317,7 @@ def run_many_studies(n_studies: int, n_per_group: int, seed: int = 0, parameters
     """
     share_states = as_bool("share_states", share_states)
     progress = as_bool("progress", progress, allow_none=True)
-    protocol = _ridge_protocol(resolve_protocol(protocol))
+    protocol = resolve_protocol(protocol)
     parameters = default_parameters(protocol) if parameters is None else parameters
     n_studies, n_per_group = as_count("n_studies", n_studies), as_count("n_per_group", n_per_group)
     plan = episode_plan(protocol)

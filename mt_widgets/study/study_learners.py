@@ -40,9 +40,9 @@ def study_learner(name: str, skill) -> Learner | None:
 
 
 def learner_parameters(learner: Learner) -> dict:
-    """The learner's parameters as plain numbers and text (what its constructor took), for the log."""
-    return {key: value for key, value in vars(learner).items()
-            if isinstance(value, (bool, int, float, str)) and not key.startswith("_")}
+    """The learner's hyper-parameters (``get_params``: what its constructor took), for the log."""
+    return {key: value.item() if isinstance(value, np.generic) else value
+            for key, value in learner.get_params().items()}
 
 
 def learnt_actions(episode) -> np.ndarray:

@@ -37,11 +37,56 @@ def test_guidance_helps_the_teachers_of_each_learner_and_each_study_runs_its_lea
     assert baseline(ridge) == baseline(reward) and len(baseline(ridge)) == 3
 
 
-def test_the_batched_engine_refuses_a_learner_it_does_not_fit():
-    from mt_widgets.in_silico import run_in_silico, run_many_studies
+@pytest.mark.parametrize("protocol, learner", [("reward-sim", None), ("paper-uarm", "kernel-ridge"),
+                                               ("paper-uarm", "gaussian-process"),
+                                               # Approximate MT per set and a batched fit: about 5 s.
+                                               pytest.param("paper-uarm", "neural-network", marks=pytest.mark.slow)])
+def test_the_batched_engine_scores_every_learner_as_its_teaching_episode_does(protocol, learner):
+    import json
 
-    reward = load_protocol("reward-sim")
-    for run in (lambda: run_in_silico(2, protocol=reward), lambda: run_many_studies(2, 2, protocol=reward)):
-        with pytest.raises(ValueError, match="protocol: expected a protocol whose learner is ridge .* "
-                                             "'reward-sim' with learner 'reward'"):
-            run()
+    from mt_widgets.core import TeachingEpisode
+    from mt_widgets.in_silico import run_in_silico, run_many_studies
+    from mt_widgets.study.study_learners import study_learner
+
+    protocol = load_protocol(protocol)
+    protocol = protocol if learner is None else protocol_with_learner(protocol, learner)
+    study = run_in_silico(3, protocol=protocol, reproduce=False, progress=False)
+    assert study.episodes["theta_hat"].isna().all() and not study.theta_hats
+    # Each row's error, rho1 and rho2 are those of a TeachingEpisode with the study's learner, one
+    # teacher at a time (the batched smoother's S U or the batched fit against the single path).
+    rows = study.demonstrations.groupby(["participant", "phase", "episode"], sort=False)
+    checked = 0
+    for (participant, phase, episode), demos in list(rows)[::5]:
+        skill = protocol.skill(demos["skill"].iloc[0])
+        states = np.array([json.loads(s) for s in demos["state"]])
+        actions = demos[["action_1", "action_2"]].to_numpy()
+        single = TeachingEpisode.from_actions(skill, states, actions, learner=study_learner(protocol.learner, skill))
+        episodes = study.episodes
+        row = episodes[(episodes["participant"] == participant) & (episodes["phase"] == phase)
+                       & (episodes["episode"] == episode)].iloc[0]
+        np.testing.assert_allclose(row["teaching_error"], single.error, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(row["rho1"], single.rho1, rtol=1e-9)
+        np.testing.assert_allclose(demos[["optimal_1", "optimal_2"]].to_numpy(), single.optimal_actions, atol=1e-9)
+        checked += 1
+    assert checked >= 5
+    # Power by simulation takes the same learner: 2 studies of 2 x 2, each change per group.
+    changes = run_many_studies(2, 2, protocol=protocol, share_states=True, progress=False)
+    assert all(change[group].shape == (2, 2) for change in changes.values() for group in protocol.groups[:2])
+
+
+def test_the_batched_engine_refuses_a_learner_it_cannot_batch_by_name():
+    from mt_widgets.core import SKILLS
+    from mt_widgets.core.learner import Learner
+    from mt_widgets.core.learner_batch import LearnerEpisodeBatch
+
+    class OneAtATime(Learner):
+        def fit(self, X, U):
+            return U
+
+        def predict(self, fitted, X_star):
+            return np.zeros((len(X_star), 2))
+
+    skill = SKILLS["uarm-point"]
+    with pytest.raises(TypeError, match="learner: expected a linear smoother or a learner with a batched fit .* "
+                                        "got OneAtATime\\(\\)"):
+        LearnerEpisodeBatch.of(skill, skill.query_states(seed=0)[None], OneAtATime())

@@ -15,8 +15,12 @@ def test_ridge_given_as_a_learner_is_the_papers_episode():
     plain, given = TeachingEpisode(skill, states, lam=0.05), TeachingEpisode(skill, states, learner=RidgeLearner(0.05))
     np.testing.assert_array_equal(plain.optimal_actions, given.optimal_actions)
     assert given.lam == 0.05 and given.ridge and plain.rho1 == given.rho1
-    with pytest.raises(ValueError, match="lam: expected the ridge learner's own lam 0.05"):
+    with pytest.raises(ValueError, match="lam: expected none \\(or the ridge learner's own lam 0.05\\)"):
         TeachingEpisode(skill, states, lam=0.2, learner=RidgeLearner(0.05))
+    # The default's value given explicitly is a second source too: refused, not overridden.
+    with pytest.raises(ValueError, match="got 0.01: the learner's lam is the one source"):
+        TeachingEpisode(skill, states, lam=0.01, learner=RidgeLearner(0.5))
+    assert TeachingEpisode(skill, states, lam=0.05, learner=RidgeLearner(0.05)).lam == 0.05
     with pytest.raises(TypeError, match="learner: expected a mt_widgets.core Learner"):
         TeachingEpisode(skill, states, learner="ridge")
 
@@ -64,3 +68,14 @@ def test_a_network_episode_has_linearised_gains_and_its_error_falls_with_mt():
     episode.restore(episode.optimal_actions)
     own = risk_of_actions(learner, skill, states, skill.target_actions(states), evaluation_states(skill))
     assert episode.error < own
+
+
+def test_the_episode_reports_theta_error_where_a_theta_exists_and_policy_risk_always():
+    skill = SKILLS["uarm-point"]
+    states = skill.query_states(seed=2)
+    actions = skill.target_actions(states) + 0.3
+    ridge = TeachingEpisode.from_actions(skill, states, actions)
+    assert ridge.theta_error == ridge.error > 0
+    assert ridge.policy_risk == pytest.approx(risk_of_actions(RidgeLearner(), skill, states, actions), rel=1e-12)
+    kernel = TeachingEpisode.from_actions(skill, states, actions, learner=make_learner("kernel-ridge", skill))
+    assert kernel.theta_error is None and kernel.policy_risk == kernel.error > 0

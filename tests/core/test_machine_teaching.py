@@ -111,7 +111,7 @@ def test_action_difference_speaks_in_angle_and_magnitude():
 
 
 @pytest.mark.parametrize("call, name", [
-    (lambda: RidgeLearner(-1.0), "lam"),
+    (lambda: RidgeLearner(-1.0).fit(np.ones((3, 2)), np.ones((3, 2))), "lam: expected a non-negative"),
     (lambda: RidgeLearner(0.1).fit(np.ones((3, 2)), np.ones((4, 2))), "U: expected one action per row"),
     (lambda: RidgeLearner(0.1).fit(np.ones(3), np.ones((3, 2))), "Phi"),
     (lambda: RidgeLearner(0.1).fit(np.ones((3, 2)), np.full((3, 2), np.inf)), "U: expected finite"),

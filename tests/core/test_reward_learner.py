@@ -5,7 +5,7 @@ import pytest
 
 from mt_widgets.core import SKILLS
 from mt_widgets.core.kernel_learners import SingularFitError
-from mt_widgets.core.learner_teaching import compare_with_baselines, make_learner, teach
+from mt_widgets.core.learner_teaching import compare_with_baselines, evaluation_states, make_learner, teach
 from mt_widgets.core.nonlinear_skills import NONLINEAR_SKILLS
 from mt_widgets.core.reward_learner import RewardLearner
 
@@ -19,7 +19,8 @@ def test_the_policy_is_the_maximiser_of_the_learnt_reward():
     for _ in range(50):   # no other action earns more reward at any state
         other = best + rng.normal(scale=0.5, size=best.shape)
         assert np.all(learner.reward(fitted, X, other) < learner.reward(fitted, X, best))
-    assert np.all(np.linalg.eigvalsh(fitted[0]) >= 0)   # a reward with a maximum
+    # A reward concave in the action (one maximiser): W + I at least I / 2.
+    assert np.all(np.linalg.eigvalsh(fitted[0] + np.eye(2)) >= 0.5 - 1e-12)
 
 
 @pytest.mark.parametrize("key, W", [("uarm-point", 0.25 * np.eye(2)),
@@ -41,6 +42,15 @@ def test_mt_teaches_the_point_skill_to_machine_precision_with_8_demonstrations(s
     assert result.risk < 1e-9 < result.target_risk
 
 
+@pytest.mark.parametrize("key", ["uarm-point", "uarm-line"])
+def test_mt_teaches_the_papers_uarm_skills_to_machine_precision_in_99_of_100_query_sets(key):
+    # The line's W is singular: a clip of W's eigenvalues at 0 made the fit non-smooth there and MT
+    # stopped between 1e-12 and 5e-6 in 44 of these 100 sets. About 0.7 s per skill.
+    comparison = compare_with_baselines(RewardLearner(), SKILLS[key], n_sets=100, n_states=8)
+    scale = np.sqrt(np.mean(np.sum(SKILLS[key].target_actions(evaluation_states(SKILLS[key])) ** 2, axis=1)))
+    assert np.count_nonzero(comparison.mt <= 1e-12 * scale) >= 99
+
+
 @pytest.mark.parametrize("key", ["uarm-point", "uarm-line", "uarm-curve", "uarm-obstacle"])
 def test_mt_beats_the_target_and_random_actions_over_query_sets_of_8(key):
     skill = {**SKILLS, **NONLINEAR_SKILLS}[key]
@@ -50,7 +60,7 @@ def test_mt_beats_the_target_and_random_actions_over_query_sets_of_8(key):
 
 def test_bad_input_is_named():
     with pytest.raises(ValueError, match="lam: expected a positive finite number"):
-        RewardLearner(lam=0.0)
+        RewardLearner(lam=0.0).fit(np.ones((8, 2)), np.ones((8, 2)))
     with pytest.raises(ValueError, match="expected planar positions and actions"):
         RewardLearner().fit(np.ones((8, 3)), np.ones((8, 3)))
     learner = RewardLearner()

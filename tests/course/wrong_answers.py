@@ -259,7 +259,7 @@ def smoother(X, X_star, length_scale, lam):
         ("solver", "KernelRidgeLearner inside smoother", {"smoother": """
 from mt_widgets.core import KernelRidgeLearner
 def smoother(X, X_star, length_scale, lam):
-    return KernelRidgeLearner(length_scale, lam).smoother(X, X_star)
+    return KernelRidgeLearner(length_scale, lam, linear_weight=0.0).smoother(X, X_star)
 """}, 6.0),
         ("transposed", "smoother returns (N, M)", {"smoother": """
 def smoother(X, X_star, length_scale, lam):
