@@ -39,7 +39,8 @@ from .skills import SKILLS, Skill, SkillRegistry
 from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
 from .trajectory import Trajectory, TrajectoryBatch
 from .uarm_plant import UARM_WORKSPACE_CM, UArmPlant
-from .ur5_plant import Conveyor, UR5Plant
+from .chain_plant import ChainPlant, Conveyor
+from .ur5_plant import UR5Plant
 from .workspace import AnnulusSector, Box, Cuboid
 
 __all__ = [
@@ -52,7 +53,7 @@ __all__ = [
     "Trajectory", "TrajectoryBatch", "TwoLinkArm", "UARM_WORKSPACE_CM", "UArmPlant",
     "UnderdeterminedTeachingWarning", "action_difference", "analyse_demonstrations", "condition_number",
     "optimal_actions", "ridge_operator", "sample_query_states", "teaching_risk",
-    "Conveyor", "ConveyorFeatures", "ConveyorTarget", "Cuboid", "SerialChain", "SpaceDrawing", "SpacePointTarget",
+    "ChainPlant", "Conveyor", "ConveyorFeatures", "ConveyorTarget", "Cuboid", "SerialChain", "SpaceDrawing", "SpacePointTarget",
     "ToolFeatures", "UR5Plant", "ViewProjection",
 ]
 __all__ += ["GaussianProcessLearner", "KernelRidgeLearner", "LEARNERS", "Learner", "LearnerTeaching",
