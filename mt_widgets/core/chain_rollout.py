@@ -11,9 +11,9 @@ The controller runs at 1 kHz. At each sample k the policy gives the tool's veloc
    a singularity asks for large but finite joint speeds). An arm with more joints than the
    task's three (the Panda's seven) has joint motions that leave the tool still: with a
    null-space gain k_n > 0 these pull the arm towards its home pose, ``qd_ref += N k_n (q_home - q)``
-   with ``N = I - J^T (J J^T + mu^2 I)^-1 J`` (the damped projector onto J's null space), so the
-   elbow does not drift over a long reproduction; with k_n = 0 the minimum-norm joint speeds
-   are taken. The whole qd_ref is then scaled down when a joint would exceed its velocity limit
+   with ``N = I - J^T (J J^T)^-1 J`` (the projector onto J's null space: the pull never moves
+   the tool; skipped at a singular pose), so the elbow does not drift over a long reproduction;
+   with k_n = 0 the minimum-norm joint speeds are taken. The whole qd_ref is then scaled down when a joint would exceed its velocity limit
    (the direction of the tool's motion is kept);
 2. a dynamic arm (torque-controlled, state q, qd): a velocity loop with gravity compensation,
    ``tau = g(q) + M(q) k_v (qd_ref - qd)``, each joint's torque clipped to its effort limit (what
@@ -191,18 +191,29 @@ def joint_velocity_reference(J, velocity, q, velocity_limit, damping, null_gain,
     for i in range(n):
         out_ref[i] = J[0, i] * y0 + J[1, i] * y1 + J[2, i] * y2
     if null_gain > 0.0:
-        # + N k_n (home - q): z minus its part J^T A^-1 J z that would move the tool
-        j0 = j1 = j2 = 0.0
-        for i in range(n):
-            z = null_gain * (home[i] - q[i])
-            j0 += J[0, i] * z
-            j1 += J[1, i] * z
-            j2 += J[2, i] * z
-        z0 = (c00 * j0 + c01 * j1 + c02 * j2) / det
-        z1 = (c01 * j0 + c11 * j1 + c12 * j2) / det
-        z2 = (c02 * j0 + c12 * j1 + c22 * j2) / det
-        for i in range(n):
-            out_ref[i] += null_gain * (home[i] - q[i]) - (J[0, i] * z0 + J[1, i] * z1 + J[2, i] * z2)
+        # + N k_n (home - q): z minus its part J^T (J J^T)^-1 J z that would move the tool. The
+        # projector is the exact one (undamped): a damped one would leak a little of the pull into
+        # the tool's motion, a steady offset of millimetres. Skipped at a singular pose.
+        b00, b11, b22 = a00 - damping * damping, a11 - damping * damping, a22 - damping * damping
+        e00 = b11 * b22 - a12 * a12
+        e01 = a02 * a12 - a01 * b22
+        e02 = a01 * a12 - a02 * b11
+        e11 = b00 * b22 - a02 * a02
+        e12 = a01 * a02 - b00 * a12
+        e22 = b00 * b11 - a01 * a01
+        det0 = b00 * e00 + a01 * e01 + a02 * e02
+        if det0 > 1e-12:
+            j0 = j1 = j2 = 0.0
+            for i in range(n):
+                z = null_gain * (home[i] - q[i])
+                j0 += J[0, i] * z
+                j1 += J[1, i] * z
+                j2 += J[2, i] * z
+            z0 = (e00 * j0 + e01 * j1 + e02 * j2) / det0
+            z1 = (e01 * j0 + e11 * j1 + e12 * j2) / det0
+            z2 = (e02 * j0 + e12 * j1 + e22 * j2) / det0
+            for i in range(n):
+                out_ref[i] += null_gain * (home[i] - q[i]) - (J[0, i] * z0 + J[1, i] * z1 + J[2, i] * z2)
     scale = 1.0
     for i in range(n):
         if abs(out_ref[i]) * scale > velocity_limit[i]:

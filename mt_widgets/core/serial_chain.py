@@ -143,6 +143,8 @@ class SerialChain:
         self.axis = np.array(axes)
         self.gravity_vector = np.array([0.0, 0.0, -self.gravity])
         self.has_dynamics = bool(np.all(mass > 0))
+        #: Joints off the chain the URDF reader held at zero (a gripper's), by name.
+        self.locked = ()
 
     @classmethod
     def from_description(cls, description: dict, dynamics: bool = True, gravity: float = 9.81) -> SerialChain:
@@ -150,8 +152,10 @@ class SerialChain:
         if not isinstance(description, dict) or not {"joints", "inertials", "tip"} <= set(description):
             raise TypeError("description: expected the dict a URDF reader gives (joints, inertials, tip), got "
                             f"{type(description).__name__}")
-        return cls(description["joints"], description["inertials"], description["tip"], gravity=gravity,
-                   dynamics=dynamics, source=description.get("source", "description"))
+        chain = cls(description["joints"], description["inertials"], description["tip"], gravity=gravity,
+                    dynamics=dynamics, source=description.get("source", "description"))
+        chain.locked = tuple(description.get("locked", ()))
+        return chain
 
     def __repr__(self) -> str:
         return f"SerialChain({len(self.joint_names)} joints to {self.tip!r}: {', '.join(self.joint_names)})"

@@ -47,12 +47,13 @@ class PinocchioArm:
         plant: the plant whose chain (its URDF: ``plant.chain.source``) and controller settings
             (gain, damping, null-space gain and home, conveyor) to copy.
         description: the chain's description (``read_urdf``); default: the chain's URDF read again
-            with the chain's tool frame (no joint locked).
+            with the chain's tool frame and locked joints.
     """
 
     def __init__(self, plant, description: dict | None = None):
         self.plant = plant
-        description = description if description is not None else read_urdf(plant.chain.source, plant.chain.tip)
+        description = description if description is not None else read_urdf(plant.chain.source, plant.chain.tip,
+                                                                                 plant.chain.locked)
         self.model, self.data, self.tool = pinocchio_chain(description)
 
     def tool_point(self, q) -> np.ndarray:
@@ -73,7 +74,7 @@ class PinocchioArm:
         reference = J.T @ inverse @ velocity
         if plant.null_gain > 0:
             pull = plant.null_gain * (plant.home - q)
-            reference = reference + pull - J.T @ inverse @ J @ pull
+            reference = reference + pull - J.T @ np.linalg.solve(J @ J.T, J @ pull)
         over = np.abs(reference) / model.velocityLimit
         if over.max() > 1.0:
             reference = reference / over.max()

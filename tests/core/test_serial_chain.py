@@ -205,6 +205,16 @@ def test_a_reproduction_matches_pinocchios_aba_stepped_the_same_way(key):
     assert np.abs(ours.states[:, 6:12]).max() > 0.1          # it moved
 
 
+def test_a_panda_reproduction_with_its_null_space_pull_matches_pinocchios_aba():
+    skill = SKILLS["panda-conveyor"]
+    theta = skill.theta + 0.1 * np.random.default_rng(2).standard_normal(skill.theta.shape)
+    ours = skill.reproduce(theta, duration=2.0)
+    assert not ours.diverged and skill.plant.null_gain > 0
+    reference = pinocchio_reference.PinocchioArm(skill.plant).rollout(theta, skill.start, 2.0)
+    assert np.abs(ours.states - reference).max() < TOLERANCE
+    assert np.abs(ours.states[:, 7:14]).max() > 0.1          # it moved
+
+
 def test_gravity_from_the_composite_bodies_equals_the_newton_euler_gravity():
     chain = SerialChain.from_description(parse_urdf(EVERY_JOINT, "tool"))
     model = chain.model
