@@ -35,7 +35,7 @@ from .plants import ContinuousPlant, KinematicPlant, Plant
 from .query_states import SeedSchedule, condition_number, sample_query_states
 from .reward_learner import RewardLearner
 from .serial_chain import SerialChain
-from .skills import SKILLS, Skill, SkillRegistry
+from .skills import CHAIN_ARMS, SKILLS, Skill, SkillRegistry
 from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
 from .trajectory import Trajectory, TrajectoryBatch
 from .uarm_plant import UARM_WORKSPACE_CM, UArmPlant
@@ -53,8 +53,8 @@ __all__ = [
     "Trajectory", "TrajectoryBatch", "TwoLinkArm", "UARM_WORKSPACE_CM", "UArmPlant",
     "UnderdeterminedTeachingWarning", "action_difference", "analyse_demonstrations", "condition_number",
     "optimal_actions", "ridge_operator", "sample_query_states", "teaching_risk",
-    "ChainPlant", "Conveyor", "ConveyorFeatures", "ConveyorTarget", "Cuboid", "SerialChain", "SpaceDrawing", "SpacePointTarget",
-    "ToolFeatures", "UR5Plant", "ViewProjection",
+    "CHAIN_ARMS", "ChainPlant", "Conveyor", "ConveyorFeatures", "ConveyorTarget", "Cuboid", "SerialChain",
+    "SpaceDrawing", "SpacePointTarget", "ToolFeatures", "UR5Plant", "ViewProjection",
 ]
 __all__ += ["GaussianProcessLearner", "KernelRidgeLearner", "LEARNERS", "Learner", "LearnerTeaching",
             "NeuralNetworkLearner", "SingularFitError", "make_learner", "policy_risk", "teach"]

@@ -443,3 +443,10 @@ SKILLS: SkillRegistry = SkillRegistry([*_paper_skills().values(), *_ur5_skills()
 
 #: The paper's own four keys, in the paper's order (the protocols, the demo and the planar views use these).
 PAPER_SKILL_KEYS = ("sim-point", "sim-line", "uarm-point", "uarm-line")
+
+#: The shipped arms beyond the paper's and the UR5, for an arm chooser (the demo's): (label,
+#: ((title, key), ...)) each, the skills taken from ``SKILLS`` by the plant's robot name.
+CHAIN_ARMS = tuple(
+    (label, tuple((skill.title, key) for key, skill in SKILLS.items() if skill.robot == robot))
+    for label, robot in (("Franka Panda (3-D)", "panda"), ("SO-101 (3-D)", "so101"))
+)
