@@ -2,7 +2,8 @@
 
 robot_models (robot descriptions read from their URDF files) is the data layer beneath
 everything: it imports nothing of the package, and core builds its chains from what it reads,
-so the files are read outside the science. core (science) <- study (the runner) <- in_silico (simulated teachers) <- analysis, and
+so the files are read outside the science. core (science) <- study (the runner) <- in_silico
+(simulated teachers) <- analysis, and
 core <- study <- classroom (a class's progress files). Two edges sit on core side by side and
 never import each other: widgets (the notebook views) and hardware (the uArm). apps (the pages
 and kiosks) is the top: it may use every layer, and no layer imports it; cli (the command) sits beside

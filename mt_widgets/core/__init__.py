@@ -6,6 +6,7 @@ query-state selection, rollouts, and the teaching episode that ties them togethe
 
 from .arm import ArmParameters, TwoLinkArm
 from .arm_plant import ArmPlant
+from .chain_plant import ChainPlant, Conveyor
 from .drawing import PlantDrawing, PoseSketch, SpaceDrawing, TargetShape, ViewProjection
 from .episode import Demonstration, DemonstrationAnalysis, EpisodeResult, EpisodeStateError, TeachingEpisode
 from .features import (
@@ -39,7 +40,6 @@ from .skills import CHAIN_ARMS, SKILLS, Skill, SkillRegistry
 from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
 from .trajectory import Trajectory, TrajectoryBatch
 from .uarm_plant import UARM_WORKSPACE_CM, UArmPlant
-from .chain_plant import ChainPlant, Conveyor
 from .ur5_plant import UR5Plant
 from .workspace import AnnulusSector, Box, Cuboid
 

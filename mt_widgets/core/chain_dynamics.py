@@ -34,7 +34,6 @@ sixth of a rollout (benchmarks/bench_ur5.py: 50 -> 42 ms of CPU for 10,000 steps
 from __future__ import annotations
 
 import math
-
 from typing import NamedTuple
 
 import numpy as np

@@ -329,8 +329,8 @@ class ChainPlant(ContinuousPlant):
         M = np.broadcast_to(self.chain.mass_matrix(q), shape + (n, n)).reshape(-1, n, n)
         g = np.broadcast_to(self.chain.gravity_torque(q), shape + (n,)).reshape(-1, n)
         qd = np.broadcast_to(qd, shape + (n,)).reshape(-1, n)
-        reference = self.joint_velocity_reference(np.broadcast_to(q, shape + (n,)), np.broadcast_to(actions, shape + (3,)))
-        reference = reference.reshape(-1, n)
+        reference = self.joint_velocity_reference(np.broadcast_to(q, shape + (n,)),
+                                                  np.broadcast_to(actions, shape + (3,))).reshape(-1, n)
         tau = np.empty((len(reference), n))
         for b in range(len(reference)):
             chain_rollout.held_torque(reference[b], np.ascontiguousarray(qd[b]), np.ascontiguousarray(M[b]),

@@ -13,7 +13,8 @@ The controller runs at 1 kHz. At each sample k the policy gives the tool's veloc
    null-space gain k_n > 0 these pull the arm towards its home pose, ``qd_ref += N k_n (q_home - q)``
    with ``N = I - J^T (J J^T)^-1 J`` (the projector onto J's null space: the pull never moves
    the tool; skipped at a singular pose), so the elbow does not drift over a long reproduction;
-   with k_n = 0 the minimum-norm joint speeds are taken. The whole qd_ref is then scaled down when a joint would exceed its velocity limit
+   with k_n = 0 the minimum-norm joint speeds are taken. The whole qd_ref is then scaled down when
+   a joint would exceed its velocity limit
    (the direction of the tool's motion is kept);
 2. a dynamic arm (torque-controlled, state q, qd): a velocity loop with gravity compensation,
    ``tau = g(q) + M(q) k_v (qd_ref - qd)``, each joint's torque clipped to its effort limit (what
@@ -111,17 +112,6 @@ def segment_distance(p0, p1, q0, q1):
     dy = ry + d1y * s - d2y * t
     dz = rz + d1z * s - d2z * t
     return math.sqrt(dx * dx + dy * dy + dz * dz)
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def chain_points(world_p, tool, out):
-    """The chain's points (n + 2, 3): the base origin, each joint's origin, the tool point."""
-    n = world_p.shape[0]
-    for k in range(3):
-        out[0, k] = 0.0
-        for i in range(n):
-            out[i + 1, k] = world_p[i, k]
-        out[n + 1, k] = tool[k]
 
 
 @njit(cache=True, error_model="numpy", inline="always")

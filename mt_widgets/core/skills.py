@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .arm_plant import ArmPlant
+from .chain_plant import ChainPlant, Conveyor
 from .drawing import PlantDrawing, PoseSketch, TargetShape
 from .features import (
     ConveyorFeatures,
@@ -24,7 +25,6 @@ from .features import (
     PositionFeatures,
     ToolFeatures,
 )
-from .chain_plant import ChainPlant, Conveyor
 from .query_states import sample_query_states
 from .shipped_arms import panda_plant, so101_plant
 from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
@@ -293,7 +293,8 @@ def _ur5_skills() -> dict[str, Skill]:
 
 
 def production_line_skills(prefix: str, arm: str, table: ChainPlant, part, fixture, above_part, max_condition: float,
-                            line: ChainPlant | None = None, conveyor_condition: float | None = None) -> dict[str, Skill]:
+                            line: ChainPlant | None = None,
+                            conveyor_condition: float | None = None) -> dict[str, Skill]:
     """An arm's production-line skills, defined as the UR5's are: the action is the tool's velocity (m/s).
 
     ``<prefix>-reach``: v = 0.8 (part - r) from the home pose; ``<prefix>-place``: from the state

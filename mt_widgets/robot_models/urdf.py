@@ -262,7 +262,8 @@ def parse_urdf(urdf_text: str, tool: str | None = None, locked=(), source: str =
                         f"({where})")
     path = path_to(tool)
     if not any(joint["type"] in MOVABLE for joint in path):
-        raise URDFError(f"{source}: tool: expected a movable joint between the root and {tool!r}, got only fixed joints")
+        raise URDFError(f"{source}: tool: expected a movable joint between the root and {tool!r}, got only fixed "
+                        f"joints")
     on_path = {root} | {joint["child"] for joint in path}
     path_names = {joint["name"] for joint in path}
     for name in locked:
