@@ -12,7 +12,6 @@ from .urdf import (
     example_robot_data_urdf,
     load_shipped,
     parse_urdf,
-    read_serial_chain,
     read_urdf,
     shipped_urdf,
 )
@@ -20,4 +19,4 @@ from .urdf import (
 # pinocchio_reference (the tests' and the benchmark's independent stepper) is left out: it needs
 # pinocchio, which only the test and bench extras install.
 __all__ = ["EXAMPLE_ROBOT_DATA", "SHIPPED", "URDFError", "example_robot_data_urdf", "load_shipped", "parse_urdf",
-           "read_serial_chain", "read_urdf", "shipped_urdf"]
+           "read_urdf", "shipped_urdf"]

@@ -290,7 +290,3 @@ def parse_urdf(urdf_text: str, tool: str | None = None, locked=(), source: str =
     return {"robot": root_element.get("name"), "source": source, "joints": path + branches,
             "inertials": inertials, "tip": tool, "locked": locked}
 
-
-def read_serial_chain(urdf_text: str, tip: str) -> dict:
-    """``parse_urdf`` of a URDF's text with the tool frame ``tip`` (no joint locked)."""
-    return parse_urdf(urdf_text, tip)
