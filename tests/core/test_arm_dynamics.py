@@ -166,7 +166,8 @@ def test_a_state_at_a_singular_pose_is_refused_with_a_velocity_and_allowed_at_re
 
 
 @pytest.mark.parametrize("arm", [TwoLinkArm(), TwoLinkArm(link_lengths=(0.7, 1.2), masses=(2.0, 0.5),
-                                                          com_fractions=(0.3, 0.6), inertias=(0.05, 0.02), gravity=3.0)])
+                                                          com_fractions=(0.3, 0.6), inertias=(0.05, 0.02),
+                                                          gravity=3.0)])
 def test_the_two_link_arm_on_the_chain_engine_agrees_with_its_closed_form(arm):
     chain = SerialChain.from_description(arm.chain_description(), gravity=arm.gravity)
     rng = np.random.default_rng(0)
