@@ -363,10 +363,10 @@ class ChainPlant(ContinuousPlant):
         return self.safety(states) != ""
 
     def rollout(self, thetas, feature_map, start, duration, record_every=None):
-        if self.conveyor is None:
-            compiled = isinstance(feature_map, ToolFeatures)
-        else:
-            compiled = isinstance(feature_map, ConveyorFeatures)
+        # The compiled engine evaluates the tool features (r, 1) or (r, s, 1) of this plant's own
+        # chain inline; any other feature map runs through the generic RK4 loop of ContinuousPlant.
+        expected = ToolFeatures if self.conveyor is None else ConveyorFeatures
+        compiled = type(feature_map) is expected and feature_map.plant is self
         if not compiled:
             return super().rollout(thetas, feature_map, start, duration, record_every)
         thetas, start, n_steps = _check_rollout(self, thetas, feature_map, start, duration, self.control_rate)
