@@ -7,7 +7,8 @@ import pytest
 from mt_widgets import SKILLS, RidgeLearner, TeachingEpisode, optimal_actions, teaching_risk
 from mt_widgets.core.chain_plant import ChainPlant
 from mt_widgets.core.features import ToolFeatures
-from mt_widgets.core.query_states import condition_number
+from mt_widgets.core.query_states import condition_number, sample_query_states
+from mt_widgets.core.workspace import Cuboid
 from mt_widgets.core.serial_chain import SerialChain
 from mt_widgets.core.shipped_arms import SO101_JOINT_SPEED, panda_plant, so101_plant
 from mt_widgets.robot_models.urdf import load_shipped
@@ -154,3 +155,13 @@ def test_bad_input_is_refused_by_name():
     massless = SerialChain.from_description(description, dynamics=False)
     with pytest.raises(ValueError, match=r"so101.urdf: kinematic=False needs the chain's dynamics"):
         ChainPlant(massless, skill.plant.home, skill.plant.teaching_box, skill.plant.scene_box)
+
+
+def test_an_arm_asked_to_teach_out_of_its_reach_is_told_so():
+    reach = SKILLS["so101-reach"]
+    plant = reach.plant
+    far = ChainPlant(plant.chain, plant.home, Cuboid((0.8, 0.9), (-0.1, 0.1), (0.05, 0.1)), plant.scene_box,
+                     robot="so101", kinematic=True, link_radius=0.015)
+    with pytest.raises(ValueError, match=r"plant: expected valid candidate states \(is_valid_state\), got none of "
+                                         r"400 sampled: is the workspace within the robot's reach"):
+        sample_query_states(far, ToolFeatures(far), 4, seed=0, max_condition=50.0, max_candidates=400, block=200)
