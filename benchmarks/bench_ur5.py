@@ -45,7 +45,7 @@ try:
     import mujoco
     import pinocchio
 
-    from mt_widgets.robot_models.pinocchio_reference import PinocchioUR5
+    from mt_widgets.robot_models.pinocchio_reference import PinocchioArm
     from mt_widgets.robot_models.urdf import example_robot_data_urdf
 except ImportError as error:  # the bench extra is missing: say how to get it, do not pretend
     raise SystemExit("benchmarks/bench_ur5.py needs mujoco, pin and example-robot-data: "
@@ -325,7 +325,7 @@ def main() -> int:
         skill = SKILLS[key]
         theta = skill.theta + 0.1 * np.random.default_rng(1).standard_normal(skill.theta.shape)
         ours = skill.reproduce(theta).states
-        pin_states = PinocchioUR5(skill.plant).rollout(theta, skill.start, 10.0)
+        pin_states = PinocchioArm(skill.plant).rollout(theta, skill.start, 10.0)
         mj_states = MujocoUR5(skill.plant).rollout(theta, skill.start, 10.0)
         to_pin, to_mj = np.abs(ours - pin_states).max(), np.abs(ours - mj_states).max()
         failed |= not (to_pin < TOLERANCE and to_mj < TOLERANCE)
@@ -342,7 +342,7 @@ def main() -> int:
     verdict = "met" if best <= 0.050 else "missed"
     print(f"   mt-widgets (skill.reproduce)            best {best * 1e3:6.1f} ms  median {median * 1e3:6.1f} ms"
           f"  CPU {cpu * 1e3:5.1f} ms  (target 50 ms: {verdict})")
-    pin_time = min(timed(lambda: PinocchioUR5(skill.plant).rollout(skill.theta, skill.start, 10.0), 2))
+    pin_time = min(timed(lambda: PinocchioArm(skill.plant).rollout(skill.theta, skill.start, 10.0), 2))
     print(f"   pinocchio ABA stepped from Python        {pin_time * 1e3:6.1f} ms   "
           f"mt-widgets is {pin_time / best:5.1f}x faster")
     mj = MujocoUR5(skill.plant)

@@ -1,6 +1,9 @@
 """The package's layers, read from its source with ast: who may import whom.
 
-core (science) <- study (the runner) <- in_silico (simulated teachers) <- analysis, and
+robot_models (robot descriptions read from their URDF files) is the data layer beneath
+everything: it imports nothing of the package, and core builds its chains from what it reads,
+so the files are read outside the science. core (science) <- study (the runner) <- in_silico
+(simulated teachers) <- analysis, and
 core <- study <- classroom (a class's progress files). Two edges sit on core side by side and
 never import each other: widgets (the notebook views) and hardware (the uArm). apps (the pages
 and kiosks) is the top: it may use every layer, and no layer imports it; cli (the command) sits beside
@@ -191,10 +194,17 @@ def test_the_package_root_imports_only_core():
 
 def test_core_imports_nothing_above_it_and_no_widget_serial_or_plotting_library():
     above = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of("mt_widgets.core")
-             if t.startswith(PACKAGE) and layer(t) != "core"]
+             if t.startswith(PACKAGE) and layer(t) not in ("core", "robot_models")]
     libraries = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of("mt_widgets.core")
                  if t.split(".")[0] in CORE_FORBIDDEN]
     assert above == [] and libraries == []
+
+
+def test_the_robot_models_import_nothing_of_the_package():
+    # The URDF reader is beneath core: it hands core plain data and knows nothing of plants or skills.
+    found = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of("mt_widgets.robot_models")
+             if t.startswith(PACKAGE + ".") and layer(t) != "robot_models"]
+    assert found == []
 
 
 def test_the_study_runner_imports_only_core():

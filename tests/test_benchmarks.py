@@ -11,6 +11,7 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 
 EXPECTED = {
+    "bench_arms.py": ["a 10 s reproduction at 1 kHz", "panda-reach", "so101-reach", "a URDF loaded into a ready plant"],
     "bench_online.py": ["participants", "arrival p50/p95/max", "response p50/p95/max", "load average"],
     "bench_kiosk.py": ["demo page (notebooks/demo.ipynb)", "stock Voila", "shipped config", "memory after"],
     "bench_core.py": ["agreement with MuJoCo", "(a) one 10 s rollout", "(b) 1000 rollouts", "fit + optimal_actions"],

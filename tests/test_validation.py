@@ -87,8 +87,9 @@ def test_view_points_teacher_parameters_and_unknown_skills_are_refused_in_the_on
         SKILLS["nope"]
     # Readable as written (a plain KeyError would print it in quotes), and still a KeyError.
     assert isinstance(error.value, KeyError)
-    assert str(error.value) == ("skill: expected one of the known skills (sim-line, sim-point, uarm-line, "
-                                "uarm-point, ur5-conveyor, ur5-place, ur5-reach), got 'nope'")
+    assert str(error.value) == ("skill: expected one of the known skills (panda-conveyor, panda-place, panda-reach, "
+                                "sim-line, sim-point, so101-place, so101-reach, uarm-line, uarm-point, ur5-conveyor, "
+                                "ur5-place, ur5-reach), got 'nope'")
 
 
 @pytest.mark.parametrize(("check", "wrong_type", "wrong_value"), [

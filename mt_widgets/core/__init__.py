@@ -6,6 +6,7 @@ query-state selection, rollouts, and the teaching episode that ties them togethe
 
 from .arm import ArmParameters, TwoLinkArm
 from .arm_plant import ArmPlant
+from .chain_plant import ChainPlant, Conveyor
 from .drawing import PlantDrawing, PoseSketch, SpaceDrawing, TargetShape, ViewProjection
 from .episode import Demonstration, DemonstrationAnalysis, EpisodeResult, EpisodeStateError, TeachingEpisode
 from .features import (
@@ -35,11 +36,11 @@ from .plants import ContinuousPlant, KinematicPlant, Plant
 from .query_states import SeedSchedule, condition_number, sample_query_states
 from .reward_learner import RewardLearner
 from .serial_chain import SerialChain
-from .skills import SKILLS, Skill, SkillRegistry
+from .skills import CHAIN_ARMS, SKILLS, Skill, SkillRegistry
 from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
 from .trajectory import Trajectory, TrajectoryBatch
 from .uarm_plant import UARM_WORKSPACE_CM, UArmPlant
-from .ur5_plant import Conveyor, UR5Plant
+from .ur5_plant import UR5Plant
 from .workspace import AnnulusSector, Box, Cuboid
 
 __all__ = [
@@ -52,8 +53,8 @@ __all__ = [
     "Trajectory", "TrajectoryBatch", "TwoLinkArm", "UARM_WORKSPACE_CM", "UArmPlant",
     "UnderdeterminedTeachingWarning", "action_difference", "analyse_demonstrations", "condition_number",
     "optimal_actions", "ridge_operator", "sample_query_states", "teaching_risk",
-    "Conveyor", "ConveyorFeatures", "ConveyorTarget", "Cuboid", "SerialChain", "SpaceDrawing", "SpacePointTarget",
-    "ToolFeatures", "UR5Plant", "ViewProjection",
+    "CHAIN_ARMS", "ChainPlant", "Conveyor", "ConveyorFeatures", "ConveyorTarget", "Cuboid", "SerialChain",
+    "SpaceDrawing", "SpacePointTarget", "ToolFeatures", "UR5Plant", "ViewProjection",
 ]
 __all__ += ["GaussianProcessLearner", "KernelRidgeLearner", "LEARNERS", "Learner", "LearnerTeaching",
             "NeuralNetworkLearner", "SingularFitError", "make_learner", "policy_risk", "teach"]

@@ -102,6 +102,32 @@ class TwoLinkArm:
         """The largest distance of the end-effector from the base, in metres."""
         return self.link_lengths[0] + self.link_lengths[1]
 
+    def chain_description(self) -> dict:
+        """The arm as a serial chain's description, as the URDF reader gives one (``SerialChain.from_description``).
+
+        The arm's plane (x, y) becomes the chain's (x, z), so gravity is along the chain's -z as
+        for every arm on the engine: the joints turn about -y (from +x towards +z), the links lie
+        along x, the tool at the tip. Its chain's (x, z) and M, C qd + g, J equal this class's
+        closed forms (tests/core/test_arm_dynamics.py, to 1e-12).
+        """
+        p = self.parameters
+        unlimited = {"lower": -np.inf, "upper": np.inf, "velocity": np.inf, "effort": np.inf}
+        joints = [
+            {"name": "q1", "type": "continuous", "parent": "base", "child": "link1", "xyz": (0.0, 0.0, 0.0),
+             "rpy": (0.0, 0.0, 0.0), "axis": (0.0, -1.0, 0.0)} | unlimited,
+            {"name": "q2", "type": "continuous", "parent": "link1", "child": "link2", "xyz": (p.l1, 0.0, 0.0),
+             "rpy": (0.0, 0.0, 0.0), "axis": (0.0, -1.0, 0.0)} | unlimited,
+            {"name": "tip", "type": "fixed", "parent": "link2", "child": "tip", "xyz": (p.l2, 0.0, 0.0),
+             "rpy": (0.0, 0.0, 0.0), "axis": (1.0, 0.0, 0.0)},
+        ]
+        # Only the inertia about the joints' axis (iyy) enters a planar motion; the others are set
+        # alike so that each link's inertia is a physical one.
+        inertials = [{"link": f"link{k}", "mass": m, "xyz": (lc, 0.0, 0.0), "rpy": (0.0, 0.0, 0.0),
+                      "inertia": (i, 0.0, 0.0, i, 0.0, i)}
+                     for k, m, lc, i in ((1, p.m1, p.lc1, p.i1), (2, p.m2, p.lc2, p.i2))]
+        return {"robot": "two_link_arm", "source": repr(self), "joints": joints, "inertials": inertials, "tip": "tip",
+                "locked": ()}
+
     # -- kinematics -------------------------------------------------------------------------
     def forward_kinematics(self, q) -> np.ndarray:
         """End-effector position. q: (..., 2) rad -> (..., 2) m."""

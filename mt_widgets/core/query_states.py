@@ -82,7 +82,7 @@ def sample_query_states(plant, feature_map, n: int, seed=None, max_condition: fl
     rng = make_rng(seed)
     accepted = np.empty((0, plant.state_dim))
     rows = np.empty((0, feature_map.dim))
-    drawn = failures = 0
+    drawn = failures = valid = 0
     # Backtracking: how many states the next drop removes, and the size the set was stuck at.
     drops, stuck_at = 0, n + 1
 
@@ -97,6 +97,7 @@ def sample_query_states(plant, feature_map, n: int, seed=None, max_condition: fl
         candidates = plant.sample_states(rng, block)
         drawn += block
         candidates = candidates[plant.is_valid_state(candidates)]
+        valid += len(candidates)
         features = feature_map(candidates)
         start = 0
         while start < len(candidates):
@@ -123,6 +124,11 @@ def sample_query_states(plant, feature_map, n: int, seed=None, max_condition: fl
             start = chosen + 1
         if failures >= patience and len(accepted) > 0:
             backtrack()
+    if valid == 0:
+        # Not a matter of the threshold: the plant offers no state at all (an arm whose teaching
+        # box is out of its reach, below its table or inside itself).
+        raise ValueError(f"plant: expected valid candidate states (is_valid_state), got none of {drawn} sampled: "
+                         f"is the workspace within the robot's reach and safe to teach in? ({plant!r})")
     raise ValueError(f"max_condition: found only {len(accepted)} of {n} states with a condition number under "
                      f"{max_condition} in {max_candidates} candidates; raise max_condition or lower n")
 

@@ -1,13 +1,15 @@
-"""A serial chain of revolute joints built from a robot's description as data (its URDF's numbers).
+"""A serial chain of joints built from a robot's description as data (its URDF's numbers).
 
 The description is what ``mt_widgets.robot_models.urdf`` reads from a URDF: the joints from the
-root to a tip frame (origins as xyz + roll-pitch-yaw, axes, limits) and each link's inertial.
-Fixed joints are folded into the moving body they weld a link to (their links' inertias added
-to it, the tip frame expressed in the last body), exactly as pinocchio does when it loads a
+root to a tool frame (origins as xyz + roll-pitch-yaw, axes, limits) and each link's inertial.
+Revolute and continuous joints turn, prismatic joints slide. Fixed joints (and joints the
+reader locked) are folded into the moving body they weld a link to (their links' inertias added
+to it, the tool frame expressed in the last body), exactly as pinocchio does when it loads a
 URDF, so both build the same chain from the same file.
 
 Every method takes one configuration or a batch with leading axes and returns arrays of
-matching leading shape; the algorithms are the compiled ones of ``chain_dynamics``.
+matching leading shape; the algorithms are the compiled ones of ``chain_dynamics``, which take
+the chain as one structure (``SerialChain.model``, a ``chain_dynamics.ChainModel``).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from . import chain_dynamics as dyn
+from .chain_dynamics import ChainModel
 from .validation import as_float_array
 
 
@@ -36,21 +39,29 @@ def _transform(xyz, rpy) -> np.ndarray:
 
 
 class SerialChain:
-    """Kinematics and rigid-body dynamics of a serial chain of revolute joints.
+    """Kinematics and rigid-body dynamics of a serial chain of revolute and prismatic joints.
 
     Args:
-        joints: dicts with name, type ("revolute" or "fixed"), parent, child, xyz, rpy, axis and,
-            for revolute joints, lower, upper (rad), velocity (rad/s), effort (N m).
+        joints: dicts with name, type ("revolute", "continuous", "prismatic" or "fixed"), parent,
+            child, xyz, rpy, axis and, for movable joints, lower, upper (rad or m), velocity
+            (rad/s or m/s), effort (N m or N).
         inertials: dicts with link, mass (kg), xyz, rpy (the centre-of-mass frame) and inertia
             (ixx, ixy, ixz, iyy, iyz, izz) in kg m^2 about the centre of mass.
         tip: the frame whose origin is the tool point.
         gravity: gravitational acceleration in m/s^2 along the base frame's -z (pinocchio's 9.81).
+        dynamics: whether the chain's dynamics are needed: then every moving body must have a
+            positive mass (a kinematic plant needs none).
+        source: where the description came from (a URDF's path), for messages.
     """
 
-    def __init__(self, joints, inertials, tip: str, gravity: float = 9.81):
+    def __init__(self, joints, inertials, tip: str, gravity: float = 9.81, dynamics: bool = True,
+                 source: str = "description"):
+        if not isinstance(dynamics, bool):
+            raise TypeError(f"dynamics: expected a bool, got {type(dynamics).__name__}")
+        self.source = str(source)
         by_child = {joint["child"]: joint for joint in joints}
         if tip not in by_child:
-            raise ValueError(f"tip: expected a link reached by a joint, got {tip!r}")
+            raise ValueError(f"{self.source}: tip: expected a link reached by a joint, got {tip!r}")
         path, link = [], tip
         while link in by_child:
             path.append(by_child[link])
@@ -58,36 +69,44 @@ class SerialChain:
         path.reverse()
         # Each link: (index of the moving body it is welded to, -1 for the base; its pose in that body's frame).
         attached = {link: (-1, np.eye(4))}
-        placements, axes, names, limits = [], [], [], []
+        placements, axes, names, limits, prismatic, moved_by = [], [], [], [], [], []
         body, pose = -1, np.eye(4)
         for joint in path:
             pose = pose @ _transform(joint["xyz"], joint["rpy"])
-            if joint["type"] == "revolute":
+            if joint["type"] in ("revolute", "continuous", "prismatic"):
                 axis = np.asarray(joint["axis"], dtype=float)
                 placements.append(pose)
                 axes.append(axis / np.linalg.norm(axis))
                 names.append(joint["name"])
+                prismatic.append(joint["type"] == "prismatic")
                 limits.append((joint["lower"], joint["upper"], joint["velocity"], joint["effort"]))
+                moved_by.append([joint["child"]])
                 body, pose = body + 1, np.eye(4)
             elif joint["type"] != "fixed":
-                raise ValueError(f"joints: {joint['name']!r} is {joint['type']}; expected revolute or fixed")
+                raise ValueError(f"{self.source}: joint {joint['name']!r} is {joint['type']}; expected revolute, "
+                                 f"continuous, prismatic or fixed")
+            elif body >= 0:
+                moved_by[body].append(joint["child"])
             attached[joint["child"]] = (body, pose)
         pending = [joint for joint in joints if joint["child"] not in attached]
         while pending:
             placed = [joint for joint in pending if joint["parent"] in attached]
             if not placed:
-                raise ValueError(f"joints: {[j['name'] for j in pending]} are not connected to the chain")
+                raise ValueError(f"{self.source}: joints {[j['name'] for j in pending]} are not connected to the chain")
             for joint in placed:
                 if joint["type"] != "fixed":
-                    raise ValueError(f"joints: {joint['name']!r} ({joint['type']}) branches off the chain")
+                    raise ValueError(f"{self.source}: joint {joint['name']!r} ({joint['type']}) branches off the chain")
                 parent_body, parent_pose = attached[joint["parent"]]
                 attached[joint["child"]] = (parent_body, parent_pose @ _transform(joint["xyz"], joint["rpy"]))
+                if parent_body >= 0:
+                    moved_by[parent_body].append(joint["child"])
             pending = [joint for joint in pending if joint not in placed]
         n = len(placements)
         if n == 0:
-            raise ValueError("joints: expected at least one revolute joint between the root and the tip")
+            raise ValueError(f"{self.source}: expected at least one movable joint between the root and the tip {tip!r}")
         self.joint_names = tuple(names)
         self.tip = tip
+        self.prismatic = np.array(prismatic, dtype=np.int64)
         limits = np.array(limits, dtype=float)
         self.lower, self.upper, self.velocity_limit, self.effort_limit = (limits[:, k].copy() for k in range(4))
         self.gravity = float(gravity)
@@ -106,32 +125,59 @@ class SerialChain:
             mass[body] += m
             moment[body] += m * c
             inertia_origin[body] += I_com + m * (c @ c * np.eye(3) - np.outer(c, c))
-        if np.any(mass <= 0):
-            raise ValueError(f"inertials: expected a positive mass on every moving body, got {mass.tolist()}")
-        com = moment / mass[:, None]
+        massless = np.flatnonzero(mass <= 0)
+        if dynamics and len(massless):
+            body = int(massless[0])
+            raise ValueError(f"{self.source}: links {moved_by[body]} (moved by joint {names[body]!r}): expected an "
+                             f"<inertial> with a positive mass, since the dynamics need it; got none")
+        com = moment / np.where(mass > 0, mass, 1.0)[:, None]
         inertia = inertia_origin - mass[:, None, None] * (np.einsum("bi,bi->b", com, com)[:, None, None] * np.eye(3)
                                                           - np.einsum("bi,bj->bij", com, com))
         tip_body, tip_pose = attached[tip]
         if tip_body != n - 1:
-            raise ValueError(f"tip: expected a frame on the last moving body, got {tip!r} on body {tip_body}")
+            raise ValueError(f"{self.source}: tip: expected a frame on the last moving body, got {tip!r} on body "
+                             f"{tip_body}")
         self.mass, self.com, self.inertia = mass, com, inertia
         self.tool_R, self.tool_p = tip_pose[:3, :3].copy(), tip_pose[:3, 3].copy()
         self.placement_R, self.placement_p = placement_R, placement_p
         self.axis = np.array(axes)
         self.gravity_vector = np.array([0.0, 0.0, -self.gravity])
+        self.has_dynamics = bool(np.all(mass > 0))
+        #: Joints off the chain the URDF reader held at zero (a gripper's), by name.
+        self.locked = ()
+
+    @classmethod
+    def from_description(cls, description: dict, dynamics: bool = True, gravity: float = 9.81) -> SerialChain:
+        """The chain of a description read from a URDF (``mt_widgets.robot_models.urdf.read_urdf``)."""
+        if not isinstance(description, dict) or not {"joints", "inertials", "tip"} <= set(description):
+            raise TypeError("description: expected the dict a URDF reader gives (joints, inertials, tip), got "
+                            f"{type(description).__name__}")
+        chain = cls(description["joints"], description["inertials"], description["tip"], gravity=gravity,
+                    dynamics=dynamics, source=description.get("source", "description"))
+        chain.locked = tuple(description.get("locked", ()))
+        return chain
 
     def __repr__(self) -> str:
         return f"SerialChain({len(self.joint_names)} joints to {self.tip!r}: {', '.join(self.joint_names)})"
+
+    def _dynamics(self) -> None:
+        if not self.has_dynamics:
+            raise ValueError(f"{self.source}: expected a positive mass on every moving body for the dynamics, got "
+                             f"{self.mass.tolist()} kg (built with dynamics=False)")
 
     @property
     def n_joints(self) -> int:
         return len(self.joint_names)
 
     @property
-    def model(self) -> tuple:
-        """The arrays the compiled kernels take, in ``chain_dynamics``' order."""
-        return (self.placement_R, self.placement_p, self.axis, self.mass, self.com, self.inertia, self.tool_R,
-                self.tool_p, self.gravity_vector)
+    def model(self) -> ChainModel:
+        """The chain as the compiled kernels take it: one ``chain_dynamics.ChainModel``.
+
+        Built from the attributes on each call, so a limit changed on the chain is the limit used.
+        """
+        return ChainModel(self.placement_R, self.placement_p, self.axis, self.prismatic, self.mass, self.com,
+                          self.inertia, self.tool_R, self.tool_p, self.gravity_vector, self.lower, self.upper,
+                          self.velocity_limit, self.effort_limit)
 
     def _q(self, name: str, value) -> np.ndarray:
         return as_float_array(name, value, shape=(self.n_joints,))
@@ -150,7 +196,7 @@ class SerialChain:
         """
         shape, (flat,) = self._flat(self._q("q", q))
         out = np.empty((len(flat), self.n_joints + 2, 3))
-        _origins_batch(self.placement_R, self.placement_p, self.axis, self.tool_p, flat, out)
+        _origins_batch(self.model, flat, out)
         return out.reshape(shape + out.shape[1:])
 
     def forward_kinematics(self, q) -> np.ndarray:
@@ -161,15 +207,14 @@ class SerialChain:
         """(rotation (..., 3, 3), position (..., 3)) of the tool frame in the base frame."""
         shape, (flat,) = self._flat(self._q("q", q))
         rotations, positions = np.empty((len(flat), 3, 3)), np.empty((len(flat), 3))
-        _tool_pose_batch(self.placement_R, self.placement_p, self.axis, self.tool_R, self.tool_p, flat, rotations,
-                         positions)
+        _tool_pose_batch(self.model, flat, rotations, positions)
         return rotations.reshape(shape + (3, 3)), positions.reshape(shape + (3,))
 
     def jacobian(self, q) -> np.ndarray:
-        """d(tool point)/dq in the base frame: (..., n) -> (..., 3, n)."""
+        """d(tool point)/dq in the base frame (a sliding joint's column in m/m): (..., n) -> (..., 3, n)."""
         shape, (flat,) = self._flat(self._q("q", q))
         out = np.empty((len(flat), 3, self.n_joints))
-        _jacobian_batch(self.placement_R, self.placement_p, self.axis, self.tool_p, flat, out)
+        _jacobian_batch(self.model, flat, out)
         return out.reshape(shape + (3, self.n_joints))
 
     def tool_velocity(self, q, qd) -> np.ndarray:
@@ -180,17 +225,18 @@ class SerialChain:
     # -- dynamics -----------------------------------------------------------------------------------
     def mass_matrix(self, q) -> np.ndarray:
         """M(q): (..., n) -> (..., n, n) in kg m^2."""
+        self._dynamics()
         shape, (flat,) = self._flat(self._q("q", q))
         out = np.empty((len(flat), self.n_joints, self.n_joints))
-        _mass_batch(self.placement_R, self.placement_p, self.axis, self.mass, self.com, self.inertia, flat, out)
+        _mass_batch(self.model, flat, out)
         return out.reshape(shape + out.shape[1:])
 
     def inverse_dynamics(self, q, qd, qdd, gravity: bool = True) -> np.ndarray:
         """tau = M(q) qdd + C(q, qd) qd + g(q) (without g when ``gravity`` is False): -> (..., n) N m."""
+        self._dynamics()
         shape, (fq, fqd, fqdd) = self._flat(self._q("q", q), self._q("qd", qd), self._q("qdd", qdd))
         out = np.empty((len(fq), self.n_joints))
-        _rnea_batch(self.placement_R, self.placement_p, self.axis, self.mass, self.com, self.inertia,
-                    self.gravity_vector, fq, fqd, fqdd, bool(gravity), out)
+        _rnea_batch(self.model, fq, fqd, fqdd, bool(gravity), out)
         return out.reshape(shape + (self.n_joints,))
 
     def nonlinear_effects(self, q, qd) -> np.ndarray:
@@ -205,23 +251,24 @@ class SerialChain:
 
     def forward_dynamics(self, q, qd, torque) -> np.ndarray:
         """qdd = M(q)^-1 (tau - C(q, qd) qd - g(q)): -> (..., n) rad/s^2."""
+        self._dynamics()
         shape, (fq, fqd, ftau) = self._flat(self._q("q", q), self._q("qd", qd), self._q("torque", torque))
         out = np.empty((len(fq), self.n_joints))
-        _forward_batch(self.placement_R, self.placement_p, self.axis, self.mass, self.com, self.inertia,
-                       self.gravity_vector, fq, fqd, ftau, out)
+        _forward_batch(self.model, fq, fqd, ftau, out)
         return out.reshape(shape + (self.n_joints,))
 
 
 # -- batch kernels: one configuration after another, scratch allocated once per call ----------------
 
 @njit(cache=True)
-def _origins_batch(placement_R, placement_p, axis, tool_p, Q, out):
+def _origins_batch(model, Q, out):
     n = Q.shape[1]
-    local_R, world_R, world_p, tool = np.empty((n, 3, 3)), np.empty((n, 3, 3)), np.empty((n, 3)), np.empty(3)
+    local_R, local_p, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    tool = np.empty(3)
     for b in range(Q.shape[0]):
-        dyn.local_rotations(placement_R, axis, Q[b], local_R)
-        dyn.world_frames(local_R, placement_p, world_R, world_p)
-        dyn.tool_point(world_R, world_p, tool_p, tool)
+        dyn.local_frames(model, Q[b], local_R, local_p)
+        dyn.world_frames(local_R, local_p, world_R, world_p)
+        dyn.tool_point(world_R, world_p, model.tool_p, tool)
         for k in range(3):
             out[b, 0, k] = 0.0
             for i in range(n):
@@ -230,13 +277,14 @@ def _origins_batch(placement_R, placement_p, axis, tool_p, Q, out):
 
 
 @njit(cache=True)
-def _tool_pose_batch(placement_R, placement_p, axis, tool_R, tool_p, Q, rotations, positions):
+def _tool_pose_batch(model, Q, rotations, positions):
     n = Q.shape[1]
-    local_R, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    local_R, local_p, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    tool_R = model.tool_R
     for b in range(Q.shape[0]):
-        dyn.local_rotations(placement_R, axis, Q[b], local_R)
-        dyn.world_frames(local_R, placement_p, world_R, world_p)
-        dyn.tool_point(world_R, world_p, tool_p, positions[b])
+        dyn.local_frames(model, Q[b], local_R, local_p)
+        dyn.world_frames(local_R, local_p, world_R, world_p)
+        dyn.tool_point(world_R, world_p, model.tool_p, positions[b])
         for r in range(3):
             for c in range(3):
                 acc = 0.0
@@ -246,50 +294,50 @@ def _tool_pose_batch(placement_R, placement_p, axis, tool_R, tool_p, Q, rotation
 
 
 @njit(cache=True)
-def _jacobian_batch(placement_R, placement_p, axis, tool_p, Q, out):
+def _jacobian_batch(model, Q, out):
     n = Q.shape[1]
-    local_R, world_R, world_p, tool = np.empty((n, 3, 3)), np.empty((n, 3, 3)), np.empty((n, 3)), np.empty(3)
+    local_R, local_p, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    tool = np.empty(3)
     for b in range(Q.shape[0]):
-        dyn.local_rotations(placement_R, axis, Q[b], local_R)
-        dyn.world_frames(local_R, placement_p, world_R, world_p)
-        dyn.tool_point(world_R, world_p, tool_p, tool)
-        dyn.tool_jacobian(world_R, world_p, axis, tool, out[b])
+        dyn.local_frames(model, Q[b], local_R, local_p)
+        dyn.world_frames(local_R, local_p, world_R, world_p)
+        dyn.tool_point(world_R, world_p, model.tool_p, tool)
+        dyn.tool_jacobian(model, world_R, world_p, tool, out[b])
 
 
 @njit(cache=True)
-def _mass_batch(placement_R, placement_p, axis, mass, com, inertia, Q, out):
+def _mass_batch(model, Q, out):
     n = Q.shape[1]
-    local_R, cm, ch, cJ = np.empty((n, 3, 3)), np.empty(n), np.empty((n, 3)), np.empty((n, 3, 3))
+    local_R, local_p, cm, ch, cJ = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty(n), np.empty((n, 3)), \
+        np.empty((n, 3, 3))
     for b in range(Q.shape[0]):
-        dyn.local_rotations(placement_R, axis, Q[b], local_R)
-        dyn.crba(local_R, placement_p, axis, mass, com, inertia, cm, ch, cJ, out[b])
+        dyn.local_frames(model, Q[b], local_R, local_p)
+        dyn.crba(model, local_R, local_p, cm, ch, cJ, out[b])
 
 
 @njit(cache=True)
-def _rnea_batch(placement_R, placement_p, axis, mass, com, inertia, gravity, Q, QD, QDD, use_gravity, out):
+def _rnea_batch(model, Q, QD, QDD, use_gravity, out):
     n = Q.shape[1]
-    local_R = np.empty((n, 3, 3))
+    local_R, local_p = np.empty((n, 3, 3)), np.empty((n, 3))
     w, v, aw, al, fn, fl = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)),
                             np.empty((n, 3)), np.empty((n, 3)))
     for b in range(Q.shape[0]):
-        dyn.local_rotations(placement_R, axis, Q[b], local_R)
-        dyn.rnea(local_R, placement_p, axis, mass, com, inertia, gravity, QD[b], QDD[b], use_gravity,
-                 w, v, aw, al, fn, fl, out[b])
+        dyn.local_frames(model, Q[b], local_R, local_p)
+        dyn.rnea(model, local_R, local_p, QD[b], QDD[b], use_gravity, w, v, aw, al, fn, fl, out[b])
 
 
 @njit(cache=True)
-def _forward_batch(placement_R, placement_p, axis, mass, com, inertia, gravity, Q, QD, TAU, out):
+def _forward_batch(model, Q, QD, TAU, out):
     n = Q.shape[1]
-    local_R = np.empty((n, 3, 3))
+    local_R, local_p = np.empty((n, 3, 3)), np.empty((n, 3))
     w, v, aw, al, fn, fl = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)),
                             np.empty((n, 3)), np.empty((n, 3)))
     cm, ch, cJ, M, L = np.empty(n), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, n)), np.zeros((n, n))
     zeros, bias, rhs = np.zeros(n), np.empty(n), np.empty(n)
     for b in range(Q.shape[0]):
-        dyn.local_rotations(placement_R, axis, Q[b], local_R)
-        dyn.rnea(local_R, placement_p, axis, mass, com, inertia, gravity, QD[b], zeros, True, w, v, aw, al, fn, fl,
-                 bias)
-        dyn.crba(local_R, placement_p, axis, mass, com, inertia, cm, ch, cJ, M)
+        dyn.local_frames(model, Q[b], local_R, local_p)
+        dyn.rnea(model, local_R, local_p, QD[b], zeros, True, w, v, aw, al, fn, fl, bias)
+        dyn.crba(model, local_R, local_p, cm, ch, cJ, M)
         for i in range(n):
             rhs[i] = TAU[b, i] - bias[i]
         if not dyn.cholesky_solve(M, rhs, L, out[b]):

@@ -1,6 +1,7 @@
 """Skills: what a teacher teaches. A skill is a target policy Theta on a plant's features.
 
-``SKILLS`` holds the paper's four and the UR5's three (``ur5-`` keys), read-only. A user
+``SKILLS`` holds the paper's four, the UR5's three (``ur5-`` keys), the Panda's three
+(``panda-``) and the SO-101's two (``so101-``), read-only. A user
 defines their own with ``Skill(...)``: a plant, a feature map, Theta (R x S), and the start state
 its reproduction runs from; then passes it to a widget or a session directly, or adds it to a
 ``SkillRegistry`` they own.
@@ -14,6 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .arm_plant import ArmPlant
+from .chain_plant import ChainPlant, Conveyor
 from .drawing import PlantDrawing, PoseSketch, TargetShape
 from .features import (
     ConveyorFeatures,
@@ -24,9 +26,10 @@ from .features import (
     ToolFeatures,
 )
 from .query_states import sample_query_states
+from .shipped_arms import panda_plant, so101_plant
 from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
 from .uarm_plant import UArmPlant
-from .ur5_plant import Conveyor, UR5Plant
+from .ur5_plant import UR5Plant
 from .validation import UnknownKeyError, as_bool, as_count, as_float_array, as_positive
 
 
@@ -289,6 +292,80 @@ def _ur5_skills() -> dict[str, Skill]:
     return {skill.key: skill for skill in skills}
 
 
+def production_line_skills(prefix: str, arm: str, table: ChainPlant, part, fixture, above_part, max_condition: float,
+                            line: ChainPlant | None = None,
+                            conveyor_condition: float | None = None) -> dict[str, Skill]:
+    """An arm's production-line skills, defined as the UR5's are: the action is the tool's velocity (m/s).
+
+    ``<prefix>-reach``: v = 0.8 (part - r) from the home pose; ``<prefix>-place``: from the state
+    ``above_part`` (as if just picked) across to the fixture and down onto it, the vertical gain
+    half the horizontal one; with a plant ``line`` carrying a conveyor, ``<prefix>-conveyor``:
+    v = 1.5 (o + s d - r) + speed d from the home pose.
+
+    Args:
+        prefix: the keys' prefix ("panda"); arm: the arm's name in the titles ("Panda").
+        table: the arm's plant without a conveyor; line: with one, or None.
+        part, fixture: (3,) m; above_part: the place skill's start state.
+        max_condition, conveyor_condition: the query-state thresholds (about the median condition
+            number of S random candidates, as for the paper's skills).
+    """
+    home = np.concatenate([table.home] + ([] if table.kinematic else [np.zeros(table.n_joints)]))
+    part, fixture = np.asarray(part, dtype=float), np.asarray(fixture, dtype=float)
+    reach = np.hstack([-0.8 * np.eye(3), 0.8 * part[:, None]]) + 0.0
+    gains = np.diag([1.0, 1.0, 0.5])
+    place = np.hstack([-gains, (gains @ fixture)[:, None]]) + 0.0
+    at = ", ".join(f"{v:.2f}" for v in part)
+    to = ", ".join(f"{v:.2f}" for v in fixture)
+    skills = [
+        Skill(f"{prefix}-reach", f"{arm}: reach the part on the table", table, ToolFeatures(table), reach, home,
+              SpacePointTarget(tuple(part)),
+              description=f"Move the {arm}'s tool to the part waiting on the table at ({at}) m: "
+                          "velocity = 0.8 (part - tool).", max_condition=max_condition),
+        Skill(f"{prefix}-place", f"{arm}: place the part at the fixture", table, ToolFeatures(table), place,
+              np.asarray(above_part, dtype=float), SpacePointTarget(tuple(fixture)),
+              description=f"Carry the part across to the fixture at ({to}) m, lowering it more slowly than it moves "
+                          "across.", max_condition=max_condition),
+    ]
+    if line is not None:
+        belt = line.conveyor
+        direction, origin = np.array(belt.direction), np.array(belt.origin)
+        follow = np.hstack([-1.5 * np.eye(3), 1.5 * direction[:, None],
+                            (1.5 * origin + belt.speed * direction)[:, None]]) + 0.0
+        skills.append(Skill(f"{prefix}-conveyor", f"{arm}: follow the part on the conveyor", line,
+                            ConveyorFeatures(line), follow, np.concatenate([home, [belt.phase_range[0]]]),
+                            ConveyorTarget(belt.origin, belt.direction, belt.phase_range),
+                            description=f"Catch up with the part riding the conveyor ({100 * belt.speed:.0f} cm/s) "
+                                        "and move with it.", max_condition=conveyor_condition))
+    return {skill.key: skill for skill in skills}
+
+
+#: The Panda's production line (m, base frame; the base on the table top, z = 0).
+PANDA_PART = (0.50, -0.15, 0.12)
+PANDA_FIXTURE = (0.40, 0.22, 0.15)
+PANDA_CONVEYOR = Conveyor(origin=(0.45, -0.25, 0.12), direction=(0.0, 1.0, 0.0), speed=0.05, phase_range=(0.0, 0.5))
+
+#: The SO-101's table top (m, base frame): a part in front of it to the right, a fixture to the left.
+SO101_PART = (0.22, -0.08, 0.04)
+SO101_FIXTURE = (0.18, 0.09, 0.06)
+
+
+def _panda_skills() -> dict[str, Skill]:
+    """The Panda's three production-line skills (``production_line_skills``)."""
+    # The pose the inverse kinematics (ChainPlant.state_at) gives for the tool 15 cm above the part,
+    # rounded to 1e-4 rad (within 0.1 mm of it; tests/core/test_arm_skills.py checks), written out
+    # so that importing compiles no kernel.
+    above_part = np.concatenate([[-0.1257, -0.0099, -0.1412, -2.2396, -0.1149, 2.2294, 0.7854], np.zeros(7)])
+    return production_line_skills("panda", "Panda", panda_plant(), PANDA_PART, PANDA_FIXTURE, above_part, 65.0,
+                                  line=panda_plant(PANDA_CONVEYOR), conveyor_condition=72.0)
+
+
+def _so101_skills() -> dict[str, Skill]:
+    """The SO-101's table-top skills: reach and place (``production_line_skills``, no conveyor)."""
+    # The inverse kinematics' pose for the jaws 8 cm above the part, rounded to 1e-4 rad (as the Panda's).
+    above_part = np.array([0.4148, -0.894, 0.7088, 0.9771, 0.0237])
+    return production_line_skills("so101", "SO-101", so101_plant(), SO101_PART, SO101_FIXTURE, above_part, 128.0)
+
+
 class SkillRegistry(Mapping):
     """Skills by key, owned by whoever needs them: a course, a lab's study, a notebook.
 
@@ -360,8 +437,17 @@ class SkillRegistry(Mapping):
 
 
 #: The paper's four skills, by key: "sim-point", "sim-line", "uarm-point", "uarm-line", then the
-#: UR5's production line (issue 31): "ur5-reach", "ur5-place", "ur5-conveyor" (read-only).
-SKILLS: SkillRegistry = SkillRegistry([*_paper_skills().values(), *_ur5_skills().values()], read_only=True)
+#: UR5's production line (issue 31): "ur5-reach", "ur5-place", "ur5-conveyor"; the Panda's "panda-reach",
+#: "panda-place", "panda-conveyor"; the SO-101's "so101-reach", "so101-place" (read-only).
+SKILLS: SkillRegistry = SkillRegistry([*_paper_skills().values(), *_ur5_skills().values(), *_panda_skills().values(),
+                                       *_so101_skills().values()], read_only=True)
 
 #: The paper's own four keys, in the paper's order (the protocols, the demo and the planar views use these).
 PAPER_SKILL_KEYS = ("sim-point", "sim-line", "uarm-point", "uarm-line")
+
+#: The shipped arms beyond the paper's and the UR5, for an arm chooser (the demo's): (label,
+#: ((title, key), ...)) each, the skills taken from ``SKILLS`` by the plant's robot name.
+CHAIN_ARMS = tuple(
+    (label, tuple((skill.title, key) for key, skill in SKILLS.items() if skill.robot == robot))
+    for label, robot in (("Franka Panda (3-D)", "panda"), ("SO-101 (3-D)", "so101"))
+)

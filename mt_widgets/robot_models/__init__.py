@@ -1,11 +1,22 @@
-"""Robot models read from their URDFs, outside the science: the files are read here, ``core`` gets data.
+"""Robot models read from their URDFs: the files are read here, ``core`` gets plain data.
 
-``urdf`` reads a URDF (example-robot-data's UR5) into the literals ``mt_widgets.core`` builds a
-serial chain from, and regenerates ``mt_widgets/core/ur5_description.py``.
+``urdf`` reads a URDF (a shipped arm's, in ``urdf_files/``, or a user's file) into the
+description ``mt_widgets.core.serial_chain.SerialChain`` builds its chain from. This subpackage
+imports nothing of the package: it is the data layer beneath ``core``.
 """
 
-from .urdf import description_module, example_robot_data_urdf, generate, read_serial_chain
+from .urdf import (
+    EXAMPLE_ROBOT_DATA,
+    SHIPPED,
+    URDFError,
+    example_robot_data_urdf,
+    load_shipped,
+    parse_urdf,
+    read_urdf,
+    shipped_urdf,
+)
 
 # pinocchio_reference (the tests' and the benchmark's independent stepper) is left out: it needs
 # pinocchio, which only the test and bench extras install.
-__all__ = ["description_module", "example_robot_data_urdf", "generate", "read_serial_chain"]
+__all__ = ["EXAMPLE_ROBOT_DATA", "SHIPPED", "URDFError", "example_robot_data_urdf", "load_shipped", "parse_urdf",
+           "read_urdf", "shipped_urdf"]

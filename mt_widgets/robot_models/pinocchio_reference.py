@@ -1,10 +1,14 @@
-"""The UR5's reproduction stepped by pinocchio from Python: the independent reference.
+"""pinocchio on the same URDF: the independent reference of the chain engine's numbers.
 
-The same URDF loaded by pinocchio (``pin.buildModelFromUrdf``), the same controller written
-here again with pinocchio's quantities (its tool Jacobian, ``crba``, ``computeGeneralizedGravity``)
-and numpy's solver, the same hold-and-RK4 scheme at 1 kHz with pinocchio's articulated-body
-algorithm (``aba``) as the dynamics. ``tests/core/test_serial_chain.py`` checks the compiled
-rollout against it; ``benchmarks/bench_ur5.py`` times it. Needs the ``test`` or ``bench`` extra.
+``pinocchio_chain`` loads a description's URDF with pinocchio (``pin.buildModelFromUrdf``) and
+locks the joints the description locked (``buildReducedModel`` at zero), so both hold the same
+chain; ``pinocchio_configuration`` writes a joint vector the way pinocchio stores it (a
+continuous joint as its cosine and sine). ``PinocchioArm`` steps a dynamic arm's reproduction:
+the same controller written here again with pinocchio's quantities (its tool Jacobian, ``crba``,
+``computeGeneralizedGravity``) and numpy's solver, the same hold-and-RK4 scheme at 1 kHz with
+pinocchio's articulated-body algorithm (``aba``) as the dynamics. ``tests/core/test_serial_chain.py``
+checks the compiled engine against them; ``benchmarks/bench_ur5.py`` times the stepper. Needs
+the ``test`` or ``bench`` extra.
 """
 
 from __future__ import annotations
@@ -12,21 +16,45 @@ from __future__ import annotations
 import numpy as np
 import pinocchio
 
-from .urdf import EXAMPLE_ROBOT_DATA, example_robot_data_urdf
+from .urdf import read_urdf
 
 
-class PinocchioUR5:
-    """pinocchio's model of the UR5 and a Python stepper of the tool-velocity controller.
+def pinocchio_chain(description: dict):
+    """(model, data, tool frame id) of pinocchio for a description read by ``read_urdf``."""
+    model = pinocchio.buildModelFromUrdf(description["source"])
+    locked = [model.getJointId(name) for name in description["locked"]]
+    if locked:
+        model = pinocchio.buildReducedModel(model, locked, pinocchio.neutral(model))
+    return model, model.createData(), model.getFrameId(description["tip"])
+
+
+def pinocchio_configuration(model, q) -> np.ndarray:
+    """pinocchio's configuration vector (nq,) for joint values q (nv,): a continuous joint as (cos, sin)."""
+    out = np.empty(model.nq)
+    for joint in model.joints[1:]:
+        if joint.nq == 2 and joint.nv == 1:
+            angle = q[joint.idx_v]
+            out[joint.idx_q], out[joint.idx_q + 1] = np.cos(angle), np.sin(angle)
+        else:
+            out[joint.idx_q:joint.idx_q + joint.nq] = q[joint.idx_v:joint.idx_v + joint.nv]
+    return out
+
+
+class PinocchioArm:
+    """pinocchio's model of a dynamic ``ChainPlant``'s arm and a Python stepper of its controller.
 
     Args:
-        plant: the ``UR5Plant`` whose controller settings (gain, damping, conveyor) to copy.
+        plant: the plant whose chain (its URDF: ``plant.chain.source``) and controller settings
+            (gain, damping, null-space gain and home, conveyor) to copy.
+        description: the chain's description (``read_urdf``); default: the chain's URDF read again
+            with the chain's tool frame and locked joints.
     """
 
-    def __init__(self, plant):
+    def __init__(self, plant, description: dict | None = None):
         self.plant = plant
-        self.model = pinocchio.buildModelFromUrdf(str(example_robot_data_urdf("ur5")))
-        self.data = self.model.createData()
-        self.tool = self.model.getFrameId(EXAMPLE_ROBOT_DATA["ur5"][1])
+        description = description if description is not None else read_urdf(plant.chain.source, plant.chain.tip,
+                                                                                 plant.chain.locked)
+        self.model, self.data, self.tool = pinocchio_chain(description)
 
     def tool_point(self, q) -> np.ndarray:
         pinocchio.forwardKinematics(self.model, self.data, q)
@@ -42,7 +70,11 @@ class PinocchioUR5:
         mass = pinocchio.crba(model, data, q)
         mass = np.triu(mass) + np.triu(mass, 1).T
         gravity = pinocchio.computeGeneralizedGravity(model, data, q)
-        reference = J.T @ np.linalg.solve(J @ J.T + plant.damping**2 * np.eye(3), velocity)
+        inverse = np.linalg.inv(J @ J.T + plant.damping**2 * np.eye(3))
+        reference = J.T @ inverse @ velocity
+        if plant.null_gain > 0:
+            pull = plant.null_gain * (plant.home - q)
+            reference = reference + pull - J.T @ np.linalg.solve(J @ J.T, J @ pull)
         over = np.abs(reference) / model.velocityLimit
         if over.max() > 1.0:
             reference = reference / over.max()
@@ -50,7 +82,7 @@ class PinocchioUR5:
         return np.clip(tau, -model.effortLimit, model.effortLimit)
 
     def rollout(self, theta, start, duration: float) -> np.ndarray:
-        """The states (T, D) of a 10 s (``duration``) reproduction of the policy theta (3, S) at 1 kHz."""
+        """The states (T, D) of a ``duration`` s reproduction of the policy theta (3, S) at 1 kHz."""
         plant, model, data = self.plant, self.model, self.data
         n = model.nv
         dt = 1.0 / plant.control_rate

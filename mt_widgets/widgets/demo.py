@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from ipywidgets import HTML, Box, Button, Checkbox, HBox, ToggleButtons, ToggleButtonsStyle, VBox
 
-from mt_widgets.core import SKILLS, Skill
+from mt_widgets.core import CHAIN_ARMS, SKILLS, Skill
 from mt_widgets.core.validation import as_bool
 
 from .animation import retire
@@ -41,6 +41,7 @@ UR5_DEMO_SKILLS = (
 DEMO_ARMS = (
     ("Planar arms", DEMO_SKILLS),
     ("UR5 arm (3-D)", UR5_DEMO_SKILLS),
+    *CHAIN_ARMS,
 )
 
 WELCOME = (

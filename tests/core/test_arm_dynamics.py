@@ -1,10 +1,12 @@
-"""The arm's dynamics against an independent Euler-Lagrange derivation done symbolically here."""
+"""The arm's dynamics against an independent Euler-Lagrange derivation done symbolically here, and the
+chain engine against the arm's closed form (the two-link arm as a two-joint chain)."""
 
 import numpy as np
 import pytest
 import sympy as sp
 
 from mt_widgets import TwoLinkArm
+from mt_widgets.core.serial_chain import SerialChain
 
 ARMS = {
     "paper arm": dict(),
@@ -161,3 +163,21 @@ def test_a_state_at_a_singular_pose_is_refused_with_a_velocity_and_allowed_at_re
     np.testing.assert_allclose(plant.end_effector(plant.state_at([2.0, 0.0]))[0], [2.0, 0.0], atol=1e-9)
     with pytest.raises(ValueError, match="position"):
         plant.state_at([2.0, 0.0], velocity=[0.0, 1.0])
+
+
+@pytest.mark.parametrize("arm", [TwoLinkArm(), TwoLinkArm(link_lengths=(0.7, 1.2), masses=(2.0, 0.5),
+                                                          com_fractions=(0.3, 0.6), inertias=(0.05, 0.02),
+                                                          gravity=3.0)])
+def test_the_two_link_arm_on_the_chain_engine_agrees_with_its_closed_form(arm):
+    chain = SerialChain.from_description(arm.chain_description(), gravity=arm.gravity)
+    rng = np.random.default_rng(0)
+    for _ in range(10):
+        q, qd, force = rng.uniform(-np.pi, np.pi, 2), rng.uniform(-3, 3, 2), rng.uniform(-5, 5, 2)
+        tool = chain.forward_kinematics(q)
+        assert np.abs(tool[[0, 2]] - arm.forward_kinematics(q)).max() < 1e-12 and abs(tool[1]) < 1e-12
+        assert np.abs(chain.jacobian(q)[[0, 2]] - arm.jacobian(q)).max() < 1e-12
+        assert np.abs(chain.mass_matrix(q) - arm.mass_matrix(q)).max() < 1e-12
+        bias = arm.coriolis_matrix(q, qd) @ qd + arm.gravity_torque(q)
+        assert np.abs(chain.nonlinear_effects(q, qd) - bias).max() < 1e-12
+        torque = arm.applied_torque(q, force)
+        assert np.abs(chain.forward_dynamics(q, qd, torque) - arm.joint_acceleration(q, qd, torque)).max() < 1e-12

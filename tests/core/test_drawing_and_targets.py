@@ -107,10 +107,10 @@ def test_a_users_target_subclass_works_through_the_same_methods():
 
 
 def test_skills_live_in_registries_their_users_own():
-    # The paper's four, and the UR5's production line (issue 31).
+    # The paper's four, the UR5's production line (issue 31), the Panda's and the SO-101's (issue 41).
     assert set(SKILLS) == {"sim-point", "sim-line", "uarm-point", "uarm-line", "ur5-reach", "ur5-place",
-                           "ur5-conveyor"}
-    with pytest.raises(KeyError, match=r"^skill: expected one of the known skills \(sim-line, sim-point, uarm-line"):
+                           "ur5-conveyor", "panda-reach", "panda-place", "panda-conveyor", "so101-reach", "so101-place"}
+    with pytest.raises(KeyError, match=r"^skill: expected one of the known skills \(panda-conveyor, .*sim-line"):
         SKILLS["nope"]
     base = SKILLS["sim-point"]
     mine = Skill("sim-stiff", "Stiff", base.plant, base.feature_map, 3 * base.theta, base.start,

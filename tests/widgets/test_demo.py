@@ -83,8 +83,8 @@ def test_switching_guidance_mid_episode_keeps_the_arrows_and_says_so(recorder):
 def test_the_visitor_picks_the_ur5_and_back_and_each_arm_gets_its_own_widget_and_skills():
     from mt_widgets.widgets import EpisodeWidget, SpaceTeachingCanvas, TeachingCanvas
     page = DemoPage(duration=1.0)
-    assert page.arm_chooser.layout.display is None and page.arm_chooser.options == ("Planar arms",
-                                                                                    "UR5 arm (3-D)")
+    assert page.arm_chooser.layout.display is None and page.arm_chooser.options == (
+        "Planar arms", "UR5 arm (3-D)", "Franka Panda (3-D)", "SO-101 (3-D)")
     assert isinstance(page.episode, EpisodeWidget) and page.skill_chooser.value == "sim-point"
     assert isinstance(page.episode.teaching, TeachingCanvas)   # the plant's drawing chose the renderer
     started = []
