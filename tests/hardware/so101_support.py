@@ -2,16 +2,11 @@
 
 from __future__ import annotations
 
-import xml.etree.ElementTree as ElementTree
-from functools import cache
 from importlib.metadata import distribution
 from pathlib import Path
 
-from mt_widgets.core.serial_chain import SerialChain
+from mt_widgets.core.shipped_arms import so101_chain as shipped_so101_chain
 from mt_widgets.hardware.feetech import SO101_IDS, SimulatedBus
-from mt_widgets.robot_models.urdf import read_serial_chain
-
-URDF = "robots/so_arm_description/urdf/so101.urdf"
 
 #: A calibration as lerobot-calibrate writes it (the numbers of a real arm's order of magnitude).
 CALIBRATION = {
@@ -24,22 +19,17 @@ CALIBRATION = {
 }
 
 
+#: example-robot-data's own SO-101 URDF: the reference pinocchio reads (the package ships a copy without meshes).
+URDF = "robots/so_arm_description/urdf/so101.urdf"
+
+
 def urdf_path() -> Path:
     return Path(str(distribution("example-robot-data").locate_file(f"cmeel.prefix/share/example-robot-data/{URDF}")))
 
 
-@cache
-def so101_chain() -> SerialChain:
-    """The five arm joints to the gripper frame; the gripper's jaw (a branch) left out."""
-    root = ElementTree.fromstring(urdf_path().read_text())
-    for joint in root.findall("joint"):
-        if joint.get("name") == "gripper":
-            root.remove(joint)
-    for link in root.findall("link"):
-        if link.get("name") == "moving_jaw_so101_v1_link":
-            root.remove(link)
-    chain = read_serial_chain(ElementTree.tostring(root, encoding="unicode"), "gripper_frame_link")
-    return SerialChain(chain["joints"], chain["inertials"], chain["tip"])
+def so101_chain():
+    """The five arm joints to the gripper frame, from the URDF the package ships."""
+    return shipped_so101_chain()
 
 
 def calibrated_bus(speed_scale: float = 50.0, calibration=None) -> SimulatedBus:

@@ -14,6 +14,7 @@ import pytest
 
 from mt_widgets.hardware.errors import UnsafeMoveError
 from mt_widgets.hardware.feetech import (
+    ARM_JOINTS,
     SO101,
     BusDisconnected,
     CalibrationError,
@@ -230,14 +231,15 @@ def test_a_move_with_the_torque_off_is_refused(sim, arm):
     assert not [p for p in bus.received[sent:] if p.code == 0x83]
 
 
-def test_without_kinematics_the_arm_reads_but_does_not_move(sim):
+def test_without_a_model_given_the_arm_moves_on_the_so101s_own_from_the_shipped_urdf(sim):
     _, server = sim
     with SO101(server.path, CALIBRATION, timeout=0.1) as arm:
         arm.torque(True)
-        assert set(arm.positions()) == set(CALIBRATION)
-        with pytest.raises(UnsafeMoveError, match="no kinematic model"):
-            arm.move_joints({"shoulder_pan": 0.1})
-        arm.gripper(0.3)   # the gripper is not near the table: its range is enough
+        q = arm.positions()
+        expected = so101_chain().forward_kinematics([q[j] for j in ARM_JOINTS])
+        assert arm.tool_point() == pytest.approx(tuple(expected), abs=1e-12)
+        with pytest.raises(UnsafeMoveError, match="below the table"):
+            arm.move_to(0.2, 0.0, -0.05)
 
 
 # ---------------------------------------------------------------- teaching by hand

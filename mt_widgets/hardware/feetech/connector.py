@@ -21,6 +21,8 @@ import threading
 import time
 from collections.abc import Callable
 
+from mt_widgets.core.shipped_arms import so101_chain
+
 from ..errors import UnsafeMoveError
 from .arm import ARM_JOINTS, GRIPPER, SO101_IDS
 from .bus import FeetechBus
@@ -64,8 +66,9 @@ class SO101:
         calibration: a LeRobot calibration file's path, its mapping, or None to use the
             calibration LeRobot wrote into the servos.
         kinematics: the arm's serial chain (:class:`mt_widgets.core.serial_chain.SerialChain`
-            of the five arm joints to ``gripper_frame_link``) or an :class:`ArmKinematics`;
-            without it the table cannot be checked and the arm does not move (it still reads).
+            of the five arm joints to ``gripper_frame_link``) or an :class:`ArmKinematics`; None:
+            the SO-101's own, from the URDF the package ships (``mt_widgets.core.shipped_arms``).
+            It is what keeps every link above the table.
         timeout: seconds a servo may take to answer (a USB adapter's latency timer is often 16 ms).
         envelope: keyword arguments of :class:`SO101Envelope` (table_height, clearance, margin,
             max_speed, max_acceleration).
@@ -79,7 +82,9 @@ class SO101:
             self._calibration_source = None
         else:
             self._calibration_source = read_calibration(calibration)
-        if kinematics is not None and not isinstance(kinematics, ArmKinematics):
+        if kinematics is None:
+            kinematics = so101_chain()
+        if not isinstance(kinematics, ArmKinematics):
             kinematics = ArmKinematics(kinematics)
         self.kinematics = kinematics
         self._envelope_options = envelope
@@ -206,8 +211,6 @@ class SO101:
 
     def tool_point(self) -> tuple[float, float, float]:
         """Where the gripper frame is (m, base frame)."""
-        if self.kinematics is None:
-            raise SO101Error("tool_point: the arm has no kinematic model (SO101(kinematics=...))")
         q = self.positions()
         return tuple(float(v) for v in self.kinematics.tool_point([q[j] for j in ARM_JOINTS]))
 
@@ -323,9 +326,6 @@ class SO101:
                 raise ValueError(f"{name}: expected a finite number of metres, got {value!r}")
             target.append(float(value))
         self._calibrated()
-        if self.kinematics is None:
-            raise UnsafeMoveError("move_to: the arm has no kinematic model (SO101(kinematics=...))",
-                                  coordinate="table", value=math.nan, limit=None)
         floor = self.envelope.table_height + self.envelope.clearance
         if target[2] < floor:
             raise UnsafeMoveError(f"z {target[2]:.3f} m is below the table's {floor:.3f} m", coordinate="z",
