@@ -120,11 +120,11 @@ class DemoPage(VBox):
         self._switching_arm = False
         # The page's parts share their layouts and styles (looks.py): none of them changes its own.
         self.arm_chooser = plain(ToggleButtons, options=list(self.arms), value=arm,
-                                 style=shared_style(ToggleButtonsStyle, button_width="120px"),
+                                 style=shared_style(ToggleButtonsStyle, button_width="auto"),
                                  tooltips=[f"Teach the {label}" for label in self.arms],
                                  layout=shared_layout() if len(self.arms) > 1 else shared_layout(display="none"))
         self.skill_chooser = plain(ToggleButtons, options=self._skill_options(arm), value=skill,
-                                   style=shared_style(ToggleButtonsStyle, button_width="150px"),
+                                   style=shared_style(ToggleButtonsStyle, button_width="auto"),
                                    tooltips=[s.title for s in self.arms[arm].values()])
         self.guidance_switch = plain(Checkbox, value=as_bool("guidance", guidance),
                                      description="Guidance: show the best arrow after each of mine", indent=False,
