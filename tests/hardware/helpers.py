@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import os
-import select
 import threading
 import time
-import tty
 
 # Importing the package (for SwiftPro) also registers the uarm-sim:// URL handler.
 from mt_widgets.hardware import SwiftPro
+from mt_widgets.hardware.sim_pty import SimulatedPort
 from mt_widgets.hardware.simdevice import SimulatedSwiftPro
 
 #: Fast defaults: a 10 ms boot, moves 100x faster than real.
@@ -71,8 +69,8 @@ def arm_is_moving(arm: SwiftPro) -> bool:
     return device_of(arm).moving_at(time.monotonic())
 
 
-class PtyArm:
-    """A simulated arm served on the master side of a pseudo-terminal by a thread.
+class PtyArm(SimulatedPort):
+    """A simulated uArm, powered on, served on the master side of a pseudo-terminal by a thread.
 
     Args:
         device: the simulated arm.
@@ -82,46 +80,5 @@ class PtyArm:
     """
 
     def __init__(self, device: SimulatedSwiftPro):
-        self.device = device
-        self.master, self.slave = os.openpty()
-        tty.setraw(self.slave)
-        tty.setraw(self.master)
-        self.path = os.ttyname(self.slave)
-        self._stop = threading.Event()
-        self.device.power_on(time.monotonic())
-        self.thread = threading.Thread(target=self._serve, daemon=True)
-        self.thread.start()
-
-    def _serve(self) -> None:
-        while not self._stop.is_set():
-            now = time.monotonic()
-            due = self.device.next_due(now)
-            wait = 0.02 if due is None else min(0.02, max(0.0, due - now))
-            try:
-                readable, _, _ = select.select([self.master], [], [], wait)
-                if readable:
-                    self.device.write(os.read(self.master, 4096), time.monotonic())
-                if self.device.disconnected:
-                    self.hang_up()
-                    return
-                out = self.device.read_available(time.monotonic())
-                if out:
-                    os.write(self.master, out)
-            except OSError:
-                return
-
-    def hang_up(self) -> None:
-        """Close both ends, as unplugging the cable does."""
-        self._stop.set()
-        for fd in (self.master, self.slave):
-            try:
-                os.close(fd)
-            except OSError:
-                pass
-        self.master = self.slave = -1
-
-    def close(self) -> None:
-        self._stop.set()
-        self.thread.join(timeout=1.0)
-        if self.master != -1:
-            self.hang_up()
+        device.power_on(time.monotonic())
+        super().__init__(device, poll=0.02, name="uarm-sim")
