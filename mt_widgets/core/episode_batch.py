@@ -95,8 +95,36 @@ class BatchOutcome:
     bound: np.ndarray
 
 
+class QuerySetBatch:
+    """What a batch of teachers' episodes shares, ridge's or another learner's: K sets of query states
+    (``query_states``, (K, N, state_dim)) with their optimal actions (``optimal_actions``, (K, N, R)),
+    and which set each teacher was given."""
+
+    query_states: np.ndarray
+    optimal_actions: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.query_states)
+
+    def _which(self, episode_of, n_teachers: int) -> np.ndarray:
+        if episode_of is None:
+            if len(self) not in (1, n_teachers):
+                raise ValueError(f"episode_of: expected the set of query states of each of {n_teachers} teachers "
+                                 f"({len(self)} sets), got None")
+            return np.zeros(n_teachers, dtype=int) if len(self) == 1 else np.arange(n_teachers)
+        which = np.asarray(episode_of)
+        if which.shape != (n_teachers,) or which.dtype.kind not in "iu" or which.min() < 0 or which.max() >= len(self):
+            raise ValueError(f"episode_of: expected {n_teachers} indices in [0, {len(self)}), got {which!r}")
+        return which
+
+    def optimal_for(self, episode_of=None, n_teachers: int | None = None) -> np.ndarray:
+        """(B, N, R) the optimal actions each teacher's query states call for."""
+        n = len(self) if n_teachers is None else n_teachers
+        return self.optimal_actions[self._which(episode_of, n)]
+
+
 @dataclass(frozen=True)
-class EpisodeBatch:
+class EpisodeBatch(QuerySetBatch):
     """One episode of a skill on K sets of query states, for many teachers at once.
 
     Build with ``EpisodeBatch.of(skill, query_states, lam, duration)``.
@@ -140,29 +168,10 @@ class EpisodeBatch:
         residual_norm = np.linalg.norm((A @ optimal - theta.T).reshape(len(A), -1), axis=1)
         return cls(skill, states, lam, duration, Phi, A, optimal, rho1, rank, residual_norm)
 
-    def __len__(self) -> int:
-        return len(self.query_states)
-
     @property
     def exact(self) -> np.ndarray:
         """(K,) whether each set of query states allows exact teaching (rank S)."""
         return self.rank == self.features.shape[2]
-
-    def _which(self, episode_of, n_teachers: int) -> np.ndarray:
-        if episode_of is None:
-            if len(self) not in (1, n_teachers):
-                raise ValueError(f"episode_of: expected the set of query states of each of {n_teachers} teachers "
-                                 f"({len(self)} sets), got None")
-            return np.zeros(n_teachers, dtype=int) if len(self) == 1 else np.arange(n_teachers)
-        which = np.asarray(episode_of)
-        if which.shape != (n_teachers,) or which.dtype.kind not in "iu" or which.min() < 0 or which.max() >= len(self):
-            raise ValueError(f"episode_of: expected {n_teachers} indices in [0, {len(self)}), got {which!r}")
-        return which
-
-    def optimal_for(self, episode_of=None, n_teachers: int | None = None) -> np.ndarray:
-        """(B, N, R) the optimal actions each teacher's query states call for."""
-        n = len(self) if n_teachers is None else n_teachers
-        return self.optimal_actions[self._which(episode_of, n)]
 
     def complete(self, actions, episode_of=None) -> BatchOutcome:
         """Fits and scores B teachers' demonstrations.

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .episode_batch import QuerySetBatch
 from .learner import Learner, has_batched_fit, is_linear_smoother
 from .learner_teaching import action_sensitivity, evaluation_states, learner_inputs, teach
 from .skills import Skill
@@ -47,7 +48,7 @@ class LearnerBatchOutcome:
 
 
 @dataclass(frozen=True)
-class LearnerEpisodeBatch:
+class LearnerEpisodeBatch(QuerySetBatch):
     """One episode of a skill on K sets of query states for any learner, for many teachers at once.
 
     Build with ``LearnerEpisodeBatch.of(skill, query_states, learner, duration)``.
@@ -96,25 +97,6 @@ class LearnerEpisodeBatch:
                 smoothers.append(learner.smoother(learner_inputs(learner, skill, query), X_eval))
         return cls(skill, learner, states, duration, np.stack(optimal), np.array(rho1),
                    np.stack(smoothers) if smoother else None, X_eval, skill.target_actions(evaluation))
-
-    def __len__(self) -> int:
-        return len(self.query_states)
-
-    def _which(self, episode_of, n_teachers: int) -> np.ndarray:
-        if episode_of is None:
-            if len(self) not in (1, n_teachers):
-                raise ValueError(f"episode_of: expected the set of query states of each of {n_teachers} teachers "
-                                 f"({len(self)} sets), got None")
-            return np.zeros(n_teachers, dtype=int) if len(self) == 1 else np.arange(n_teachers)
-        which = np.asarray(episode_of)
-        if which.shape != (n_teachers,) or which.dtype.kind not in "iu" or which.min() < 0 or which.max() >= len(self):
-            raise ValueError(f"episode_of: expected {n_teachers} indices in [0, {len(self)}), got {which!r}")
-        return which
-
-    def optimal_for(self, episode_of=None, n_teachers: int | None = None) -> np.ndarray:
-        """(B, N, R) the optimal actions each teacher's query states call for."""
-        n = len(self) if n_teachers is None else n_teachers
-        return self.optimal_actions[self._which(episode_of, n)]
 
     def learnt_on_evaluation(self, actions, episode_of=None) -> np.ndarray:
         """(B, M, R): each teacher's learnt policy on the evaluation states."""
