@@ -37,6 +37,9 @@ Settings (environment variables, so one file serves a course and the tests, test
 - ``MT_HUB_COURSE``: the instructor's nbgrader course folder, made the instructors' only.
 - ``MT_HUB_PORT`` (8000): the port, on 127.0.0.1 only (README.md: HTTPS for a class beyond the
   machine). ``MT_HUB_PROXY_API_PORT`` (8001), ``MT_HUB_INTERNAL_PORT`` (8081).
+- ``MT_HUB_SPAWN_LIMIT`` (100): servers starting at once (the server template's backlog too);
+  ``MT_HUB_SERVER_LIMIT`` (100; 0: none): servers running at once, the next student being told
+  the class server is full.
 - ``MT_HUB_API_TOKEN``: a token for the ``class-admin`` service (tests, ``benchmarks/bench_hub.py``).
 - ``MT_WIDGETS_CLASS_FOLDER``, ``MT_WIDGETS_EXCHANGE``: the class folder and nbgrader's exchange.
 - ``MT_HUB_NUMBA_TEMPLATE``: a warm numba cache (``warm_numba_cache.py``) copied into a
@@ -104,6 +107,18 @@ if _problems:
                      + "\n  ".join(_problems) + "\n(or set MT_HUB_STUDENT_PYTHON to a Python they can run: "
                      "scripts/install-hub.sh makes one)")
 
+
+
+def _count_setting(name: str, default: str, zero_means: str | None = None) -> int:
+    """The environment's ``name`` as a count of at least 1 (or 0, where ``zero_means`` says what it means)."""
+    text = os.environ.get(name, default)
+    smallest = 0 if zero_means else 1
+    if not text.isdigit() or int(text) < smallest:
+        meaning = f" (0: {zero_means})" if zero_means else ""
+        raise SystemExit(f"{name}: expected a whole number of at least {smallest}{meaning}, got {text!r}")
+    return int(text)
+
+
 # -- the hub: loopback only ------------------------------------------------------------------------
 c.JupyterHub.ip = "127.0.0.1"
 c.JupyterHub.port = int(os.environ.get("MT_HUB_PORT", "8000"))
@@ -115,8 +130,14 @@ c.ConfigurableHTTPProxy.pid_file = str(STATE / "proxy.pid")
 c.ConfigurableHTTPProxy.api_url = f"http://127.0.0.1:{int(os.environ.get('MT_HUB_PROXY_API_PORT', '8001'))}"
 # A whole class logs in at the start of a lesson: let them all spawn at once (a forked server
 # starts in about 0.2 CPU-seconds: sixty at once are ready well within a minute, docs/guide/scaling.md).
-c.JupyterHub.concurrent_spawn_limit = int(os.environ.get("MT_HUB_SPAWN_LIMIT", "100"))
-c.JupyterHub.active_server_limit = 0
+# The server template's socket holds as many waiting spawns (its backlog, below): a backlog of 64
+# under a limit of 100 lost a quarter of a class started at once (docs/guide/faults.md).
+SPAWN_LIMIT = _count_setting("MT_HUB_SPAWN_LIMIT", "100")
+c.JupyterHub.concurrent_spawn_limit = SPAWN_LIMIT
+# The servers this machine holds at once (0: no limit): the next student is told the class server
+# is full, in words (templates/429.html), instead of a server that never comes up.
+c.JupyterHub.active_server_limit = _count_setting("MT_HUB_SERVER_LIMIT", "100", zero_means="no limit")
+c.JupyterHub.template_paths = [str(HERE / "templates")]
 
 # -- who comes in ----------------------------------------------------------------------------------
 c.JupyterHub.authenticator_class = RosterAuthenticator
@@ -271,7 +292,9 @@ if os.environ.get("MT_HUB_SERVER_TEMPLATE", "on") != "off":
              "JUPYTER_CONFIG_PATH": str(HERE / "student-config"), "JUPYTER_PATH": str(HERE / "student-share"),
              "MT_HUB_ROLE": "student", "LANG": os.environ.get("LANG", "C.UTF-8")},
         # The warm cache's compiled rollouts, loaded once and shared by every student's kernel.
-        numba_cache=os.environ.get("MT_HUB_NUMBA_TEMPLATE"))
+        numba_cache=os.environ.get("MT_HUB_NUMBA_TEMPLATE"),
+        # Every spawn the hub lets run at once waits in the template's queue, none refused.
+        backlog=SPAWN_LIMIT)
     _hub_app = sys.modules.get("jupyterhub.app")
     if _hub_app is not None and _hub_app.JupyterHub.initialized():
         SERVER_TEMPLATE.ensure_started()  # a hub is starting: the template imports meanwhile

@@ -236,6 +236,33 @@ def test_the_server_template_is_on_unless_the_environment_says_off(setting):
     assert template(setting(MT_HUB_SERVER_TEMPLATE="off")) is None
 
 
+def test_the_server_templates_backlog_covers_every_spawn_the_hub_lets_run_at_once(setting):
+    """A backlog of 64 under a spawn limit of 100 lost a quarter of a class started at once: the
+    backlog is the limit itself, so neither can change alone."""
+    for env, limit in (({}, 100), ({"MT_HUB_SPAWN_LIMIT": "150"}, 150)):
+        config = setting(**env)
+        template = config.JupyterHub.spawner_class.start.__globals__["SERVER_TEMPLATE"]
+        shutil.rmtree(template.folder)
+        assert config.JupyterHub.concurrent_spawn_limit == limit
+        assert template.backlog >= config.JupyterHub.concurrent_spawn_limit
+        assert template.command()[0][-1] == str(template.backlog)
+        # What Linux grants a listening socket at most: the backlog asked for must not be cut.
+        assert int(Path("/proc/sys/net/core/somaxconn").read_text()) >= template.backlog
+    for bad in ("0", "-3", "many"):
+        with pytest.raises(SystemExit, match=f"MT_HUB_SPAWN_LIMIT: expected a whole number of at least 1, got '{bad}'"):
+            setting(MT_HUB_SPAWN_LIMIT=bad)
+
+
+def test_a_full_class_server_refuses_the_next_student_with_a_page_of_its_own(setting):
+    config = setting()
+    assert config.JupyterHub.active_server_limit == 100
+    page = Path(config.JupyterHub.template_paths[0], "429.html")
+    assert page.is_file() and "The class server is full" in page.read_text()
+    assert setting(MT_HUB_SERVER_LIMIT="0").JupyterHub.active_server_limit == 0
+    with pytest.raises(SystemExit, match=r"MT_HUB_SERVER_LIMIT: expected a whole number of at least 0 \(0: no limit\)"):
+        setting(MT_HUB_SERVER_LIMIT="full")
+
+
 def test_the_installation_check_names_the_folder_students_cannot_enter(tmp_path):
     locked = tmp_path / "locked"
     (locked / "inner").mkdir(parents=True)
