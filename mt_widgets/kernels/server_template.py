@@ -286,7 +286,8 @@ class ServerTemplate(TemplateProcess):
                  numba_cache: str | None = None, numba_packages: tuple[str, ...] = ("mt_widgets",),
                  backlog: int = template.KERNEL_BACKLOG):
         if type(backlog) is not int or backlog < 1:
-            raise ValueError(f"backlog: expected a positive integer (the hub's concurrent spawn limit), got {backlog!r}")
+            raise ValueError("backlog: expected a positive integer (the hub's concurrent spawn limit), "
+                             f"got {backlog!r}")
         cap = somaxconn()
         if cap is not None and backlog > cap:
             log.warning("server template: a backlog of %d is capped at net.core.somaxconn = %d; spawns beyond it "
