@@ -50,11 +50,13 @@ Settings (environment variables, so one file serves a course and the tests, test
   way. Instructors' servers always start the usual way (their extensions differ).
 """
 
+import asyncio
 import os
 import random
 import shutil
 import socket
 import sys
+import tempfile
 from pathlib import Path
 
 import jupyterhub
@@ -302,9 +304,19 @@ if os.environ.get("MT_HUB_SERVER_TEMPLATE", "on") != "off":
 
 
 def _copy_owned(source: Path, target: Path, uid: int, gid: int) -> None:
-    shutil.copytree(source, target)
-    for path in [target, *target.rglob("*")]:
-        os.chown(path, uid, gid, follow_symlinks=False)
+    """``source`` copied to ``target``, every file ``uid``'s and ``gid``'s; ``target`` appears whole or
+    not at all (copied beside it, then renamed): a copy cut short is not taken for a warm cache
+    at the next spawn, which copies again. The copy is made in a new folder of root's (0700), where
+    the student cannot reach it until it is whole."""
+    staging = Path(tempfile.mkdtemp(prefix=f".{target.name}-copying-", dir=target.parent))
+    try:
+        partial = staging / target.name
+        shutil.copytree(source, partial)
+        for path in [partial, *partial.rglob("*")]:
+            os.chown(path, uid, gid, follow_symlinks=False)
+        os.rename(partial, target)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
 
 
 #: The port chosen for each login's server, from its spawn until it stops. (Keyed by login: a
@@ -338,7 +350,8 @@ def _reserve_port(login: str) -> int:
     port (about once in thirty classes of thirty; seen in benchmarks/bench_hub.py). The second
     server then cannot bind it and ends, but the hub, which takes any HTTP answer as "up", finds
     the first student's server there and routes the second student to it. The hub runs its spawn
-    hooks one at a time on its event loop, so this record has no race of its own."""
+    hooks on its event loop, and this record is read and written with no await between (the hook's
+    only await, the cache's copy, comes before), so it has no race of its own."""
     taken = {port for other, port in _SERVER_PORTS.items() if other != login}
     _SERVER_PORTS[login] = _port_outside_ephemeral_range(taken)
     return _SERVER_PORTS[login]
@@ -348,8 +361,12 @@ def _release_port(login: str) -> None:
     _SERVER_PORTS.pop(login, None)
 
 
-def _before_spawn(spawner) -> None:
-    """Before a server starts: the account (the roster may have changed), a warm numba cache, the cgroups."""
+async def _before_spawn(spawner) -> None:
+    """Before a server starts: the account (the roster may have changed), a warm numba cache, the cgroups.
+
+    JupyterHub awaits this hook on its event loop, which serves every other login, spawn and
+    progress page meanwhile: the warm cache (every compiled version of the package's kernels) is
+    copied in a thread, so that a class spawning at once is not served one copy at a time."""
     import pwd
 
     login = spawner.user.name
@@ -368,7 +385,8 @@ def _before_spawn(spawner) -> None:
         for folder in (HOMES / login / ".cache",):
             folder.mkdir(exist_ok=True)
             os.chown(folder, user.pw_uid, user.pw_gid)
-        _copy_owned(Path(template), cache, user.pw_uid, user.pw_gid)
+        await asyncio.get_running_loop().run_in_executor(None, _copy_owned, Path(template), cache,
+                                                         user.pw_uid, user.pw_gid)
     if LIMITS is not None:
         LIMITS.create(login)
     spawner.port = _reserve_port(login)
