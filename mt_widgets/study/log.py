@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from . import jsonl
-from .jsonl import Lock, LogError, read_jsonl
+from .jsonl import Lock, LogError, NotSavedError, read_jsonl
 from .schema import migrate_events
 
 LOCK_FOLDER = ".locks"
@@ -223,6 +223,8 @@ class ParticipantLog:
             The event as written, with ``seq``, ``type``, ``time``, ``participant`` and ``study``.
 
         Raises:
+            NotSavedError: the event could not be stored (a full disk, a quota, an I/O error):
+                nothing of it is in the log, and the next ``append`` may succeed once there is room.
             LogError: the log is closed, or another session has continued this participant
                 since (this session is stale and must stop).
         """
@@ -237,8 +239,20 @@ class ParticipantLog:
                 raise ContinuedElsewhereError(f"participant {self.participant!r} was continued by another session "
                                               f"(a reloaded page or a second tab) since this one last wrote; this "
                                               f"one stops here, nothing was written")
-            jsonl.write_all(self._fd, line)
-            os.fsync(self._fd)
+            try:
+                jsonl.write_all(self._fd, line)
+                os.fsync(self._fd)
+            except OSError as error:
+                # Not acknowledged: the bytes that reached the file are taken back, so the log reads
+                # as it did, and this session writes again once there is room. Where even that
+                # fails, the log is closed: a resume ends the half line as after a kill.
+                try:
+                    jsonl.take_back(self._fd, self._size)
+                except OSError:
+                    self.close()
+                raise NotSavedError(f"participant {self.participant!r}: this step could not be saved "
+                                    f"({jsonl.why_not_saved(error)}); nothing of it was written, and "
+                                    f"everything before it is saved", error.errno) from error
             self._size += len(line)
         self.events.append(event)
         return event
@@ -326,3 +340,15 @@ def check_folder_writable(folder) -> Path:
     return folder
 
 
+
+
+def storage_problem(folder) -> str | None:
+    """Why ``folder`` could not take a participant's next step now (the disk is full, or nearly:
+    less than ``MIN_FREE_BYTES`` free; not writable), or None. The experimenter's listing and
+    ``python -m mt_widgets.study status`` show it: a page whose step could not be saved holds its
+    participant until there is room (docs/guide/faults.md)."""
+    try:
+        check_folder_writable(folder)
+    except LogFolderError as error:
+        return str(error)
+    return None

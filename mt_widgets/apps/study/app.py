@@ -71,7 +71,7 @@ class StudyApp(VBox):
         panel.start_button.on_click(lambda _: self._guarded(self._start_from_panel))
         panel.resume_button.on_click(lambda _: self._guarded(self._resume_from_panel))
         panel.lesson_button.on_click(lambda _: self._guarded(self._lesson_from_panel))
-        panel.list_button.on_click(lambda _: self._guarded(lambda: panel.list_study(self._study())))
+        panel.list_button.on_click(lambda _: self._guarded(lambda: panel.list_study(self._listed_study())))
         self._on_protocol({"new": protocol})
         super().__init__([panel])
 
@@ -129,6 +129,14 @@ class StudyApp(VBox):
         protocol = load_protocol(self.experimenter.protocol.value.strip())
         # Refuses an unwritable folder (and one running another protocol) before anyone starts.
         return StudyFolder.create(self.experimenter.log_folder.value.strip(), protocol)
+
+    def _listed_study(self) -> StudyFolder:
+        """The study to list: read as it is, so that a full disk (which ``_study`` refuses to start a
+        participant on) is shown in the listing instead of hiding it; made only when new."""
+        try:
+            return StudyFolder(self.experimenter.log_folder.value.strip())
+        except LogError:
+            return self._study()
 
     def _chosen_group(self) -> str | None:
         choice = self.experimenter.group.value
