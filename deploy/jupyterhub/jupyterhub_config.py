@@ -140,6 +140,11 @@ c.JupyterHub.concurrent_spawn_limit = SPAWN_LIMIT
 # is full, in words (templates/429.html), instead of a server that never comes up.
 c.JupyterHub.active_server_limit = _count_setting("MT_HUB_SERVER_LIMIT", "100", zero_means="no limit")
 c.JupyterHub.template_paths = [str(HERE / "templates")]
+# A hub stopped (an upgrade, a restart) or killed during a lesson leaves students' servers and kernels
+# running: the restarted hub finds each by the pid in its database and routes to it again
+# (docs/guide/faults.md). JupyterHub's default stops every server with the hub. To end a class's
+# servers, stop them first (the admin page's "Stop All", or the idle culler).
+c.JupyterHub.cleanup_servers = False
 
 # -- who comes in ----------------------------------------------------------------------------------
 c.JupyterHub.authenticator_class = RosterAuthenticator

@@ -156,8 +156,6 @@ class ClassHub:
         self.env = env
         self.log = self.root / "jupyterhub.log"
         self._log_file = open(self.log, "w")
-        self.process = subprocess.Popen([str(BIN / "jupyterhub"), "-f", str(CONFIG)], cwd=self.root, env=env,
-                                        stdout=self._log_file, stderr=subprocess.STDOUT, start_new_session=True)
         self.session = requests.Session()
         self.session.headers["Authorization"] = f"token {self.token}"
         # A fresh connection for every request: the proxy (configurable-http-proxy, node) closes a
@@ -170,22 +168,39 @@ class ClassHub:
         self.session.headers["Connection"] = "close"
         adapter = requests.adapters.HTTPAdapter(pool_connections=4, pool_maxsize=64)
         self.session.mount("http://", adapter)
-        deadline = time.monotonic() + 120
         try:
-            while True:
-                if self.process.poll() is not None:
-                    raise RuntimeError(f"jupyterhub exited with {self.process.returncode}:\n{self.tail()}")
-                try:
-                    if self.session.get(f"{self.url}/hub/api/", timeout=2).status_code == 200:
-                        break
-                except requests.ConnectionError:
-                    pass
-                if time.monotonic() > deadline:
-                    raise RuntimeError(f"jupyterhub did not answer within 120 s:\n{self.tail()}")
-                time.sleep(0.25)
+            self._start()
         except BaseException:
             self.stop()
             raise
+
+    def _start(self) -> float:
+        """Starts the hub and waits until its API answers; the seconds that took."""
+        started = time.monotonic()
+        self.process = subprocess.Popen([str(BIN / "jupyterhub"), "-f", str(CONFIG)], cwd=self.root, env=self.env,
+                                        stdout=self._log_file, stderr=subprocess.STDOUT, start_new_session=True)
+        deadline = started + 120
+        while True:
+            if self.process.poll() is not None:
+                raise RuntimeError(f"jupyterhub exited with {self.process.returncode}:\n{self.tail()}")
+            try:
+                if self.session.get(f"{self.url}/hub/api/", timeout=2).status_code == 200:
+                    return time.monotonic() - started
+            except requests.ConnectionError:
+                pass
+            if time.monotonic() > deadline:
+                raise RuntimeError(f"jupyterhub did not answer within 120 s:\n{self.tail()}")
+            time.sleep(0.25)
+
+    def restart(self, signum: int) -> float:
+        """Ends the hub process alone with ``signum`` (SIGTERM: the documented stop; SIGKILL: a crash),
+        leaving its proxy and the students' servers as they are, and starts it again; the seconds
+        until the new hub answers."""
+        os.kill(self.process.pid, signum)
+        self.process.wait(60)
+        self._log_file.write(f"\n=== hub ended by signal {signum}, started again ===\n")
+        self._log_file.flush()
+        return self._start()
 
     def tail(self, chars: int = 4000) -> str:
         self._log_file.flush()

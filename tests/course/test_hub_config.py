@@ -308,6 +308,10 @@ def test_the_server_templates_backlog_covers_every_spawn_the_hub_lets_run_at_onc
             setting(MT_HUB_SPAWN_LIMIT=bad)
 
 
+def test_a_hub_stopped_or_restarted_leaves_students_servers_running(setting):
+    assert setting().JupyterHub.cleanup_servers is False
+
+
 def test_a_full_class_server_refuses_the_next_student_with_a_page_of_its_own(setting):
     config = setting()
     assert config.JupyterHub.active_server_limit == 100
