@@ -13,8 +13,9 @@ checking that nobody else wrote since, so two processes never interleave events 
 a newer session (a reloaded page) takes over, and the older one is refused. A crash can leave
 at most the last line torn; loading drops it,
 and reopening for writing first ends it with a newline so the next event starts on a line of
-its own; the ``session_resumed`` event that follows records the repair, and only such
-repaired lines are tolerated in the middle of a log.
+its own; the ``session_resumed`` event that follows (or the ``session_started`` of a start
+made again, when the torn line was the first event) records the repair, and only such repaired
+lines are tolerated in the middle of a log.
 
 Events are JSON objects with at least ``seq`` (0-based, consecutive), ``type``, ``time``
 (ISO 8601 UTC), ``participant`` and ``study``; the event types, the schema version the log
@@ -110,7 +111,7 @@ def read_events(path) -> tuple[list[dict], dict]:
             pending_bad.append(number)
             continue
         if pending_bad:
-            if event.get("type") == "session_resumed" and event.get("repaired_torn_line"):
+            if event.get("type") in ("session_resumed", "session_started") and event.get("repaired_torn_line"):
                 repaired.extend(pending_bad)
                 pending_bad = []
             else:

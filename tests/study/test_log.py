@@ -113,6 +113,24 @@ def test_resumes_killed_before_recording_their_repair_leave_a_log_that_still_ope
     assert final[-1]["type"] == "session_finished" and len(info["repaired_lines"]) == 2
 
 
+def test_a_start_killed_inside_its_first_event_is_started_again_and_says_so(study):
+    """The participant is enrolled and their log created, then the start is killed half-way through
+    its session_started: the next arrival starts again after ending the torn line, and its
+    session_started records the repair (benchmarks/bench_kill_soak.py found a log that then no
+    longer opened: a repaired line must be followed by an event that says so)."""
+    study.enrol("P01", "target")
+    path = study.log_path("P01")
+    path.write_bytes(b'{"seq":0,"type":"session_sta')
+    session = Session.resume(study, "P01")
+    assert session.events[0]["type"] == "session_started"
+    assert session.events[0]["repaired_torn_line"] == len(b'{"seq":0,"type":"session_sta')
+    run(session)
+    session.close()
+    events, info = read_events(path)
+    assert events[-1]["type"] == "session_finished" and info["repaired_lines"] == [1]
+    Session.resume(study, "P01").close()  # and it opens again
+
+
 def test_a_last_line_missing_only_its_newline_is_kept(study):
     session = Session.start(study, "P01")
     run(session, stop_after=3)
