@@ -19,8 +19,8 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import jinja2
-import jupyterhub
 import pytest
+from jupyterhub._data import DATA_FILES_PATH
 
 from mt_widgets.kernels import template
 from mt_widgets.kernels.provisioner import ask_template
@@ -111,7 +111,7 @@ def test_the_backlog_is_a_positive_count_and_reaches_the_server_templates_comman
 
 
 def _refusal_page(message: str) -> str:
-    templates = Path(jupyterhub.__file__).parents[4] / "share" / "jupyterhub" / "templates"
+    templates = Path(DATA_FILES_PATH) / "templates"  # where JupyterHub itself finds its pages
     loader = jinja2.FileSystemLoader([str(REPO / "deploy" / "jupyterhub" / "templates"), str(templates)])
     page = jinja2.Environment(loader=loader, autoescape=True).get_template("429.html")
     return page.render(status_code=429, status_message="Too Many Requests", message=message,
