@@ -106,7 +106,7 @@ class ClassHub:
     """
 
     def __init__(self, students, admins=(), numba_template: Path | None = None, spawn_limit: int = 100,
-                 mem_limit: str = "1G", cpu_limit: str = "1.0", extra_roster: str = ""):
+                 mem_limit: str = "1G", cpu_limit: str = "1.0", extra_roster: str = "", extra_env: dict | None = None):
         for login in (*students, *admins):
             if not login.startswith(TEST_PREFIX):
                 raise ValueError(f"test logins start with {TEST_PREFIX!r} (so cleanup finds them), got {login!r}")
@@ -149,6 +149,7 @@ class ClassHub:
             "MT_HUB_API_TOKEN": self.token, "MT_HUB_SPAWN_LIMIT": str(spawn_limit),
             "MT_WIDGETS_CLASS_FOLDER": str(self.class_folder), "MT_WIDGETS_EXCHANGE": str(self.exchange),
         })
+        env.update(extra_env or {})
         env.pop("MT_WIDGETS_STUDENT", None)
         env["MT_HUB_STUDENT_PYTHON"] = str(STUDENT_PYTHON if STUDENT_PYTHON.exists() else sys.executable)
         if numba_template is not None:

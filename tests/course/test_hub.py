@@ -186,8 +186,9 @@ def test_a_hub_stopped_or_killed_mid_lesson_finds_every_students_server_and_kern
     then killed (SIGKILL) and started again. Each student's server (forked from the server template)
     and kernel survive and are re-adopted: the next execution in the very same kernel, which still
     holds its variables, succeeds within 10 s of the hub answering again. After the class ends (the
-    servers stopped through the hub) no process of any student is left. About a minute: its own
-    small hub (two students), before the module's class hub starts."""
+    servers stopped through the hub) no process of any student is left. And with the machine full
+    (``MT_HUB_SERVER_LIMIT``), a third student gets the page saying so. About 80 s: its own small hub
+    (two students and the late one), before the module's class hub starts."""
     students = ["mtt-rs0", "mtt-rs1"]
     try:
         left = remove_leftovers()
@@ -195,10 +196,16 @@ def test_a_hub_stopped_or_killed_mid_lesson_finds_every_students_server_and_kern
         left = []
     if left:
         warnings.warn(f"removed {len(left)} test accounts an earlier, killed run left", stacklevel=2)
-    restart_hub = ClassHub(students, spawn_limit=10)
+    late = "mtt-rs2"
+    restart_hub = ClassHub([*students, late], spawn_limit=10, extra_env={"MT_HUB_SERVER_LIMIT": str(len(students))})
     try:
         restart_hub.create_users(students)
         restart_hub.spawn_class(students)
+        # The machine is full (MT_HUB_SERVER_LIMIT): the next student is told so in a page, not a spinner.
+        refused = restart_hub.login(late, "a late student's own passphrase").get(f"{restart_hub.url}/hub/spawn",
+                                                                                timeout=60)
+        assert refused.status_code == 429 and "The class server is full" in refused.text, refused.text[-2000:]
+        assert not restart_hub.processes(late)
         kernels = {}
         for name in students:
             answer = restart_hub.run_in_kernel(name, MID_EPISODE.format(name=name))
