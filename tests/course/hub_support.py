@@ -180,6 +180,11 @@ class ClassHub:
         started = time.monotonic()
         self.process = subprocess.Popen([str(BIN / "jupyterhub"), "-f", str(CONFIG)], cwd=self.root, env=self.env,
                                         stdout=self._log_file, stderr=subprocess.STDOUT, start_new_session=True)
+        return self.wait_until_answering(started)
+
+    def wait_until_answering(self, started: float | None = None) -> float:
+        """Waits (at most 120 s) until the hub's API answers through the proxy; the seconds since ``started``."""
+        started = time.monotonic() if started is None else started
         deadline = started + 120
         while True:
             if self.process.poll() is not None:

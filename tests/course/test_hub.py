@@ -186,7 +186,8 @@ def test_a_hub_stopped_or_killed_mid_lesson_finds_every_students_server_and_kern
     then killed (SIGKILL) and started again. Each student's server (forked from the server template)
     and kernel survive and are re-adopted: the next execution in the very same kernel, which still
     holds its variables, succeeds within 10 s of the hub answering again. After the class ends (the
-    servers stopped through the hub) no process of any student is left. And with the machine full
+    servers stopped through the hub) no process of any student is left. The same for the proxy
+    killed alone. And with the machine full
     (``MT_HUB_SERVER_LIMIT``), a third student gets the page saying so. About 80 s: its own small hub
     (two students and the late one), before the module's class hub starts."""
     students = ["mtt-rs0", "mtt-rs1"]
@@ -220,6 +221,14 @@ def test_a_hub_stopped_or_killed_mid_lesson_finds_every_students_server_and_kern
                 assert answer == {**answer, "stdout": f"{name}\n", "error": None, "died": False}, (signum, answer)
                 assert restart_hub.api("GET", f"/users/{name}")["servers"][""]["state"]["pid"] == servers[name]
             assert time.monotonic() - back < 10 + 5 * len(students), "the students waited long after the hub was back"
+        # The proxy alone killed: the hub starts it again and gives it back every student's route.
+        os.kill(int((restart_hub.root / "state" / "proxy.pid").read_text()), signal.SIGKILL)
+        restart_hub.wait_until_answering()
+        back = time.monotonic()
+        for name in students:
+            answer = restart_hub.run_in_kernel(name, NEXT_DEMONSTRATION, timeout=30, kernel_id=kernels[name])
+            assert answer == {**answer, "stdout": f"{name}\n", "error": None, "died": False}, ("proxy", answer)
+        assert time.monotonic() - back < 10 + 5 * len(students), "the students waited long after the proxy was back"
         # The class ends: every server stopped through the hub; nothing of any student stays behind.
         for name in students:
             restart_hub.api("DELETE", f"/users/{name}/server")
