@@ -25,10 +25,12 @@ EXPECTED = {
     "bench_learners.py": ["MT against the target's and random actions", "machine teaching per learner",
                           "feedback latency per learner", "guidance per learner in silico",
                           "batched in-silico study per learner", "power by simulation, reward-sim"],
+    "bench_kill_soak.py": ["SIGKILLs (before", "nothing lost, nothing duplicated"],
 }
 # Shorter runs where a full one takes minutes (the figures are reported, never asserted).
 ARGS = {"bench_kiosk.py": ["--loads", "2", "--no-study"], "bench_online.py": ["--participants", "2", "--think", "1"],
-        "bench_install.py": ["--shapes", "core"], "bench_learners.py": ["--quick"]}
+        "bench_install.py": ["--shapes", "core"], "bench_learners.py": ["--quick"],
+        "bench_kill_soak.py": ["--kills", "1", "--protocols", "paper-sim"]}
 
 
 @pytest.mark.slow

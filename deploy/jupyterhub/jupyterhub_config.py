@@ -39,6 +39,9 @@ Settings (environment variables, so one file serves a course and the tests, test
 - ``MT_HUB_COURSE``: the instructor's nbgrader course folder, made the instructors' only.
 - ``MT_HUB_PORT`` (8000): the port, on 127.0.0.1 only (README.md: HTTPS for a class beyond the
   machine). ``MT_HUB_PROXY_API_PORT`` (8001), ``MT_HUB_INTERNAL_PORT`` (8081).
+- ``MT_HUB_SPAWN_LIMIT`` (100): servers starting at once (the server template's backlog too);
+  ``MT_HUB_SERVER_LIMIT`` (100; 0: none): servers running at once, the next student being told
+  the class server is full.
 - ``MT_HUB_API_TOKEN``: a token for the ``class-admin`` service (tests, ``benchmarks/bench_hub.py``).
 - ``MT_WIDGETS_CLASS_FOLDER``, ``MT_WIDGETS_EXCHANGE``: the class folder and nbgrader's exchange.
 - ``MT_HUB_NUMBA_TEMPLATE``: a warm numba cache (``warm_numba_cache.py``) copied into a
@@ -49,11 +52,13 @@ Settings (environment variables, so one file serves a course and the tests, test
   way. Instructors' servers always start the usual way (their extensions differ).
 """
 
+import asyncio
 import os
 import random
 import shutil
 import socket
 import sys
+import tempfile
 from pathlib import Path
 
 import jupyterhub
@@ -106,6 +111,18 @@ if _problems:
                      + "\n  ".join(_problems) + "\n(or set MT_HUB_STUDENT_PYTHON to a Python they can run: "
                      "scripts/install-hub.sh makes one)")
 
+
+
+def _count_setting(name: str, default: str, zero_means: str | None = None) -> int:
+    """The environment's ``name`` as a count of at least 1 (or 0, where ``zero_means`` says what it means)."""
+    text = os.environ.get(name, default)
+    smallest = 0 if zero_means else 1
+    if not text.isdigit() or int(text) < smallest:
+        meaning = f" (0: {zero_means})" if zero_means else ""
+        raise SystemExit(f"{name}: expected a whole number of at least {smallest}{meaning}, got {text!r}")
+    return int(text)
+
+
 # -- the hub: loopback only ------------------------------------------------------------------------
 c.JupyterHub.ip = "127.0.0.1"
 c.JupyterHub.port = int(os.environ.get("MT_HUB_PORT", "8000"))
@@ -117,8 +134,19 @@ c.ConfigurableHTTPProxy.pid_file = str(STATE / "proxy.pid")
 c.ConfigurableHTTPProxy.api_url = f"http://127.0.0.1:{int(os.environ.get('MT_HUB_PROXY_API_PORT', '8001'))}"
 # A whole class logs in at the start of a lesson: let them all spawn at once (a forked server
 # starts in about 0.2 CPU-seconds: sixty at once are ready well within a minute, docs/guide/scaling.md).
-c.JupyterHub.concurrent_spawn_limit = int(os.environ.get("MT_HUB_SPAWN_LIMIT", "100"))
-c.JupyterHub.active_server_limit = 0
+# The server template's socket holds as many waiting spawns (its backlog, below): a backlog of 64
+# under a limit of 100 lost a quarter of a class started at once (docs/guide/faults.md).
+SPAWN_LIMIT = _count_setting("MT_HUB_SPAWN_LIMIT", "100")
+c.JupyterHub.concurrent_spawn_limit = SPAWN_LIMIT
+# The servers this machine holds at once (0: no limit): the next student is told the class server
+# is full, in words (templates/429.html), instead of a server that never comes up.
+c.JupyterHub.active_server_limit = _count_setting("MT_HUB_SERVER_LIMIT", "100", zero_means="no limit")
+c.JupyterHub.template_paths = [str(HERE / "templates")]
+# A hub stopped (an upgrade, a restart) or killed during a lesson leaves students' servers and kernels
+# running: the restarted hub finds each by the pid in its database and routes to it again
+# (docs/guide/faults.md). JupyterHub's default stops every server with the hub. To end a class's
+# servers, stop them first (the admin page's "Stop All", or the idle culler).
+c.JupyterHub.cleanup_servers = False
 
 # -- who comes in ----------------------------------------------------------------------------------
 c.JupyterHub.authenticator_class = RosterAuthenticator
@@ -285,7 +313,9 @@ if os.environ.get("MT_HUB_SERVER_TEMPLATE", "on") != "off":
              "JUPYTER_CONFIG_PATH": str(HERE / "student-config"), "JUPYTER_PATH": str(HERE / "student-share"),
              "MT_HUB_ROLE": "student", "LANG": os.environ.get("LANG", "C.UTF-8")},
         # The warm cache's compiled rollouts, loaded once and shared by every student's kernel.
-        numba_cache=os.environ.get("MT_HUB_NUMBA_TEMPLATE"))
+        numba_cache=os.environ.get("MT_HUB_NUMBA_TEMPLATE"),
+        # Every spawn the hub lets run at once waits in the template's queue, none refused.
+        backlog=SPAWN_LIMIT)
     _hub_app = sys.modules.get("jupyterhub.app")
     if _hub_app is not None and _hub_app.JupyterHub.initialized():
         SERVER_TEMPLATE.ensure_started()  # a hub is starting: the template imports meanwhile
@@ -293,9 +323,19 @@ if os.environ.get("MT_HUB_SERVER_TEMPLATE", "on") != "off":
 
 
 def _copy_owned(source: Path, target: Path, uid: int, gid: int) -> None:
-    shutil.copytree(source, target)
-    for path in [target, *target.rglob("*")]:
-        os.chown(path, uid, gid, follow_symlinks=False)
+    """``source`` copied to ``target``, every file ``uid``'s and ``gid``'s; ``target`` appears whole or
+    not at all (copied beside it, then renamed): a copy cut short is not taken for a warm cache
+    at the next spawn, which copies again. The copy is made in a new folder of root's (0700), where
+    the student cannot reach it until it is whole."""
+    staging = Path(tempfile.mkdtemp(prefix=f".{target.name}-copying-", dir=target.parent))
+    try:
+        partial = staging / target.name
+        shutil.copytree(source, partial)
+        for path in [partial, *partial.rglob("*")]:
+            os.chown(path, uid, gid, follow_symlinks=False)
+        os.rename(partial, target)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
 
 
 #: The port chosen for each login's server, from its spawn until it stops. (Keyed by login: a
@@ -329,7 +369,8 @@ def _reserve_port(login: str) -> int:
     port (about once in thirty classes of thirty; seen in benchmarks/bench_hub.py). The second
     server then cannot bind it and ends, but the hub, which takes any HTTP answer as "up", finds
     the first student's server there and routes the second student to it. The hub runs its spawn
-    hooks one at a time on its event loop, so this record has no race of its own."""
+    hooks on its event loop, and this record is read and written with no await between (the hook's
+    only await, the cache's copy, comes before), so it has no race of its own."""
     taken = {port for other, port in _SERVER_PORTS.items() if other != login}
     _SERVER_PORTS[login] = _port_outside_ephemeral_range(taken)
     return _SERVER_PORTS[login]
@@ -339,8 +380,12 @@ def _release_port(login: str) -> None:
     _SERVER_PORTS.pop(login, None)
 
 
-def _before_spawn(spawner) -> None:
-    """Before a server starts: the account (the roster may have changed), a warm numba cache, the cgroups."""
+async def _before_spawn(spawner) -> None:
+    """Before a server starts: the account (the roster may have changed), a warm numba cache, the cgroups.
+
+    JupyterHub awaits this hook on its event loop, which serves every other login, spawn and
+    progress page meanwhile: the warm cache (every compiled version of the package's kernels) is
+    copied in a thread, so that a class spawning at once is not served one copy at a time."""
     import pwd
 
     login = spawner.user.name
@@ -359,7 +404,8 @@ def _before_spawn(spawner) -> None:
         for folder in (HOMES / login / ".cache",):
             folder.mkdir(exist_ok=True)
             os.chown(folder, user.pw_uid, user.pw_gid)
-        _copy_owned(Path(template), cache, user.pw_uid, user.pw_gid)
+        await asyncio.get_running_loop().run_in_executor(None, _copy_owned, Path(template), cache,
+                                                         user.pw_uid, user.pw_gid)
     if LIMITS is not None:
         LIMITS.create(login)
     spawner.port = _reserve_port(login)

@@ -190,18 +190,55 @@ async def ask_template(what: str, template, request: dict, wait_s: float):
             return None
         await asyncio.sleep(0.05)
     try:
-        reader, writer = await asyncio.open_unix_connection(template.socket)
+        connection = await _connect(what, template, deadline)
+        reader, writer = await asyncio.open_unix_connection(sock=connection)
     except OSError as error:
         log.warning("%s unreachable (%s)", what, error)
         return None
-    writer.write(json.dumps(request).encode() + b"\n")
-    await writer.drain()
-    reply = json.loads(await reader.readline() or b"{}")
+    try:
+        writer.write(json.dumps(request).encode() + b"\n")
+        await writer.drain()
+        reply = json.loads(await reader.readline() or b"{}")
+    except (OSError, ValueError) as error:  # the template died mid-answer
+        writer.close()
+        log.warning("%s lost the connection before answering (%r)", what, error)
+        return None
     if "pid" not in reply:
         writer.close()
         log.warning("%s refused: %s", what, reply.get("error", "it closed the connection"))
         return None
     return int(reply["pid"]), reader, writer
+
+
+async def _connect(what: str, template, deadline: float) -> socket.socket:
+    """A connection to ``template.socket``, retried until ``deadline`` while its backlog is full.
+
+    A Unix socket whose backlog of waiting connections is full refuses a non-blocking connect with
+    EAGAIN. asyncio's ``open_unix_connection(path)`` takes that EAGAIN for a TCP connect in
+    progress, waits until the socket is writable and finds no error, so it returns a socket that
+    was never connected; the first write then fails and ``drain`` raises
+    ``ConnectionResetError('Connection lost')``. (A hundred spawns at once against the server
+    template's backlog of 64 lost a quarter of the class so.) Here the connect is made by hand: a
+    full backlog is waited out, the connection made once the template has accepted others."""
+    pause = 0.005
+    while True:
+        connection = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        connection.setblocking(False)
+        try:
+            connection.connect(template.socket)
+            return connection
+        except (BlockingIOError, ConnectionRefusedError) as error:
+            # EAGAIN: the backlog is full; ECONNREFUSED: a socket file nobody listens on yet.
+            connection.close()
+            if template.process.poll() is not None:
+                raise ConnectionRefusedError(f"{what} ended ({template.process.returncode})") from error
+            if time.monotonic() + pause > deadline:
+                raise TimeoutError(f"{what}'s socket still refused connections at the deadline ({error})") from error
+            await asyncio.sleep(pause)
+            pause = min(2 * pause, 0.1)
+        except BaseException:
+            connection.close()
+            raise
 
 
 class ChildProcess:

@@ -10,10 +10,12 @@ cores waited half a minute for the servers and twenty seconds more for a first e
 shared copy-on-write between every student's processes.
 
 Run by the hub, as root: ``python -m mt_widgets.kernels.server_template SOCKET SERVERS KERNELS
-PRELOAD`` (comma-separated lists: the server modules a request may run, the kernel modules a
-student's kernel template may run, the modules to import first; ``KERNELS`` are imported before
-everything else, as what they set up, ``mt_hub_kernel``'s ipykernel without debugpy, must precede
-the rest). :class:`ServerTemplate` is the hub's side.
+PRELOAD NUMBA_PACKAGES BACKLOG`` (comma-separated lists: the server modules a request may run, the
+kernel modules a student's kernel template may run, the modules to import first, the packages whose
+cached numba functions are loaded; ``KERNELS`` are imported before everything else, as what they
+set up, ``mt_hub_kernel``'s ipykernel without debugpy, must precede the rest; ``BACKLOG``: how many
+spawns may wait for the template at once, the hub's concurrent spawn limit).
+:class:`ServerTemplate` is the hub's side.
 
 What keeps it safe (the template forks as root, and every student's server starts as its copy):
 
@@ -206,18 +208,18 @@ def serve(listener: socket.socket, server_modules: tuple[str, ...], kernel_modul
 
 def main(argv: list[str] | None = None) -> None:
     args = sys.argv[1:] if argv is None else argv
-    if len(args) != 5:
+    if len(args) != 6 or not args[5].isdigit():
         raise SystemExit("usage: python -m mt_widgets.kernels.server_template SOCKET SERVER_MODULES "
-                         "KERNEL_MODULES PRELOAD NUMBA_PACKAGES")
-    path = args[0]
-    servers, kernels, preload, numba_packages = ([name for name in arg.split(",") if name] for arg in args[1:])
+                         "KERNEL_MODULES PRELOAD NUMBA_PACKAGES BACKLOG")
+    path, backlog = args[0], int(args[5])
+    servers, kernels, preload, numba_packages = ([name for name in arg.split(",") if name] for arg in args[1:5])
     template.preload([*kernels, *servers, *preload])
     made = template._widgets_made()
     if made:
         raise SystemExit(f"server template: importing {preload} made widgets ({made}); preload modules that make none")
     _system_facts_once()
     template.settle(numba_packages)
-    serve(template.listen(path), tuple(servers), tuple(kernels))
+    serve(template.listen(path, backlog), tuple(servers), tuple(kernels))
 
 
 def _system_facts_once() -> None:
@@ -250,6 +252,15 @@ def untrusted(folder: str) -> str | None:
     return None
 
 
+def somaxconn() -> int | None:
+    """Linux's cap on a listening socket's backlog (``net.core.somaxconn``), or None where unreadable."""
+    try:
+        with open("/proc/sys/net/core/somaxconn") as handle:
+            return int(handle.read())
+    except (OSError, ValueError):
+        return None
+
+
 class ServerTemplate(TemplateProcess):
     """The hub's side: starts the template (as the hub's user) and asks it for servers.
 
@@ -263,12 +274,25 @@ class ServerTemplate(TemplateProcess):
             versions of ``numba_packages``' functions the template loads before forking; used only
             when it is root's and nobody else may write it (numba unpickles its index), else None.
         numba_packages: packages whose cached functions are loaded (``mt_widgets``).
+        backlog: spawns that may wait for the template's answer at once: the hub's concurrent spawn
+            limit (``jupyterhub_config.py`` passes it), so that a class spawned at once all waits in
+            the socket's queue. Linux caps it at ``net.core.somaxconn`` (logged when lower); a spawn
+            beyond it waits and tries again (``ask_template``).
     """
 
     what = "server template"
 
     def __init__(self, python: str, servers: list[str], kernels: list[str], preload: list[str], env: dict,
-                 numba_cache: str | None = None, numba_packages: tuple[str, ...] = ("mt_widgets",)):
+                 numba_cache: str | None = None, numba_packages: tuple[str, ...] = ("mt_widgets",),
+                 backlog: int = template.KERNEL_BACKLOG):
+        if type(backlog) is not int or backlog < 1:
+            raise ValueError("backlog: expected a positive integer (the hub's concurrent spawn limit), "
+                             f"got {backlog!r}")
+        cap = somaxconn()
+        if cap is not None and backlog > cap:
+            log.warning("server template: a backlog of %d is capped at net.core.somaxconn = %d; spawns beyond it "
+                        "wait and try again", backlog, cap)
+        self.backlog = backlog
         self.python, self.servers, self.kernels, self.preload = str(python), servers, kernels, preload
         self.folder = tempfile.mkdtemp(prefix="mt-st-")  # 0700, the hub's
         self.socket = os.path.join(self.folder, "s")
@@ -283,7 +307,7 @@ class ServerTemplate(TemplateProcess):
 
     def command(self) -> tuple[list[str], dict | None, str]:
         return ([self.python, "-m", "mt_widgets.kernels.server_template", self.socket, ",".join(self.servers),
-                 ",".join(self.kernels), ",".join(self.preload), ",".join(self.numba_packages)],
+                 ",".join(self.kernels), ",".join(self.preload), ",".join(self.numba_packages), str(self.backlog)],
                 self.env, self.env["HOME"])
 
     async def fork(self, request: dict, wait_s: float = 60.0) -> int | None:

@@ -53,6 +53,11 @@ import time
 KERNEL_MODULES = ("ipykernel_launcher",)
 #: What a request may be at most (a kernel's environment is a few kilobytes).
 MAX_REQUEST_BYTES = 1 << 20
+#: Connections a kernel template's socket holds waiting before one is accepted: one server's
+#: kernels, a handful at once. A server template is given its hub's spawn limit instead
+#: (``server_template.py``): a request beyond the backlog is refused at connect, and the asker
+#: retries (``provisioner.ask_template``).
+KERNEL_BACKLOG = 64
 
 
 def preload(modules: list[str]) -> list[str]:
@@ -360,15 +365,18 @@ def drain(wake_read: socket.socket) -> None:
         pass
 
 
-def listen(path: str) -> socket.socket:
-    """A Unix socket listening at ``path``, readable and writable by this user only."""
+def listen(path: str, backlog: int = KERNEL_BACKLOG) -> socket.socket:
+    """A Unix socket listening at ``path``, readable and writable by this user only, holding at most
+    ``backlog`` connections not yet accepted (Linux caps it at ``net.core.somaxconn``)."""
+    if type(backlog) is not int or backlog < 1:
+        raise ValueError(f"backlog: expected a positive integer, got {backlog!r}")
     listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     old_umask = os.umask(0o177)
     try:
         listener.bind(path)
     finally:
         os.umask(old_umask)
-    listener.listen(64)
+    listener.listen(backlog)
     return listener
 
 

@@ -39,6 +39,7 @@ One concern per module::
 from .analysis_plan import PAPER_CHANGES, AnalysisPlan, Change
 from .bids import export_bids
 from .erasure import ErasureReport, UnknownParticipantError, erase_participant
+from .jsonl import NotSavedError
 from .log import LogError, LogFolderError, MemoryLog, ParticipantLog, check_folder_writable, read_events, read_log
 from .online import OnlineSettings, outcome_of
 from .participants import ParticipantIdError, block_assignment, validate_participant_id, validate_url_participant_id
@@ -57,4 +58,5 @@ __all__ = [
     "OnlineSettings", "read_log", "ProtocolSession", "Window", "WindowError", "outcome_of",
     "validate_url_participant_id",
     "ErasureReport", "UnknownParticipantError", "erase_participant",
+    "NotSavedError",
 ]

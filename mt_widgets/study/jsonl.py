@@ -10,6 +10,10 @@ rules a crash relies on are written once:
 - ``append_line``: ends a torn last line with a newline first (its bytes stay: append-only), so
   the new record never gets glued onto it; writes the record with ``write_all`` and fsyncs it
   (and the folder when the file is new) before returning.
+- A write that fails (a full disk, a quota, an I/O error) is taken back: the file is cut back to
+  its length before the write (``take_back``), so no half line is left, and ``NotSavedError``
+  says that nothing of the record was stored. Nothing is acknowledged that is not on disk, and
+  the next write, once there is room again, goes on from the last stored record.
 - ``read_jsonl``: every newline-ended line, parsed or marked as not parsing, and the bytes after
   the last newline (a record still being written, or torn by a kill) reported apart. What a
   reader tolerates (skip and count, or only lines a later record says it repaired) is its own
@@ -33,6 +37,34 @@ from pathlib import Path
 
 class LogError(RuntimeError):
     """A log or study folder that cannot be used as asked (in use, corrupt, mismatched)."""
+
+
+class NotSavedError(LogError):
+    """A record that could not be stored (the disk is full, a quota is reached, an I/O error):
+    nothing of it is in the file, and the file reads as before. ``errno`` is the system's error
+    number (``errno.ENOSPC``, ``errno.EDQUOT``, ``errno.EIO``...)."""
+
+    def __init__(self, message: str, errno_: int | None = None):
+        super().__init__(message)
+        self.errno = errno_
+
+
+#: Why a write failed, in words a page can show (the system's own words otherwise).
+_WHY = {errno.ENOSPC: "the disk holding it is full", errno.EDQUOT: "its disk quota is used up",
+        errno.EIO: "the disk reported an input/output error", errno.EFBIG: "the file reached its size limit"}
+
+
+def why_not_saved(error: OSError) -> str:
+    """An OSError of a write as words: "the disk holding it is full (No space left on device)"."""
+    words = error.strerror or str(error)
+    return f"{_WHY[error.errno]} ({words})" if error.errno in _WHY else words
+
+
+def take_back(fd: int, length: int) -> None:
+    """Cuts the file open at ``fd`` back to ``length`` bytes, on disk: what a failed write left is gone.
+    (Shortening a file needs no free space.)"""
+    os.ftruncate(fd, length)
+    os.fsync(fd)
 
 
 def write_all(fd: int, data: bytes) -> None:
@@ -101,7 +133,8 @@ def encode(record: dict) -> bytes:
 
 
 def append_line(path: Path, line: bytes | Callable[[int], bytes]) -> int:
-    """Appends one line to ``path`` (created if missing) and returns once it is on disk.
+    """Appends one line to ``path`` (created if missing) and returns once it is on disk; raises
+    ``NotSavedError`` (the file as before) when it cannot.
 
     The caller holds the file's ``Lock``. A torn last line (a writer killed mid-line) is ended
     with a newline first, so the new line starts a line of its own; the torn bytes stay.
@@ -122,8 +155,16 @@ def append_line(path: Path, line: bytes | Callable[[int], bytes]) -> int:
         if size and os.pread(fd, 1, size - 1) != b"\n":
             torn = size - (os.pread(fd, size, 0).rfind(b"\n") + 1)
         data = line(torn) if callable(line) else line
-        write_all(fd, (b"\n" if torn else b"") + data)
-        os.fsync(fd)
+        try:
+            write_all(fd, (b"\n" if torn else b"") + data)
+            os.fsync(fd)
+        except OSError as error:
+            try:
+                take_back(fd, size)
+            except OSError:
+                pass  # a half line stays: the next append ends it first (above), as after a kill
+            raise NotSavedError(f"{path.name}: this record could not be saved: {why_not_saved(error)}; nothing of "
+                                f"it was written", error.errno) from error
     finally:
         os.close(fd)
     if created:

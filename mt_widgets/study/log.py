@@ -13,8 +13,9 @@ checking that nobody else wrote since, so two processes never interleave events 
 a newer session (a reloaded page) takes over, and the older one is refused. A crash can leave
 at most the last line torn; loading drops it,
 and reopening for writing first ends it with a newline so the next event starts on a line of
-its own; the ``session_resumed`` event that follows records the repair, and only such
-repaired lines are tolerated in the middle of a log.
+its own; the ``session_resumed`` event that follows (or the ``session_started`` of a start
+made again, when the torn line was the first event) records the repair, and only such repaired
+lines are tolerated in the middle of a log.
 
 Events are JSON objects with at least ``seq`` (0-based, consecutive), ``type``, ``time``
 (ISO 8601 UTC), ``participant`` and ``study``; the event types, the schema version the log
@@ -35,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from . import jsonl
-from .jsonl import Lock, LogError, read_jsonl
+from .jsonl import Lock, LogError, NotSavedError, read_jsonl
 from .schema import migrate_events
 
 LOCK_FOLDER = ".locks"
@@ -110,7 +111,7 @@ def read_events(path) -> tuple[list[dict], dict]:
             pending_bad.append(number)
             continue
         if pending_bad:
-            if event.get("type") == "session_resumed" and event.get("repaired_torn_line"):
+            if event.get("type") in ("session_resumed", "session_started") and event.get("repaired_torn_line"):
                 repaired.extend(pending_bad)
                 pending_bad = []
             else:
@@ -128,10 +129,13 @@ def read_events(path) -> tuple[list[dict], dict]:
             events.append(event)
             return events, {"torn_tail": 0, "unterminated": True, "repaired_lines": repaired}
     if pending_bad:
-        # A torn line already ended with a newline by a resume that crashed before logging.
-        if len(pending_bad) > 1 or pending_bad[0] != len(complete):
+        # Torn lines already ended with a newline by resumes that were killed before logging the
+        # repair: each such resume may leave one (its own session_resumed torn on top of the
+        # last), so any run of them at the very end, and only there, is a tear still to record.
+        # (Found by benchmarks/bench_kill_soak.py: three kills in a row left two.)
+        if pending_bad != list(range(len(complete) - len(pending_bad) + 1, len(complete) + 1)):
             raise LogError(f"{path}, line {pending_bad[0]}: not a JSON event; the log is damaged")
-        torn_tail += len(complete[-1].raw) + 1
+        torn_tail += sum(len(complete[number - 1].raw) + 1 for number in pending_bad)
     return events, {"torn_tail": torn_tail, "unterminated": False, "repaired_lines": repaired}
 
 
@@ -223,6 +227,8 @@ class ParticipantLog:
             The event as written, with ``seq``, ``type``, ``time``, ``participant`` and ``study``.
 
         Raises:
+            NotSavedError: the event could not be stored (a full disk, a quota, an I/O error):
+                nothing of it is in the log, and the next ``append`` may succeed once there is room.
             LogError: the log is closed, or another session has continued this participant
                 since (this session is stale and must stop).
         """
@@ -237,8 +243,20 @@ class ParticipantLog:
                 raise ContinuedElsewhereError(f"participant {self.participant!r} was continued by another session "
                                               f"(a reloaded page or a second tab) since this one last wrote; this "
                                               f"one stops here, nothing was written")
-            jsonl.write_all(self._fd, line)
-            os.fsync(self._fd)
+            try:
+                jsonl.write_all(self._fd, line)
+                os.fsync(self._fd)
+            except OSError as error:
+                # Not acknowledged: the bytes that reached the file are taken back, so the log reads
+                # as it did, and this session writes again once there is room. Where even that
+                # fails, the log is closed: a resume ends the half line as after a kill.
+                try:
+                    jsonl.take_back(self._fd, self._size)
+                except OSError:
+                    self.close()
+                raise NotSavedError(f"participant {self.participant!r}: this step could not be saved "
+                                    f"({jsonl.why_not_saved(error)}); nothing of it was written, and "
+                                    f"everything before it is saved", error.errno) from error
             self._size += len(line)
         self.events.append(event)
         return event
@@ -326,3 +344,15 @@ def check_folder_writable(folder) -> Path:
     return folder
 
 
+
+
+def storage_problem(folder) -> str | None:
+    """Why ``folder`` could not take a participant's next step now (the disk is full, or nearly:
+    less than ``MIN_FREE_BYTES`` free; not writable), or None. The experimenter's listing and
+    ``python -m mt_widgets.study status`` show it: a page whose step could not be saved holds its
+    participant until there is room (docs/guide/faults.md)."""
+    try:
+        check_folder_writable(folder)
+    except LogFolderError as error:
+        return str(error)
+    return None

@@ -32,7 +32,8 @@ Participant log events (one JSON object a line; ``mt_widgets.study.log`` writes 
 - ``session_started``: format, session (the protocol session's id), software_version,
   protocol_hash, protocol_name, group, enrolment (the enrolment record), lam, numpy_version,
   python_version; window (``WindowCheck.as_dict()``) and arrived_at when the arrival was
-  checked against a session window.
+  checked against a session window; repaired_torn_line when a kill had torn the session's very
+  first event before it (the start is then made again, and says so).
 - ``session_resumed``: format, software_version, protocol_hash, at (the step resumed at),
   repaired_torn_line (bytes of a torn last line ended by this resume; 0 if none).
 - ``screen_done``: screen (welcome, instructions, phase_intro, reproduction), phase_index,

@@ -184,6 +184,9 @@ class SessionArrival:
                arrived_at=None) -> SessionArrival:
         plan = study.protocol.session(session)
         extra = {}
+        if log.repaired_torn_bytes:
+            # A start killed inside its own first event: this start ends that torn line, and says so.
+            extra["repaired_torn_line"] = log.repaired_torn_bytes
         if window is not None:
             extra.update(window=window, arrived_at=as_utc(arrived_at).isoformat(timespec="milliseconds")
                          .replace("+00:00", "Z"))

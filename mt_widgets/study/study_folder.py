@@ -36,7 +36,7 @@ from mt_widgets.core.validation import as_bool
 
 from . import jsonl
 from .jsonl import Lock, LogError, append_line, encode, read_jsonl
-from .log import LOCK_FOLDER, check_folder_writable, read_events, to_jsonable, utc_now
+from .log import LOCK_FOLDER, check_folder_writable, read_events, storage_problem, to_jsonable, utc_now
 from .participants import block_assignment, new_reentry_code, normalise_reentry_code, validate_participant_id
 from .protocol import Protocol, protocol_from_data
 from .pseudonyms import ERASURE_FILE, erased_record
@@ -374,11 +374,18 @@ class StudyFolder:
             counts[row["group"]][row["state"]] += 1
         return counts
 
+    def storage_problem(self) -> str | None:
+        """Why this folder could not take a participant's next step now (a full disk), or None."""
+        return storage_problem(self.folder)
+
     def status_report(self) -> str:
-        """The per-group status as a small text table (for the experimenter and the notes)."""
+        """The per-group status as a small text table (for the experimenter and the notes), after a
+        line on the folder's storage when it could not take a participant's next step."""
         counts = self.group_status()
         columns = ["enrolled", "completed", "in progress", *LOST_OUTCOMES]
-        lines = ["group    " + "  ".join(f"{c:>11}" for c in columns)]
+        problem = self.storage_problem()
+        lines = [f"STORAGE FAULT: {problem}"] if problem else []
+        lines.append("group    " + "  ".join(f"{c:>11}" for c in columns))
         for group, row in counts.items():
             lines.append(f"{group:<9}" + "  ".join(f"{row[c]:>11}" for c in columns))
         return "\n".join(lines)

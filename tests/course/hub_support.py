@@ -153,12 +153,10 @@ class ClassHub:
         env["MT_HUB_STUDENT_PYTHON"] = str(STUDENT_PYTHON if STUDENT_PYTHON.exists() else sys.executable)
         if numba_template is not None:
             env["MT_HUB_NUMBA_TEMPLATE"] = str(numba_template)
-        env.update(extra_env or {})  # an LTI hub's settings (tests/course/test_hub_lti.py)
+        env.update(extra_env or {})  # the test's own settings (an LTI hub's, a server limit)
         self.env = env
         self.log = self.root / "jupyterhub.log"
         self._log_file = open(self.log, "w")
-        self.process = subprocess.Popen([str(BIN / "jupyterhub"), "-f", str(CONFIG)], cwd=self.root, env=env,
-                                        stdout=self._log_file, stderr=subprocess.STDOUT, start_new_session=True)
         self.session = requests.Session()
         self.session.headers["Authorization"] = f"token {self.token}"
         # A fresh connection for every request: the proxy (configurable-http-proxy, node) closes a
@@ -171,22 +169,44 @@ class ClassHub:
         self.session.headers["Connection"] = "close"
         adapter = requests.adapters.HTTPAdapter(pool_connections=4, pool_maxsize=64)
         self.session.mount("http://", adapter)
-        deadline = time.monotonic() + 120
         try:
-            while True:
-                if self.process.poll() is not None:
-                    raise RuntimeError(f"jupyterhub exited with {self.process.returncode}:\n{self.tail()}")
-                try:
-                    if self.session.get(f"{self.url}/hub/api/", timeout=2).status_code == 200:
-                        break
-                except requests.ConnectionError:
-                    pass
-                if time.monotonic() > deadline:
-                    raise RuntimeError(f"jupyterhub did not answer within 120 s:\n{self.tail()}")
-                time.sleep(0.25)
+            self._start()
         except BaseException:
             self.stop()
             raise
+
+    def _start(self) -> float:
+        """Starts the hub and waits until its API answers; the seconds that took."""
+        started = time.monotonic()
+        self.process = subprocess.Popen([str(BIN / "jupyterhub"), "-f", str(CONFIG)], cwd=self.root, env=self.env,
+                                        stdout=self._log_file, stderr=subprocess.STDOUT, start_new_session=True)
+        return self.wait_until_answering(started)
+
+    def wait_until_answering(self, started: float | None = None) -> float:
+        """Waits (at most 120 s) until the hub's API answers through the proxy; the seconds since ``started``."""
+        started = time.monotonic() if started is None else started
+        deadline = started + 120
+        while True:
+            if self.process.poll() is not None:
+                raise RuntimeError(f"jupyterhub exited with {self.process.returncode}:\n{self.tail()}")
+            try:
+                if self.session.get(f"{self.url}/hub/api/", timeout=2).status_code == 200:
+                    return time.monotonic() - started
+            except requests.ConnectionError:
+                pass
+            if time.monotonic() > deadline:
+                raise RuntimeError(f"jupyterhub did not answer within 120 s:\n{self.tail()}")
+            time.sleep(0.25)
+
+    def restart(self, signum: int) -> float:
+        """Ends the hub process alone with ``signum`` (SIGTERM: the documented stop; SIGKILL: a crash),
+        leaving its proxy and the students' servers as they are, and starts it again; the seconds
+        until the new hub answers."""
+        os.kill(self.process.pid, signum)
+        self.process.wait(60)
+        self._log_file.write(f"\n=== hub ended by signal {signum}, started again ===\n")
+        self._log_file.flush()
+        return self._start()
 
     def tail(self, chars: int = 4000) -> str:
         self._log_file.flush()

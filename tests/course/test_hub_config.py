@@ -6,6 +6,7 @@ run as root, like the hub, and remove what they made.
 
 from __future__ import annotations
 
+import asyncio
 import grp
 import json
 import os
@@ -15,6 +16,7 @@ import shutil
 import stat
 import subprocess
 import sys
+import threading
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -135,7 +137,7 @@ def test_the_spawn_hook_gives_a_warm_cache_a_runtime_folder_cgroups_and_a_port_o
     (template / "core_x" / "f.nbi").write_text("index")
     config = setting(MT_HUB_NUMBA_TEMPLATE=str(template), MT_HUB_MEM_LIMIT="700M", MT_HUB_CPU_LIMIT="0.5")
     spawner = _spawner(config, ANN, setting.tmp)
-    config.Spawner.pre_spawn_hook(spawner)
+    asyncio.run(config.Spawner.pre_spawn_hook(spawner))
     ann = pwd.getpwnam(ANN)
     cached = setting.tmp / "homes" / ANN / ".cache" / "numba" / "core_x" / "f.nbi"
     assert cached.read_text() == "index" and cached.stat().st_uid == ann.pw_uid
@@ -147,14 +149,67 @@ def test_the_spawn_hook_gives_a_warm_cache_a_runtime_folder_cgroups_and_a_port_o
     assert int((memory / "memory.limit_in_bytes").read_text()) == 700 * 2**20
     assert int((cpu / "cpu.cfs_quota_us").read_text()) == int((cpu / "cpu.cfs_period_us").read_text()) // 2
     cached.write_text("the student's own")
-    config.Spawner.pre_spawn_hook(spawner)  # a restart keeps the student's cache
+    asyncio.run(config.Spawner.pre_spawn_hook(spawner))  # a restart keeps the student's cache
     assert cached.read_text() == "the student's own"
     config.Spawner.post_stop_hook(spawner)
     assert not memory.exists() and not cpu.exists()
     # Someone taken off the roster does not start again.
     setting.roster.write_text(f"login,role\n{TEACHER},instructor\n")
     with pytest.raises(class_hub.ClassHubError, match="no longer on the roster"):
-        config.Spawner.pre_spawn_hook(spawner)
+        asyncio.run(config.Spawner.pre_spawn_hook(spawner))
+
+
+def test_the_warm_caches_copy_leaves_the_hubs_event_loop_serving_others(setting, monkeypatch):
+    """The copy runs in a thread: while it is under way, another coroutine of the hub's loop runs.
+    The copy here waits until that coroutine has run; on the loop itself it would wait in vain."""
+    template = setting.tmp / "template"
+    (template / "core_x").mkdir(parents=True)
+    (template / "core_x" / "f.nbi").write_text("index")
+    config = setting(MT_HUB_NUMBA_TEMPLATE=str(template))
+    hooks = config.Spawner.pre_spawn_hook.__globals__
+    copy, others_served, seen = hooks["_copy_owned"], threading.Event(), []
+
+    def slow_copy(*args):
+        seen.append(others_served.wait(10))
+        copy(*args)
+
+    monkeypatch.setitem(hooks, "_copy_owned", slow_copy)
+
+    async def another_login():
+        await asyncio.sleep(0)
+        others_served.set()
+
+    async def spawn_and_login():
+        await asyncio.gather(config.Spawner.pre_spawn_hook(_spawner(config, ANN, setting.tmp)), another_login())
+
+    asyncio.run(spawn_and_login())
+    assert seen == [True], "the hub's loop stood still while the cache was copied"
+    cached = setting.tmp / "homes" / ANN / ".cache" / "numba"
+    assert (cached / "core_x" / "f.nbi").read_text() == "index"
+    assert [p.name for p in cached.parent.iterdir()] == ["numba"]  # no half-copied folder left beside it
+    config.Spawner.post_stop_hook(_spawner(config, ANN, setting.tmp))
+
+
+def test_a_copy_cut_short_leaves_no_cache_and_the_next_spawn_copies_again(setting, monkeypatch):
+    template = setting.tmp / "template"
+    (template / "core_x").mkdir(parents=True)
+    (template / "core_x" / "f.nbi").write_text("index")
+    config = setting(MT_HUB_NUMBA_TEMPLATE=str(template))
+    hooks = config.Spawner.pre_spawn_hook.__globals__
+    spawner = _spawner(config, ANN, setting.tmp)
+
+    def disk_full(source, target, *args, **kwargs):
+        raise OSError(28, "No space left on device", str(target))
+
+    with monkeypatch.context() as patch:
+        patch.setattr(hooks["shutil"], "copyfile", disk_full)
+        with pytest.raises(OSError, match="No space left on device"):
+            asyncio.run(config.Spawner.pre_spawn_hook(spawner))
+    cache_folder = setting.tmp / "homes" / ANN / ".cache"
+    assert list(cache_folder.iterdir()) == []
+    asyncio.run(config.Spawner.pre_spawn_hook(spawner))
+    assert (cache_folder / "numba" / "core_x" / "f.nbi").read_text() == "index"
+    config.Spawner.post_stop_hook(spawner)
 
 
 def test_students_spawned_at_once_never_share_a_port(setting):
@@ -234,6 +289,37 @@ def test_the_server_template_is_on_unless_the_environment_says_off(setting):
     assert on.servers == ["jupyterhub.singleuser"] and on.kernels == ["mt_hub_kernel"]
     assert "mt_widgets.kernels.activity" in on.preload   # the server's kernel manager, imported before forking
     assert template(setting(MT_HUB_SERVER_TEMPLATE="off")) is None
+
+
+def test_the_server_templates_backlog_covers_every_spawn_the_hub_lets_run_at_once(setting):
+    """A backlog of 64 under a spawn limit of 100 lost a quarter of a class started at once: the
+    backlog is the limit itself, so neither can change alone."""
+    for env, limit in (({}, 100), ({"MT_HUB_SPAWN_LIMIT": "150"}, 150)):
+        config = setting(**env)
+        template = config.JupyterHub.spawner_class.start.__globals__["SERVER_TEMPLATE"]
+        shutil.rmtree(template.folder)
+        assert config.JupyterHub.concurrent_spawn_limit == limit
+        assert template.backlog >= config.JupyterHub.concurrent_spawn_limit
+        assert template.command()[0][-1] == str(template.backlog)
+        # What Linux grants a listening socket at most: the backlog asked for must not be cut.
+        assert int(Path("/proc/sys/net/core/somaxconn").read_text()) >= template.backlog
+    for bad in ("0", "-3", "many"):
+        with pytest.raises(SystemExit, match=f"MT_HUB_SPAWN_LIMIT: expected a whole number of at least 1, got '{bad}'"):
+            setting(MT_HUB_SPAWN_LIMIT=bad)
+
+
+def test_a_hub_stopped_or_restarted_leaves_students_servers_running(setting):
+    assert setting().JupyterHub.cleanup_servers is False
+
+
+def test_a_full_class_server_refuses_the_next_student_with_a_page_of_its_own(setting):
+    config = setting()
+    assert config.JupyterHub.active_server_limit == 100
+    page = Path(config.JupyterHub.template_paths[0], "429.html")
+    assert page.is_file() and "The class server is full" in page.read_text()
+    assert setting(MT_HUB_SERVER_LIMIT="0").JupyterHub.active_server_limit == 0
+    with pytest.raises(SystemExit, match=r"MT_HUB_SERVER_LIMIT: expected a whole number of at least 0 \(0: no limit\)"):
+        setting(MT_HUB_SERVER_LIMIT="full")
 
 
 def test_the_installation_check_names_the_folder_students_cannot_enter(tmp_path):

@@ -87,6 +87,50 @@ def test_a_torn_last_line_is_dropped_on_reading_and_repaired_on_resume(study):
     assert b'"type": "demonstr\n' in path.read_bytes()
 
 
+def test_resumes_killed_before_recording_their_repair_leave_a_log_that_still_opens(study):
+    """Kill 1 tears an event; resume 2 ends the torn line and is killed before its session_resumed;
+    resume 3 is killed half-way through its session_resumed; resume 4 ends that line and is killed
+    too. The log then ends in two torn lines, each ended, neither recorded as repaired: it must still
+    open, and the next resume records both (benchmarks/bench_kill_soak.py found this sequence;
+    before, the log was refused as damaged and the participant could not go on)."""
+    session = Session.start(study, "P01")
+    run(session, stop_after=6)
+    session.close()
+    path = study.log_path("P01")
+    complete, _ = read_events(path)
+    torn_event = b'{"seq": %d, "type": "demonstr' % len(complete)        # kill 1: a torn event
+    torn_resume = b'{"seq": %d, "type": "session_res' % len(complete)    # resume 3: torn in turn
+    with open(path, "ab") as handle:
+        # Resumes 2 and 4 each end the torn line with a newline, then are killed.
+        handle.write(torn_event + b"\n" + torn_resume + b"\n")
+    events, info = read_events(path)
+    assert events == complete and info["torn_tail"] == len(torn_event) + len(torn_resume) + 2
+    resumed = Session.resume(study, "P01")
+    assert next(e for e in resumed.events if e["type"] == "session_resumed")["repaired_torn_line"] == info["torn_tail"]
+    run(resumed)
+    resumed.close()
+    final, info = read_events(path)
+    assert final[-1]["type"] == "session_finished" and len(info["repaired_lines"]) == 2
+
+
+def test_a_start_killed_inside_its_first_event_is_started_again_and_says_so(study):
+    """The participant is enrolled and their log created, then the start is killed half-way through
+    its session_started: the next arrival starts again after ending the torn line, and its
+    session_started records the repair (benchmarks/bench_kill_soak.py found a log that then no
+    longer opened: a repaired line must be followed by an event that says so)."""
+    study.enrol("P01", "target")
+    path = study.log_path("P01")
+    path.write_bytes(b'{"seq":0,"type":"session_sta')
+    session = Session.resume(study, "P01")
+    assert session.events[0]["type"] == "session_started"
+    assert session.events[0]["repaired_torn_line"] == len(b'{"seq":0,"type":"session_sta')
+    run(session)
+    session.close()
+    events, info = read_events(path)
+    assert events[-1]["type"] == "session_finished" and info["repaired_lines"] == [1]
+    Session.resume(study, "P01").close()  # and it opens again
+
+
 def test_a_last_line_missing_only_its_newline_is_kept(study):
     session = Session.start(study, "P01")
     run(session, stop_after=3)

@@ -127,8 +127,10 @@ class StudyApp(VBox):
                               f"{protocol.n_episodes} episodes.")
 
     def _list_participants(self) -> None:
-        """Lists the study in the panel's log folder; a folder without a study stays as it is (the
-        study is made when the first participant starts, with the protocol chosen then)."""
+        """Lists the study in the panel's log folder, read as it is (a full disk, which ``_study`` refuses
+        to start a participant on, is shown in the listing instead of hiding it); a folder without a
+        study stays as it is (the study is made when the first participant starts, with the protocol
+        chosen then)."""
         folder = Path(self.experimenter.log_folder.value.strip()).expanduser()
         if not (folder / STUDY_FILE).is_file():
             self.experimenter.listing.value = ""

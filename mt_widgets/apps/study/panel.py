@@ -66,7 +66,12 @@ class ExperimenterPanel(VBox):
         columns = list(next(iter(counts.values())))
         summary = "".join(f"<tr><td>{html.escape(group)}</td>" + "".join(f"<td>{row[c]}</td>" for c in columns)
                           + "</tr>" for group, row in counts.items())
-        self.listing.value = (f"<small>{html.escape(str(study.folder))}</small><table><tr><th>ID</th>"
+        problem = study.storage_problem()
+        fault = ("" if problem is None else
+                 f"<div role='alert' class='mt-storage-fault' style='color:#b00020;max-width:760px'><b>Storage fault:"
+                 f"</b> {html.escape(problem)}. A page whose step could not be saved holds its participant there; "
+                 f"free space, then they press Try again (no restart needed).</div>")
+        self.listing.value = (f"{fault}<small>{html.escape(str(study.folder))}</small><table><tr><th>ID</th>"
                               f"<th>group</th><th>assigned</th><th>state</th><th>events</th></tr>"
                               f"{rows}</table><table><tr><th>group</th>"
                               + "".join(f"<th>{c}</th>" for c in columns) + f"</tr>{summary}</table>")

@@ -10,7 +10,10 @@ step twice.
 
 Any error in a participant step (the log cannot be written, the session refuses a call) stops
 the page with a call for the experimenter, and the episode does not count a demonstration the
-log refused.
+log refused. A step that could not be saved (the study folder's disk is full, a quota, an I/O
+error: ``NotSavedError``) holds the participant instead: the page says so and offers "Try again",
+which continues from the log's last saved step in this same kernel once there is room
+(docs/guide/faults.md).
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from collections.abc import Callable
 import numpy as np
 from ipywidgets import HTML, Button, HBox, Layout, VBox
 
-from mt_widgets.study import Session
+from mt_widgets.study import NotSavedError, Session
 from mt_widgets.study.log import ContinuedElsewhereError
 from mt_widgets.widgets import EpisodeWidget, retire
 
@@ -62,6 +65,10 @@ class ParticipantView(VBox):
         self.session: Session | None = None
         #: The error that stopped the participant flow, or None (see ``stop_for_experimenter``).
         self.stopped_by: BaseException | None = None
+        #: The error of the step that could not be saved while the page holds the participant
+        #: (``hold_unsaved``), or None.
+        self.held_by: NotSavedError | None = None
+        self._retried = False  # "Try again" was pressed and no step has been saved since
         self.episode = None
         self.video: VideoStep | None = None
         self.form: QuestionForm | None = None
@@ -132,17 +139,73 @@ class ParticipantView(VBox):
                 not move on (a demonstration that is not on disk is neither counted nor shown
                 guidance).
         """
-        if self.stopped_by is not None:
+        if self.stopped_by is not None or self.held_by is not None:
             if reraise:
-                raise RuntimeError("the participant flow is stopped (the experimenter was called); nothing more "
-                                   "is recorded in this page") from self.stopped_by
+                raise RuntimeError("the participant flow is stopped (the experimenter was called) or held (a step "
+                                   "could not be saved); nothing more is recorded in this page") \
+                    from (self.stopped_by or self.held_by)
             return
         try:
             action()
+            self._retried = False
+        except NotSavedError as error:
+            if self.session is not None and self.session.folder is not None:
+                self.hold_unsaved(error)
+            else:
+                self.stop_for_experimenter(error)
+            if reraise:
+                raise
         except Exception as error:  # noqa: BLE001 - any error: what is shown may not be on disk
             self.stop_for_experimenter(error)
             if reraise:
                 raise
+
+    def hold_unsaved(self, error: NotSavedError) -> None:
+        """Holds the participant at a step that could not be saved, saying so, with "Try again".
+
+        Nothing of the step is in the log (``ParticipantLog.append`` takes back what a failed write
+        left), and what the page showed before it is saved. The session is closed; "Try again"
+        continues the participant from the log (``Session.resume``) in this kernel, once the
+        study folder has room again: the step is asked for again, as after a reload.
+        """
+        _log.error("a step could not be saved; the participant is held", exc_info=(type(error), error,
+                                                                                   error.__traceback__))
+        again = self.held_by is not None or self._retried
+        self.held_by = error
+        self._cancel_timer()
+        if self.session is not None:
+            try:
+                self.session.close()
+            except OSError:
+                pass
+        self.heading.value = ""
+        self.withdraw_box.layout.display = "none"
+        self.withdraw_box.children = []
+        still = "It still could not be saved. " if again else ""
+        self.body.children = [HTML(
+            f"<div role='alert' class='mt-not-saved' style='color:#b00020;font-size:1.2em;max-width:760px'>"
+            f"<b>Your last step could not be saved.</b><br>{still}Please stay on this page and tell the experimenter. "
+            f"Everything before this step is saved. Press <i>Try again</i> in a minute: you continue from the last "
+            f"saved step, so this step may be asked of you again."
+            f"<br><small>For the experimenter: the study folder could not store it ({html.escape(str(error))}). "
+            f"Free space there, then press Try again; nothing needs restarting.</small></div>"),
+            Choice().button("Try again", self._try_again)]
+
+    def _try_again(self) -> None:
+        held = self.session
+        try:
+            session = Session.resume(held.folder, held.participant, session=held.plan.id)
+        except NotSavedError as error:
+            self.hold_unsaved(error)
+            return
+        except Exception as error:  # noqa: BLE001 - as any step's error: the experimenter is called
+            self.held_by = None
+            self.stop_for_experimenter(error)
+            return
+        self.held_by = None
+        self._episode_step = None
+        self._retried = True
+        self.begin(session)
 
     def stop_for_experimenter(self, error: BaseException) -> None:
         """Stops the participant flow and asks for the experimenter.
@@ -181,7 +244,7 @@ class ParticipantView(VBox):
     # -- the dispatcher --------------------------------------------------------------------------------------
     def show_step(self) -> None:
         """Shows the session's current step (nothing once the flow is stopped)."""
-        if self.stopped_by is not None:
+        if self.stopped_by is not None or self.held_by is not None:
             return
         step = self.session.current_step()
         shown = self.episode
