@@ -59,6 +59,15 @@ from traitlets import Integer, Set, Unicode
 from mt_widgets.classroom.roster import RosterEntry, read_roster, write_roster
 
 
+class VerifiedLaunch(dict):
+    """A launch's claims, as ``LaunchVerifier`` returned them to the launch handler.
+
+    JupyterHub's own ``/hub/login`` still answers a POST, and hands its form fields to the
+    authenticator as a dict: ``authenticate`` takes nothing but this type, which only the launch
+    handler makes, so no form can sign anyone in as a platform user.
+    """
+
+
 class LaunchRefused(Exception):
     """A launch the hub refuses; ``reason`` says why in words a student or instructor can act on."""
 
@@ -185,7 +194,7 @@ class ClassLTICallbackHandler(LTI13CallbackHandler):
             claims = await asyncio.to_thread(self.authenticator.verifier.verify, id_token, expected_nonce)
         except LaunchRefused as refusal:
             raise _refuse(self, refusal) from None
-        user = await self.login_user(claims)
+        user = await self.login_user(VerifiedLaunch(claims))
         if user is None:
             raise HTTPError(403, "This launch was refused.")
         await self.redirect_to_next_url(user)
@@ -272,7 +281,12 @@ class ClassLTIAuthenticator(LTI13Authenticator):
         return user.name in read_roster(self.roster_path)
 
     async def authenticate(self, handler, data=None):
-        claims = data or {}
+        if not isinstance(data, VerifiedLaunch):
+            # Not a launch this hub verified: a form posted to /hub/login, say, naming any iss and sub.
+            self.log.warning("LTI login refused: not a verified launch (%s)",
+                             getattr(getattr(handler, "request", None), "path", "?"))
+            return None
+        claims = data
         login = login_for(claims["iss"], claims["sub"], self.login_prefix)
         entry = RosterEntry(login, platform_name(claims.get("name")), platform_email(claims.get("email")),
                             role_for(claims.get(LTI + "roles", [])))

@@ -184,6 +184,18 @@ def test_wrong_launches_are_refused_with_a_page_and_a_log_line(course):
     replay.cookies = cookies
     answer = _post_launch(hub, replay, request["redirect_uri"], fields)
     assert answer.status_code == 403 and "used before" in html.unescape(answer.text)
+    # JupyterHub's own login form, posted with the course's issuer and a classmate's platform id.
+    users = {user["name"] for user in hub.api("GET", "/users")}
+    for victim in (ann, "sub-zed-0"):   # a classmate, and a platform id nobody launched with
+        forger = requests.Session()
+        forger.get(f"{hub.url}/hub/login", timeout=60)
+        answer = forger.post(f"{hub.url}/hub/login", allow_redirects=False, timeout=60,
+                             data={"_xsrf": forger.cookies.get("_xsrf", ""), "iss": platform.url, "sub": victim,
+                                   "username": "x", "password": "x"})
+        assert answer.status_code != 302, answer.headers
+        assert forger.get(f"{hub.url}/hub/api/user", timeout=60).status_code == 403
+    assert {user["name"] for user in hub.api("GET", "/users")} == users
+    assert "LTI login refused: not a verified launch" in hub.tail(200_000)
     log = hub.tail(200_000)
     assert log.count("LTI launch refused:") >= 7
     # Tokens and launches are never logged whole.

@@ -17,7 +17,7 @@ from .course_support import REPO
 from .lti_platform import INSTRUCTOR, LEARNER, TEACHING_ASSISTANT, LTIPlatform, Member, new_key
 
 sys.path.insert(0, str(REPO / "deploy" / "jupyterhub"))
-from lti_authenticator import LaunchRefused, LaunchVerifier  # noqa: E402
+from lti_authenticator import ClassLTIAuthenticator, LaunchRefused, LaunchVerifier, VerifiedLaunch  # noqa: E402
 from lti_services import LTIServiceError, PlatformClient, ToolKey, login_for, role_for, synced_roster  # noqa: E402
 
 ANN, BO, CY, DANA = "sub-ann-7f3", "sub-bo-11c", "sub-cy-90d", "sub-dana-2b"
@@ -173,3 +173,21 @@ def _with_kid(token: str, kid: str) -> str:
     decoded["kid"] = kid
     new_header = base64.urlsafe_b64encode(json.dumps(decoded).encode()).rstrip(b"=").decode()
     return ".".join([new_header, payload, signature])
+
+
+def test_only_a_verified_launch_signs_anyone_in_not_a_form_naming_an_issuer_and_a_sub(tmp_path):
+    # JupyterHub's own /hub/login takes a POST and hands its form fields to the authenticator: a form
+    # naming the course's issuer and a classmate's platform id must not sign in as them.
+    import asyncio
+
+    roster = tmp_path / "roster.csv"
+    roster.write_text("login,name,email,role\n")
+    authenticator = ClassLTIAuthenticator(
+        issuer="https://lms.example.edu", client_id={"tool-1"}, authorize_url="https://lms.example.edu/auth",
+        jwks_endpoint="https://lms.example.edu/jwks", deployment_ids={"dep-1"}, roster_path=str(roster),
+        state_path=str(tmp_path))
+    forged = {"iss": "https://lms.example.edu", "sub": ANN}
+    assert asyncio.run(authenticator.authenticate(None, forged)) is None
+    assert roster.read_text() == "login,name,email,role\n"   # nobody added either
+    signed_in = asyncio.run(authenticator.authenticate(None, VerifiedLaunch(forged)))
+    assert signed_in == {"name": login_for("https://lms.example.edu", ANN), "admin": False}
