@@ -3,6 +3,8 @@ jaw included), and the envelope's joint ranges, table and speed checks without a
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pinocchio
 import pytest
@@ -78,6 +80,12 @@ def test_the_envelope_intersects_the_calibration_and_the_urdf_and_checks_the_tab
         envelope.check_speed(1.0, 7.0)
     with pytest.raises(ValueError, match="speed: expected a number > 0"):
         envelope.check_speed(0.0, 1.0)
+    # A live arm's envelope cannot be loosened: not its limits, not its ranges.
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        envelope.max_speed = 100.0
+    with pytest.raises(TypeError):
+        envelope.ranges["wrist_flex"] = (-10.0, 10.0)
+    assert envelope.max_speed == 1.5 and envelope.ranges["wrist_flex"][1] == pytest.approx(1.65806 - 0.05)
 
 
 def test_the_table_is_checked_along_the_move_not_only_at_its_ends():
