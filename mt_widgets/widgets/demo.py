@@ -127,7 +127,7 @@ class DemoPage(VBox):
                                    style=shared_style(ToggleButtonsStyle, button_width="auto"),
                                    tooltips=[s.title for s in self.arms[arm].values()])
         self.guidance_switch = plain(Checkbox, value=as_bool("guidance", guidance),
-                                     description="Guidance: show the best arrow after each of mine", indent=False,
+                                     description="Guidance: show the best arrow", indent=False,
                                      layout=shared_layout(width="auto"))
         self.new_states_button = plain(Button, description="Try again with new states", icon="refresh",
                                        layout=shared_layout(width="auto"))

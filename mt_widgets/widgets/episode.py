@@ -273,11 +273,14 @@ class EpisodeWidget(VBox):
         self.side = plain(VBox, [self.teaching.controls, self.guidance_panel, self.next_button, self.player.status,
                                  self.next_actions, self.teaching.view.legend, player_legend],
                           layout=shared_layout(min_width="300px", max_width="400px", flex="1 1 300px"))
-        canvases = plain(VBox, [self.teaching.view.canvas, self.player], layout=shared_layout(flex="0 1 auto"))
+        # Drawing only (a practice round): no reproduction, so no player canvas on the page and no
+        # effort to count.
+        shown = [self.teaching.view.canvas, self.player] if self.reproduce else [self.teaching.view.canvas]
+        canvases = plain(VBox, shown, layout=shared_layout(flex="0 1 auto"))
         self.stage = plain(HBox, [canvases, self.side],
                            layout=shared_layout(flex_flow="row wrap", align_items="flex-start",
                                                 grid_gap="4px 16px", width="100%"))
-        children = [self.header, self.progress, self.stage]
+        children = [self.header, self.progress, self.stage] if self.reproduce else [self.header, self.stage]
         if view_args["css_width"] is None:  # the canvases grow with the page (see stage_css)
             for view in (self.teaching.view, self.player.view):
                 view.canvas.add_class(_canvas_class(view))
