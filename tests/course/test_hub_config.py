@@ -17,6 +17,7 @@ import stat
 import subprocess
 import sys
 import threading
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -39,6 +40,14 @@ pytestmark = pytest.mark.skipif(os.geteuid() != 0, reason="the class hub's confi
 
 TEACHER, ANN = "mtt-cfg-teacher", "mtt-cfg-ann"
 GROUP = "mtt-cfg-instructors"
+
+
+def in_a_loop_of_its_own(coroutine):
+    """Run ``coroutine`` to its end in a new event loop on a thread of its own: in the hub tier the
+    browser fixture's Playwright keeps an event loop running in the main thread, where
+    ``asyncio.run`` refuses to start another."""
+    with ThreadPoolExecutor(1) as pool:
+        return pool.submit(asyncio.run, coroutine).result()
 
 
 def _remove_accounts():
@@ -137,7 +146,7 @@ def test_the_spawn_hook_gives_a_warm_cache_a_runtime_folder_cgroups_and_a_port_o
     (template / "core_x" / "f.nbi").write_text("index")
     config = setting(MT_HUB_NUMBA_TEMPLATE=str(template), MT_HUB_MEM_LIMIT="700M", MT_HUB_CPU_LIMIT="0.5")
     spawner = _spawner(config, ANN, setting.tmp)
-    asyncio.run(config.Spawner.pre_spawn_hook(spawner))
+    in_a_loop_of_its_own(config.Spawner.pre_spawn_hook(spawner))
     ann = pwd.getpwnam(ANN)
     cached = setting.tmp / "homes" / ANN / ".cache" / "numba" / "core_x" / "f.nbi"
     assert cached.read_text() == "index" and cached.stat().st_uid == ann.pw_uid
@@ -149,14 +158,14 @@ def test_the_spawn_hook_gives_a_warm_cache_a_runtime_folder_cgroups_and_a_port_o
     assert int((memory / "memory.limit_in_bytes").read_text()) == 700 * 2**20
     assert int((cpu / "cpu.cfs_quota_us").read_text()) == int((cpu / "cpu.cfs_period_us").read_text()) // 2
     cached.write_text("the student's own")
-    asyncio.run(config.Spawner.pre_spawn_hook(spawner))  # a restart keeps the student's cache
+    in_a_loop_of_its_own(config.Spawner.pre_spawn_hook(spawner))  # a restart keeps the student's cache
     assert cached.read_text() == "the student's own"
     config.Spawner.post_stop_hook(spawner)
     assert not memory.exists() and not cpu.exists()
     # Someone taken off the roster does not start again.
     setting.roster.write_text(f"login,role\n{TEACHER},instructor\n")
     with pytest.raises(class_hub.ClassHubError, match="no longer on the roster"):
-        asyncio.run(config.Spawner.pre_spawn_hook(spawner))
+        in_a_loop_of_its_own(config.Spawner.pre_spawn_hook(spawner))
 
 
 def test_the_warm_caches_copy_leaves_the_hubs_event_loop_serving_others(setting, monkeypatch):
@@ -182,7 +191,7 @@ def test_the_warm_caches_copy_leaves_the_hubs_event_loop_serving_others(setting,
     async def spawn_and_login():
         await asyncio.gather(config.Spawner.pre_spawn_hook(_spawner(config, ANN, setting.tmp)), another_login())
 
-    asyncio.run(spawn_and_login())
+    in_a_loop_of_its_own(spawn_and_login())
     assert seen == [True], "the hub's loop stood still while the cache was copied"
     cached = setting.tmp / "homes" / ANN / ".cache" / "numba"
     assert (cached / "core_x" / "f.nbi").read_text() == "index"
@@ -204,10 +213,10 @@ def test_a_copy_cut_short_leaves_no_cache_and_the_next_spawn_copies_again(settin
     with monkeypatch.context() as patch:
         patch.setattr(hooks["shutil"], "copyfile", disk_full)
         with pytest.raises(OSError, match="No space left on device"):
-            asyncio.run(config.Spawner.pre_spawn_hook(spawner))
+            in_a_loop_of_its_own(config.Spawner.pre_spawn_hook(spawner))
     cache_folder = setting.tmp / "homes" / ANN / ".cache"
     assert list(cache_folder.iterdir()) == []
-    asyncio.run(config.Spawner.pre_spawn_hook(spawner))
+    in_a_loop_of_its_own(config.Spawner.pre_spawn_hook(spawner))
     assert (cache_folder / "numba" / "core_x" / "f.nbi").read_text() == "index"
     config.Spawner.post_stop_hook(spawner)
 
