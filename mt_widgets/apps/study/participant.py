@@ -172,15 +172,7 @@ class ParticipantView(VBox):
                                                                                    error.__traceback__))
         again = self.held_by is not None or self._retried
         self.held_by = error
-        self._cancel_timer()
-        if self.session is not None:
-            try:
-                self.session.close()
-            except OSError:
-                pass
-        self.heading.value = ""
-        self.withdraw_box.layout.display = "none"
-        self.withdraw_box.children = []
+        self._halt()
         still = "It still could not be saved. " if again else ""
         self.body.children = [HTML(
             f"<div role='alert' class='mt-not-saved' style='color:#b00020;font-size:1.2em;max-width:760px'>"
@@ -207,6 +199,19 @@ class ParticipantView(VBox):
         self._retried = True
         self.begin(session)
 
+    def _halt(self) -> None:
+        """No further step: the timer off, the log closed (all it holds stays), and a page that offers
+        nothing that would do nothing: no heading, no Withdraw."""
+        self._cancel_timer()
+        if self.session is not None:
+            try:
+                self.session.close()
+            except OSError:
+                pass
+        self.heading.value = ""
+        self.withdraw_box.layout.display = "none"
+        self.withdraw_box.children = []
+
     def stop_for_experimenter(self, error: BaseException) -> None:
         """Stops the participant flow and asks for the experimenter.
 
@@ -216,16 +221,7 @@ class ParticipantView(VBox):
         """
         _log.error("participant flow stopped", exc_info=(type(error), error, error.__traceback__))
         self.stopped_by = error
-        self._cancel_timer()
-        if self.session is not None:
-            try:
-                self.session.close()
-            except OSError:
-                pass
-        self.heading.value = ""
-        # A stopped page offers nothing that would do nothing: no Withdraw, no step button.
-        self.withdraw_box.layout.display = "none"
-        self.withdraw_box.children = []
+        self._halt()
         if isinstance(error, ContinuedElsewhereError):
             # The same participant's page opened again (a second tab, another device): that page
             # goes on from the log; this one must only say so (online there is no experimenter).
