@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from tests.docs.getting_started_pages import PAGES, runnable, run_page
+from tests.docs.getting_started_pages import PAGES, run_page, runnable
 
 from .test_shapes import CLEAN_ENV
 
