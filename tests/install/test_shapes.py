@@ -68,6 +68,10 @@ def test_the_sdist_and_the_wheel_hold_the_package_and_its_data(distributions):
                  "mt_widgets/widgets/canvas_access.js", "mt_widgets/widgets/canvas_access.css",
                  "mt_widgets/apps/study/navigation.js"):
         assert path in in_wheel and path in in_sdist, path
+    # The pages' Voila template, without a CDN (deploy/voila/voila.py selects it), in its folders.
+    for name in ("index.html.j2", "conf.json"):
+        path = f"deploy/voila/jupyter/voila/templates/mt-widgets/{name}"
+        assert f"mt_widgets/_data/{path}" in in_wheel and path in in_sdist, path
     assert {"pyproject.toml", "LICENSE"} <= in_sdist
     assert not any(name.startswith(("tests/", "notebooks/")) for name in in_wheel)
 
