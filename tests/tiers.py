@@ -8,7 +8,8 @@ A tier is a pytest marker expression over five marks, set by tests/conftest.py (
 - ``notebook``: a notebook cell run by nbval;
 - ``hub``: a test that starts a JupyterHub or loads its config as root (tests/course/test_hub.py, test_hub_config.py);
 - ``slow``: a test that takes seconds, marked ``@pytest.mark.slow`` where it is written;
-- ``docs``: tests/docs/test_docs_build.py, which builds the documentation site with Sphinx.
+- ``docs``: tests/docs/test_docs_build.py, which builds the documentation site with Sphinx (and opens
+  built pages in Chromium, offline: it looks at this tier's build rather than building again).
 - ``install``: a test that builds the wheel and installs it into fresh venvs (tests/install/test_shapes.py),
   or runs the getting-started pages in such a venv (tests/install/test_getting_started_from_wheel.py).
 
