@@ -12,7 +12,9 @@ from setuptools import setup
 from setuptools.command.build_py import build_py
 
 HERE = Path(__file__).resolve().parent
-SHIPPED = {"tutorials": ("*.ipynb", "*.toml"), "notebooks": ("*.ipynb", "*.toml"), "deploy/voila": ("*.py",)}
+# The same as mt_widgets/cli/shipped.py's SHIPPED (tests/install/test_shapes.py checks the wheel).
+SHIPPED = {"tutorials": ("*.ipynb", "*.toml"), "notebooks": ("*.ipynb", "*.toml"),
+           "deploy/voila": ("*.py", "jupyter/voila/templates/*/*")}
 
 
 class BuildWithNotebooks(build_py):
@@ -24,8 +26,9 @@ class BuildWithNotebooks(build_py):
             target = Path(self.build_lib) / "mt_widgets" / "_data" / folder
             for pattern in patterns:
                 for source in sorted((HERE / folder).glob(pattern)):
-                    target.mkdir(parents=True, exist_ok=True)
-                    self.copy_file(str(source), str(target / source.name))
+                    copy = target / source.relative_to(HERE / folder)   # a template keeps its folders
+                    copy.parent.mkdir(parents=True, exist_ok=True)
+                    self.copy_file(str(source), str(copy))
 
 
 setup(cmdclass={"build_py": BuildWithNotebooks})

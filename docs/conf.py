@@ -58,7 +58,8 @@ nb_execution_cache_path = str(DOCS / "_build" / ".jupyter_cache")
 nb_execution_raise_on_error = True
 nb_merge_streams = True
 
-exclude_patterns = ["_build", "**/.ipynb_checkpoints", "jupyter_execute", "_ext", "README.md", "benchmarks/_generated"]
+exclude_patterns = ["_build", "**/.ipynb_checkpoints", "jupyter_execute", "_ext", "_vendor", "README.md",
+                    "benchmarks/_generated"]
 templates_path = ["_templates"]
 html_static_path = ["_static"]
 
@@ -86,6 +87,46 @@ def _ship_mathjax() -> Path:
 
 
 html_static_path.append(str(_ship_mathjax()))
+
+# The tutorials' widgets from their saved state (nbclient stores it when it executes a notebook),
+# drawn without a kernel and without the internet: myst-nb's default loads RequireJS and the widget
+# manager (@jupyter-widgets/html-manager) from CDNs, and the manager loads ipycanvas and anywidget
+# from another. Here all of them come from the site: the manager is vendored (docs/_vendor/html-manager,
+# its SOURCE.txt says what and why), RequireJS is the copy Voila ships (the lab extra), and ipycanvas
+# and anywidget are the AMD builds their pip packages install for the classic notebook
+# (share/jupyter/nbextensions); docs/_static/widgets/local-modules.js points RequireJS at them.
+HTML_MANAGER_VERSION = "1.0.15"
+
+
+def _ship_widgets() -> Path:
+    """The folder whose widgets/ holds what the executed notebooks' widgets need (a static path)."""
+    from jupyter_core.paths import jupyter_path
+
+    def installed(*parts: str) -> Path:
+        for root in jupyter_path():
+            if Path(root, *parts).is_file():
+                return Path(root, *parts)
+        raise FileNotFoundError(f"{'/'.join(parts)}: not in the Jupyter data folders {jupyter_path()}; "
+                                f"the docs extra installs it (pip install -e '.[docs]')")
+
+    folder = DOCS / "_build" / "widgets-static"
+    shutil.rmtree(folder, ignore_errors=True)
+    target = folder / "widgets"
+    shutil.copytree(DOCS / "_vendor" / "html-manager", target, ignore=shutil.ignore_patterns("SOURCE.txt"))
+    shutil.copy2(installed("voila", "templates", "base", "static", "require.min.js"), target / "require.min.js")
+    for module in ("ipycanvas", "anywidget"):
+        (target / module).mkdir()
+        shutil.copy2(installed("nbextensions", module, "index.js"), target / module / "index.js")
+    return folder
+
+
+html_static_path.append(str(_ship_widgets()))
+nb_ipywidgets_js = {
+    "widgets/require.min.js": {},
+    "widgets/local-modules.js": {},
+    # The CDN attribute names no CDN: a module not on the site fails to load instead of being fetched.
+    "widgets/embed-amd.js": {"data-jupyter-widgets-cdn": "./"},
+}
 
 html_theme = "pydata_sphinx_theme"
 html_title = f"mt-widgets {release}"

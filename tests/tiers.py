@@ -8,8 +8,10 @@ A tier is a pytest marker expression over five marks, set by tests/conftest.py (
 - ``notebook``: a notebook cell run by nbval;
 - ``hub``: a test that starts a JupyterHub or loads its config as root (tests/course/test_hub.py, test_hub_config.py);
 - ``slow``: a test that takes seconds, marked ``@pytest.mark.slow`` where it is written;
-- ``docs``: tests/docs/test_docs_build.py, which builds the documentation site with Sphinx.
-- ``install``: a test that builds the wheel and installs it into fresh venvs (tests/install/test_shapes.py).
+- ``docs``: tests/docs/test_docs_build.py, which builds the documentation site with Sphinx (and opens
+  built pages in Chromium, offline: it looks at this tier's build rather than building again).
+- ``install``: a test that builds the wheel and installs it into fresh venvs (tests/install/test_shapes.py),
+  or runs the getting-started pages in such a venv (tests/install/test_getting_started_from_wheel.py).
 
 Beside them, ``OTHER_PYTHONS``: the fast tier again on the oldest and the newest supported Python,
 each in its own venv (``.venv-py3XX`` in the repository, ignored by git, kept between runs).
@@ -37,7 +39,7 @@ HUB_TESTS = ("tests/course/test_hub.py", "tests/course/test_hub_config.py", "tes
 # The documentation site's build (./scripts/build-docs.sh, about a minute): a tier of its own, after
 # the cheap ones and before the browser, which it does not need.
 DOCS_TESTS = ("tests/docs/test_docs_build.py",)
-INSTALL_TESTS = ("tests/install/test_shapes.py",)
+INSTALL_TESTS = ("tests/install/test_shapes.py", "tests/install/test_getting_started_from_wheel.py")
 
 #: (name, marker expression), in the order they run. ``fast`` is what scripts/test-fast.sh runs
 #: after ``lint``: the edit loop's tiers.

@@ -142,3 +142,16 @@ c.Voila.logging_config = {"filters": {"notebook_trust": {"()": "log_filters.Note
 
 # No tracebacks on a public page: errors go to the server's log.
 c.VoilaConfiguration.show_tracebacks = False
+
+# --- Nothing from the internet ------------------------------------------------------------------
+# Voila's lab template links Font Awesome from a CDN (cdn.jsdelivr.net), so every page waited on
+# the internet, and without it (a classroom offline, a kiosk on a closed network) the request
+# failed. The "mt-widgets" template beside this file (jupyter/voila/templates/mt-widgets/) is the
+# lab template without those links: Voila's own bundle, which the server sends, already carries
+# Font Awesome 5 (with the v4 names ipywidgets' icons use) and its fonts. Voila finds templates
+# in the Jupyter data folders; this folder joins them (JUPYTER_PATH, read when the server collects
+# the template's folders, after this file). tests/browser/test_demo_offline.py records the requests.
+_templates_root = str(Path(__file__).resolve().parent / "jupyter")
+if _templates_root not in os.environ.get("JUPYTER_PATH", "").split(os.pathsep):
+    os.environ["JUPYTER_PATH"] = os.pathsep.join(p for p in (_templates_root, os.environ.get("JUPYTER_PATH")) if p)
+c.VoilaConfiguration.template = "mt-widgets"

@@ -153,9 +153,11 @@ def serve_online(port: int | None, extra: list[str]) -> int:
     print(f"Protocol: {protocol}\nLogs: {logs}\n"
           f"Participant link to try (a made-up test ID): {participant_link(base, protocol)}\n"
           f"Experimenter's page: {base}/voila/render/study_sim.ipynb\n"
-          f"At the end: the page shows the completion code ({completed.code}), then goes to the protocol's "
-          f"completion URL, {completed.url} (the pool's page; the shipped pilot's stand-in leads nowhere: put "
-          f"your pool's URLs in your copy, mt-widgets study copy-protocol online-pilot)", flush=True)
+          + (f"At the end: the page shows the completion code ({completed.code}), then goes to the protocol's "
+             f"completion URL, {completed.url}" if completed.url is not None else
+             f"At the end: the page shows the completion code ({completed.code}) and stays (the protocol gives "
+             f"no completion URL, as a pilot's: for a pool, copy it, mt-widgets study copy-protocol online-pilot, "
+             f"and give each ending its url)"), flush=True)
     pages = Path(tempfile.mkdtemp(prefix="mt-widgets-study-pages."))
     try:
         for name in ONLINE_PAGES:

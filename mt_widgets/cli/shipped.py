@@ -13,7 +13,10 @@ from pathlib import Path
 
 PACKAGE_ROOT = Path(__file__).resolve().parents[1]
 #: What the wheel ships, as (folder inside the repository, file patterns).
-SHIPPED = {"tutorials": ("*.ipynb", "*.toml"), "notebooks": ("*.ipynb", "*.toml"), "deploy/voila": ("*.py",)}
+#: deploy/voila's template (the lab template without its CDN links) keeps its folders: Voila finds it
+#: as jupyter/voila/templates/mt-widgets/ under a Jupyter data folder (deploy/voila/voila.py).
+SHIPPED = {"tutorials": ("*.ipynb", "*.toml"), "notebooks": ("*.ipynb", "*.toml"),
+           "deploy/voila": ("*.py", "jupyter/voila/templates/*/*")}
 START_HERE = "tutorials/00_start_here.ipynb"
 
 

@@ -34,7 +34,9 @@ who was screened out, who declined and who withdrew)::
 
 Every outcome of ``OUTCOMES`` must be given: a participant who ends in a way the protocol
 did not plan for would otherwise be stranded. ``{code}`` (optional) in a URL is replaced by
-the outcome's code; a URL must be ``https://`` (or ``http://localhost`` for a pilot). The
+the outcome's code; a URL must be ``https://`` (or ``http://localhost`` for a pilot). An outcome
+without ``url`` (a pilot's: no pool to go back to) ends on the page, which shows its code and
+says the participant may close it; nothing redirects. The
 ``return_url`` is shown, never followed automatically, on the pages that turn a participant away
 before their session starts (the study is busy, the link names no one, the session's window is
 closed) and beside the completion code when a session ends early.
@@ -78,14 +80,17 @@ MAX_PARAMETER_LENGTH = 128
 
 @dataclass(frozen=True)
 class Completion:
-    """Where an outcome sends the participant: ``url`` with ``{code}`` replaced, and the code."""
+    """Where an outcome sends the participant: ``url`` with ``{code}`` replaced, and the code.
+    ``url_template`` None: the outcome sends no one anywhere (a pilot's); the page shows the code."""
 
     outcome: str
-    url_template: str
+    url_template: str | None
     code: str
 
     @property
-    def url(self) -> str:
+    def url(self) -> str | None:
+        if self.url_template is None:
+            return None
         return self.url_template.replace("{code}", quote(self.code, safe=""))
 
 
@@ -168,13 +173,15 @@ class OnlineSettings:
                              f"got {outcome!r}")
         return self.completions[key]
 
-    def completion_url(self, outcome: str) -> str:
-        """The URL to send the participant to when their session ends with ``outcome``."""
+    def completion_url(self, outcome: str) -> str | None:
+        """The URL to send the participant to when their session ends with ``outcome`` (None: the
+        protocol gives that ending no URL, and the page ends there with the code)."""
         return self.completion(outcome).url
 
     def as_dict(self) -> dict:
         table = {"identify": self.identify,
-                 "completion": {k: {"url": c.url_template, "code": c.code} for k, c in self.completions.items()}}
+                 "completion": {k: {"code": c.code} | ({} if c.url_template is None else {"url": c.url_template})
+                                for k, c in self.completions.items()}}
         if self.return_url is not None:
             table["return_url"] = self.return_url
         return table
@@ -214,11 +221,11 @@ def parse_online(check, raw: dict) -> OnlineSettings | None:
     for outcome in OUTCOMES:
         path = ("online", "completion", outcome)
         if outcome not in completion:
-            check.fail(path, f"missing required table [online.completion.{outcome}] (url and code): every way a "
-                             f"session can end ({', '.join(OUTCOMES)}) needs its completion URL")
+            check.fail(path, f"missing required table [online.completion.{outcome}] (its code, and the pool's "
+                             f"url): every way a session can end ({', '.join(OUTCOMES)}) needs its completion code")
         entry = check.get(completion, path, "table")
         check.unknown(entry, path, ("url", "code"))
-        url = _check_url(check, entry, path + ("url",))
+        url = _check_url(check, entry, path + ("url",)) if "url" in entry else None
         code = check.get(entry, path + ("code",), "text", nonempty=True)
         if not _CODE.match(code):
             check.fail(path + ("code",), f"expected a code of letters, digits, '-' or '_' (at most 64), got {code!r}")

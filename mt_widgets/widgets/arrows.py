@@ -81,6 +81,24 @@ def _head(canvas, tip, left, right) -> None:
     canvas.close_path()
 
 
+def visible_tip(start, tip, shortest: float):
+    """The tip of an arrow from ``start`` drawn at least ``shortest`` pixels long, in its own direction.
+
+    An action of a few pixels (a small optimal action at a coarse scale) would sit under the hand's
+    dot; drawn at ``shortest`` it shows which way it points, and the caller says its true size in
+    words. An arrow under half a pixel has no direction to show and is left as it is.
+
+    Returns:
+        (tip, lengthened): the (x, y) pixel to draw to, and whether it differs from ``tip``.
+    """
+    x0, y0 = float(start[0]), float(start[1])
+    dx, dy = float(tip[0]) - x0, float(tip[1]) - y0
+    length = math.hypot(dx, dy)
+    if length >= shortest or length < 0.5:
+        return (float(tip[0]), float(tip[1])), False
+    return (x0 + dx / length * shortest, y0 + dy / length * shortest), True
+
+
 #: Arrows closer in direction than this (degrees) are drawn side by side, not on top of each other.
 ALIGNED_DEG = 10.0
 

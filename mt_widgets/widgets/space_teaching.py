@@ -4,7 +4,8 @@ The canvas holds three panels, each a ``ViewProjection`` of the plant's ``SpaceD
 
 - **top** (looking down): a drag from the tool sets the action's horizontal components (x, y);
 - **side** (looking along +y): a drag from the tool sets x and the height z (x is shared with the
-  top view: the two are linked, an arrow drawn in one shows in both);
+  top view: the two are linked, an arrow drawn in one shows in both, and a drag changes x by the
+  pointer's sideways travel, so a drag straight up in the side view keeps the x the top view set);
 - **perspective**: a drag anywhere orbits the camera (or keys ``a``/``d``, ``w``/``s``).
 
 The query state (the arm's chain and its tool) and the tool's arrows are drawn in every panel.
@@ -39,7 +40,7 @@ from ..core.skills import SKILLS, Skill
 from ..core.validation import as_bool
 from ..core.workspace import Box
 from .animation import frame_times, play_frames, sample_at, stop_animation
-from .arrows import draw_arrow_pair
+from .arrows import draw_arrow_pair, visible_tip
 from .canvas_access import FINGER_RADIUS_CSS_PX, CanvasDescription
 from .episode_controller import EpisodeController
 from .legend import _arrow_svg, _dot_svg, _entry, _line_svg
@@ -53,6 +54,11 @@ PANEL_CELLS = {"top": (0, 0), "side": (1, 0), "perspective": (0, 1)}
 PANEL_TITLES = {"top": "Top (drag: x, y)", "side": "Side (drag: x, height)", "perspective": "3-D (drag: turn)"}
 #: Action components a keyboard nudges, in the order Space moves through them.
 COMPONENTS = ("x", "y", "z")
+#: The radius of the hand's dot, in pixels.
+HAND_RADIUS_PX = 6.0
+#: The optimal arrow is drawn at least this long (pixels): its shaft clears the hand's dot and its
+#: head shows the direction. The UR5's first optimal action at seed 0 is 3-5 px to scale.
+SHORTEST_OPTIMAL_PX = 24.0
 #: Degrees one orbit key turns the perspective camera, and per pixel of a drag.
 ORBIT_KEY_DEG, ORBIT_DRAG_DEG_PER_PX = 10.0, 0.5
 #: The camera's elevation stays in this range (degrees): never under the table nor upside down.
@@ -178,7 +184,8 @@ class SpaceTeachingCanvas(VBox):
         self.action_length = drawing.action_length or 0.1 * float(np.max(drawing.bounds.high - drawing.bounds.low))
         self.active_component = "x"
         self.animation = None
-        self._drag = None  # what the pointer's drag moves: ("arrow", panel name) or ("orbit", last pointer)
+        # What the pointer's drag moves: ("arrow", panel name, pixel pressed, action then) or ("orbit", last pointer).
+        self._drag = None
         # An orbit goes on while guidance is shown; an arrow's drag ends when input stops being accepted.
         self._pointer = PointerDrag(self._press, lambda pointer: self._drag_to(pointer, final=False),
                                     lambda pointer: self._drag_to(pointer, final=True),
@@ -495,11 +502,11 @@ class SpaceTeachingCanvas(VBox):
             canvas.fill_style = theme.end_effector
             canvas.stroke_style = theme.end_effector_outline
             canvas.line_width = 1.5
-            canvas.fill_circle(float(start[0]), float(start[1]), 6.0)
-            canvas.stroke_circle(float(start[0]), float(start[1]), 6.0)
-            # Arrows over the hand: a short action's arrow would otherwise hide under it.
+            canvas.fill_circle(float(start[0]), float(start[1]), HAND_RADIUS_PX)
+            canvas.stroke_circle(float(start[0]), float(start[1]), HAND_RADIUS_PX)
+            # Arrows over the hand; the optimal one at least a visible length (its size is then stated).
             user_tip = None if user is None else panel.pixels(tool + self.action_length * np.asarray(user))
-            optimal_tip = None if optimal is None else panel.pixels(tool + self.action_length * optimal)
+            optimal_tip = None if optimal is None else self._optimal_tip(panel, tool, optimal)[0]
             draw_arrow_pair(canvas, start, user_tip, optimal_tip, theme.user_arrow, theme.optimal_arrow)
             canvas.global_alpha = 1.0
         if index is None:
@@ -514,6 +521,19 @@ class SpaceTeachingCanvas(VBox):
         if user is not None:
             canvas.fill_text("Arrow: " + ", ".join(f"{c} {v:+.3f}" for c, v in zip(COMPONENTS, user)),
                              cell + 6, cell + 62)
+        if optimal is not None and self._optimal_drawn_longer(tool, optimal):
+            canvas.fill_text("Dashed arrow drawn longer so that it shows:", cell + 6, cell + 80)
+            canvas.fill_text(f"its size is {np.linalg.norm(optimal):.3f} {self.drawing.action_units}",
+                             cell + 6, cell + 96)
+
+    def _optimal_tip(self, panel: _Panel, tool, optimal):
+        """(pixel, lengthened) of the optimal arrow's tip in ``panel``: to scale, or at least
+        ``SHORTEST_OPTIMAL_PX`` long, so that a small optimal action does not hide under the hand's dot."""
+        to_scale = panel.pixels(tool + self.action_length * np.asarray(optimal))
+        return visible_tip(panel.pixels(tool), to_scale, SHORTEST_OPTIMAL_PX)
+
+    def _optimal_drawn_longer(self, tool, optimal) -> bool:
+        return any(self._optimal_tip(panel, tool, optimal)[1] for panel in self._panels.values())
 
     def _legend_html(self) -> str:
         theme = self.theme
@@ -562,8 +582,12 @@ class SpaceTeachingCanvas(VBox):
         if self.showing_guidance:
             user = self.episode.demonstrations[index].action
             optimal = self.episode.optimal_actions[index]
+            longer = ""
+            if self._optimal_drawn_longer(self._tool(), optimal):
+                longer = (f"; drawn longer than to scale so that it shows; its size is "
+                          f"{np.linalg.norm(optimal):.3f} {action_units}")
             words += (f" Your arrow: {_vector_words(user, action_units)}. The optimal arrow (dashed): "
-                      f"{_vector_words(optimal, action_units)}. Press Next state or Enter to go on.")
+                      f"{_vector_words(optimal, action_units)}{longer}. Press Next state or Enter to go on.")
         elif self.pending_action is not None:
             words += f" Your arrow: {_vector_words(self.pending_action, action_units)}. Enter confirms it."
         else:
@@ -613,12 +637,17 @@ class SpaceTeachingCanvas(VBox):
             return False
         self.hint.value = ""
         self.controller.note_input("pointer")
-        self._drag = ("arrow", name)
+        # x is in both views: a drag changes it by the pointer's sideways travel from the press, so a
+        # drag straight up in the side view keeps the x the top view set. A first arrow starts at the hand.
+        if self.pending_action is None:
+            self._drag = ("arrow", name, start, np.zeros(3))
+        else:
+            self._drag = ("arrow", name, pointer, self.pending_action.copy())
         self._drag_to(pointer, final=False)
         return True
 
     def _drag_to(self, pointer, final: bool) -> None:
-        kind, value = self._drag
+        kind, value = self._drag[:2]
         if kind == "orbit":
             delta = np.asarray(pointer, dtype=float) - value
             self._drag = ("orbit", np.asarray(pointer, dtype=float))
@@ -626,16 +655,15 @@ class SpaceTeachingCanvas(VBox):
             if final:
                 self._update_words()
             return
+        _, _, pressed, at_press = self._drag
         panel = self.panel(value)
         start = self.tool_pixel(value)
         # Pixels back to world units: both orthographic views keep world lengths (scale px per unit).
-        du = (float(pointer[0]) - start[0]) / panel.scale / self.action_length
-        dv = -(float(pointer[1]) - start[1]) / panel.scale / self.action_length
+        # x moves with the pointer from where it was pressed; the view's own component (y from the
+        # top, the height from the side) is where the pointer is, measured from the hand.
         action = np.zeros(3) if self.pending_action is None else self.pending_action.copy()
-        if value == "top":
-            action[0], action[1] = du, dv
-        else:
-            action[0], action[2] = du, dv
+        action[0] = at_press[0] + (float(pointer[0]) - pressed[0]) / panel.scale / self.action_length
+        action[1 if value == "top" else 2] = -(float(pointer[1]) - start[1]) / panel.scale / self.action_length
         self.controller.hold(action, None)
         self._after_change(final)
 

@@ -133,7 +133,9 @@ def teach_p1(page, server, pid, draw, shot, name):
             e["type"] == "demonstration" and e["phase"] == "P1" and e["index"] == i for e in events), 60)
         action = np.asarray([e for e in events if e["type"] == "demonstration"][-1]["action"])
         length = reference.action_length
-        expected = np.array([SIDE_DRAG[0] / side.scale, -TOP_DRAG[1] / top.scale, -SIDE_DRAG[1] / side.scale]) / length
+        # x in both views: the side drag moves it on from the top drag's x.
+        expected = np.array([TOP_DRAG[0] / top.scale + SIDE_DRAG[0] / side.scale, -TOP_DRAG[1] / top.scale,
+                             -SIDE_DRAG[1] / side.scale]) / length
         # A CSS pixel of the scaled canvas (a phone's is 1.5 canvas pixels) is the tolerance.
         assert action == pytest.approx(expected, abs=3.0 / top.scale / length), (index, action, expected)
         reference.set_action(action)

@@ -26,6 +26,7 @@ from .support import button, current_episode, demonstrate, wait_for_log, wait_fo
 pytestmark = pytest.mark.browser
 
 ONLINE = "/voila/render/study_online.ipynb"
+# The pilot's old completion address (nothing serves it): the page must never go there.
 COMPLETE = "http://localhost/prolific/complete"
 PEOPLE = {"reloads": "5f0a1b2c3d4e5f6a7b8c9d01", "withdraws": "5f0a1b2c3d4e5f6a7b8c9d02",
           "declines": "5f0a1b2c3d4e5f6a7b8c9d03"}
@@ -66,20 +67,24 @@ def test_participants_arrive_by_url_at_once_one_reloads_one_withdraws_one_declin
             nothing_of_others(page, PEOPLE[role])
         pages["reloads"][1].screenshot(path=shot("welcome"))
 
-        # Withdraws at once: the withdrawal URL, with its code.
+        # Withdraws at once: the withdrawal code, on the page. The pilot gives no completion URL, so
+        # the page stays (it used to go to http://localhost/prolific/complete, which nothing serves).
         page = pages["withdraws"][1]
+        address = page.url
         button(page, "Withdraw from the study").click()
         button(page, "Yes, withdraw").dblclick()
         page.get_by_text("PILOTWITHDRAW").wait_for(timeout=15_000)
-        page.screenshot(path=shot("withdrawn"))
-        page.wait_for_url(f"{COMPLETE}?cc=PILOTWITHDRAW", timeout=30_000)
-        assert page.landed == [f"{COMPLETE}?cc=PILOTWITHDRAW"]
+        page.get_by_text("This is the end of the study").wait_for(timeout=15_000)
 
-        # Declines consent: the declined URL.
-        page = pages["declines"][1]
-        button(page, "Continue").click()
-        button(page, "I do not agree").click()
-        page.wait_for_url(f"{COMPLETE}?cc=PILOTDECLINE", timeout=30_000)
+        # Declines consent: the declined code.
+        declines = pages["declines"][1]
+        button(declines, "Continue").click()
+        button(declines, "I do not agree").click()
+        declines.get_by_text("PILOTDECLINE").wait_for(timeout=15_000)
+        declines.screenshot(path=shot("declined"))
+        page.wait_for_timeout(5000)   # longer than a redirect's delay (4 s): still on the page, nowhere else asked
+        page.screenshot(path=shot("withdrawn"))
+        assert page.url == address and page.landed == [] and declines.landed == []
 
         # Goes on to the first episode, reloads mid-episode, and resumes at the same demonstration.
         pid, page = PEOPLE["reloads"], pages["reloads"][1]

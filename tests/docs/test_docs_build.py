@@ -120,3 +120,78 @@ def test_the_maths_is_typeset_by_the_sites_own_mathjax(build):
     cdn = [page.relative_to(HTML).as_posix() for page in HTML.rglob("*.html")
            if re.search(r"https?://[^\"']*mathjax", page.read_text(errors="replace"), flags=re.I)]
     assert not cdn, f"pages asking a CDN for MathJax: {cdn[:10]}"
+
+
+#: Pages the offline look opens: maths in the prose and the code's outputs, and widgets with their
+#: saved state (ipywidgets' controls, ipycanvas' canvases, anywidget's accessibility layer).
+OFFLINE_PAGES = ("tutorials/02_ridge_regression.html", "tutorials/06_drawing_a_demonstration.html")
+
+
+def test_offline_the_site_shows_its_maths_and_the_tutorials_widgets(build, tmp_path):
+    # Chromium with the network blocked: every request not to the site's own server is refused and
+    # recorded. The maths must be typeset (MathJax's output elements) and the executed tutorials'
+    # widgets drawn from their saved state, by the site's own widget manager and modules
+    # (docs/conf.py: nb_ipywidgets_js). Chromium drives this in the docs tier, not the browser tier,
+    # so that it looks at this tier's one build (about 15 s) instead of building the site again.
+    import functools
+    import http.server
+    import threading
+
+    from playwright.sync_api import sync_playwright
+
+    from browser_support import CHROMIUM, CHROMIUM_ARGS
+
+    assert build.returncode == 0, (build.stdout + build.stderr)[-3000:]
+    class Quiet(http.server.SimpleHTTPRequestHandler):
+        def log_message(self, *args):   # a line per request would bury the test's own output
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(Quiet, directory=str(HTML)))
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    site = f"http://127.0.0.1:{server.server_address[1]}"
+    outside, failed = [], []
+    try:
+        with sync_playwright() as playwright:
+            browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            context = browser.new_context(viewport={"width": 1280, "height": 1000})
+
+            def only_the_site(route):
+                if route.request.url.startswith((site, "data:", "blob:")):
+                    route.continue_()
+                else:
+                    outside.append(route.request.url)
+                    route.abort()
+
+            context.route("**/*", only_the_site)
+            page = context.new_page()
+            page.on("response", lambda response: failed.append(response.url) if response.status >= 400 else None)
+            seen = {}
+            for path in OFFLINE_PAGES:
+                page.goto(f"{site}/{path}", wait_until="load", timeout=60_000)
+                page.wait_for_selector("mjx-container", state="attached", timeout=60_000)
+                page.wait_for_selector(".widget-subarea .jupyter-widgets", state="attached", timeout=60_000)
+                page.wait_for_load_state("networkidle", timeout=60_000)
+                seen[path] = page.evaluate("""() => ({
+                    maths: document.querySelectorAll('mjx-container[jax="CHTML"]').length,
+                    raw_tex: [...document.querySelectorAll('.math')].filter(m => !m.querySelector('mjx-container')
+                                                                           && /\\\\|\\$/.test(m.textContent)).length,
+                    views: document.querySelectorAll('script[type="application/vnd.jupyter.widget-view+json"]').length,
+                    drawn: document.querySelectorAll('.widget-subarea > .jupyter-widgets').length,
+                    buttons: [...document.querySelectorAll('.widget-subarea button')].map(b => b.textContent.trim())
+                             .filter(t => t),
+                    canvases: document.querySelectorAll('.widget-subarea canvas').length,
+                    errors: [...document.querySelectorAll('.widget-subarea')].filter(s => /Error|Failed/.test(
+                             s.textContent) && !s.querySelector('.jupyter-widgets')).length})""")
+                page.locator(".widget-subarea").first.scroll_into_view_if_needed()
+                page.screenshot(path=str(ROOT / "test-artifacts" / f"docs-offline-{Path(path).stem}.png"))
+            browser.close()
+    finally:
+        server.shutdown()
+    assert outside == [], f"the pages asked outside the site: {outside[:10]}"
+    assert failed == [], f"the site lacked: {failed[:10]}"
+    for path, found in seen.items():
+        assert found["maths"] > 0 and found["raw_tex"] == 0, (path, found)
+        # Every saved widget view is drawn (none left as its script tag or an error message).
+        assert found["views"] > 0 and found["drawn"] == found["views"] and found["errors"] == 0, (path, found)
+    drawing = seen["tutorials/06_drawing_a_demonstration.html"]
+    assert "Confirm" in " ".join(drawing["buttons"]) and drawing["canvases"] > 0, drawing

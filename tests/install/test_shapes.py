@@ -56,11 +56,6 @@ def make_shape(wheel: Path, shape: str, venv: Path) -> Path:
     return python
 
 
-@pytest.fixture(scope="module")
-def distributions(tmp_path_factory):
-    return build_distributions(tmp_path_factory.mktemp("dist"))
-
-
 def test_the_sdist_and_the_wheel_hold_the_package_and_its_data(distributions):
     sdist, wheel = distributions
     with zipfile.ZipFile(wheel) as archive:
@@ -73,6 +68,10 @@ def test_the_sdist_and_the_wheel_hold_the_package_and_its_data(distributions):
                  "mt_widgets/widgets/canvas_access.js", "mt_widgets/widgets/canvas_access.css",
                  "mt_widgets/apps/study/navigation.js"):
         assert path in in_wheel and path in in_sdist, path
+    # The pages' Voila template, without a CDN (deploy/voila/voila.py selects it), in its folders.
+    for name in ("index.html.j2", "conf.json"):
+        path = f"deploy/voila/jupyter/voila/templates/mt-widgets/{name}"
+        assert f"mt_widgets/_data/{path}" in in_wheel and path in in_sdist, path
     assert {"pyproject.toml", "LICENSE"} <= in_sdist
     assert not any(name.startswith(("tests/", "notebooks/")) for name in in_wheel)
 
@@ -89,14 +88,15 @@ def test_the_sdist_and_the_wheel_are_versioned_and_pass_twine_check(distribution
 
 
 @pytest.mark.parametrize("shape", list(SHAPES))
-def test_each_shape_installs_from_the_wheel_and_runs_its_smoke_test(distributions, shape, tmp_path):
+def test_each_shape_installs_from_the_wheel_and_runs_its_smoke_test(distributions, shape, tmp_path, request):
     _, wheel = distributions
-    python = make_shape(wheel, shape, tmp_path / "venv")
+    # The lab's venv is the session's (tests/install/conftest.py): the getting-started pages run in it too.
+    python = request.getfixturevalue("lab_venv") if shape == "lab" else make_shape(wheel, shape, tmp_path / "venv")
     work = tmp_path / "work"  # an empty folder: mt_widgets can only come from the venv
     work.mkdir()
     where = subprocess.run([python, "-c", "import mt_widgets; print(mt_widgets.__file__)"], cwd=work,
                            capture_output=True, text=True, check=True, timeout=300, env=CLEAN_ENV).stdout
-    assert where.startswith(str(tmp_path / "venv")), f"mt_widgets imported from {where}, not the shape's venv"
+    assert where.startswith(str(python.parents[1])), f"mt_widgets imported from {where}, not the shape's venv"
     result = subprocess.run([python, str(HERE / f"smoke_{shape}.py")], cwd=work, capture_output=True, text=True,
                             timeout=900, env=CLEAN_ENV)
     assert result.returncode == 0, f"{shape}:\n{result.stdout}\n{result.stderr[-4000:]}"

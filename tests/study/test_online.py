@@ -1,9 +1,12 @@
 """The [online] table: completion URLs and codes per outcome, the URL parameters that identify a
 participant, and IDs from a URL refused (with nothing written) when they are not usable."""
 
+import re
+from pathlib import Path
+
 import pytest
 
-from mt_widgets.study import ParticipantIdError, ProtocolError, Session, StudyFolder, parse_protocol
+from mt_widgets.study import ParticipantIdError, ProtocolError, Session, StudyFolder, load_protocol, parse_protocol
 from mt_widgets.study.online import OUTCOMES, outcome_of
 from mt_widgets.study.participants import validate_url_participant_id
 
@@ -22,6 +25,18 @@ def test_each_outcome_has_its_completion_url_and_code():
     with pytest.raises(ValueError, match="outcome: expected one of"):
         online.completion_url("finished")
     assert parse_protocol(SHORT_PROTOCOL).online is None
+
+
+def test_an_ending_without_a_url_ends_on_the_page_with_its_code_as_the_shipped_pilot_does():
+    without = online_protocol(re.sub(r'\nurl = "[^"]*"', "", ONLINE, count=1))   # the first ending's url only
+    first = next(o for o in OUTCOMES if without.online.completion(o).url is None)
+    assert without.online.completion_url(first) is None and without.online.completion(first).code
+    assert "url" not in without.online.as_dict()["completion"][first]
+    assert sum(without.online.completion_url(o) is None for o in OUTCOMES) == 1
+    pilot = load_protocol(str(Path(__file__).resolve().parents[2] / "notebooks" / "study_online_pilot.toml")).online
+    assert [pilot.completion_url(o) for o in OUTCOMES] == [None] * 4   # no dead localhost page
+    assert [pilot.completion(o).code for o in OUTCOMES] == ["PILOTDONE", "PILOTSCREEN", "PILOTDECLINE",
+                                                            "PILOTWITHDRAW"]
 
 
 def test_the_url_names_the_participant_and_what_is_recorded_with_them(tmp_path):

@@ -107,7 +107,9 @@ def test_a_reload_resumes_the_participant_where_they_were(tmp_path):
 
 @pytest.mark.parametrize("ending, code", [("completed", "PILOTDONE"), ("withdrawn", "PILOTWITHDRAW"),
                                           ("declined", "PILOTDECLINE"), ("screened_out", "PILOTSCREEN")])
-def test_each_ending_sends_the_participant_to_its_own_completion_url_and_code(tmp_path, ending, code):
+def test_each_ending_of_the_pilot_shows_its_own_code_and_sends_no_one_anywhere(tmp_path, ending, code):
+    # The pilot gives no completion URL (it used to send everyone to http://localhost/prolific/complete,
+    # which nothing serves): the page ends with the code, in words, and no redirect.
     page = OnlineStudyPage(PILOT, tmp_path / "logs", prolific("E1"), redirect_delay_s=0)
     answers = {"robotics_background": "yes" if ending == "screened_out" else "no"}
     while not page.session.finished:
@@ -122,15 +124,32 @@ def test_each_ending_sends_the_participant_to_its_own_completion_url_and_code(tm
         else:
             act(page.view, answers)
     assert page.completion.code == code
-    assert redirect_of(page) == f"http://localhost/prolific/complete?cc={code}"
-    assert code in " ".join(participant_texts(page))
+    assert redirect_of(page) is None
+    said = re.sub(r"<[^>]+>", "", " ".join(participant_texts(page)))
+    assert f"Your completion code is {code}. This is the end of the study" in said and "taken back" not in said
     # Coming back with the same link: sent on again, nothing more written.
     page.session.close()
     log = tmp_path / "logs" / "E1.jsonl"
     logged = len(read_events(log)[0]) if log.exists() else 0
     back = OnlineStudyPage(PILOT, tmp_path / "logs", prolific("E1"), redirect_delay_s=0)
-    assert redirect_of(back) == f"http://localhost/prolific/complete?cc={code}"
+    assert redirect_of(back) is None and code in " ".join(participant_texts(back))
     assert (len(read_events(log)[0]) if log.exists() else 0) == logged + (ending == "completed")
+
+
+def test_a_protocol_with_the_pool_s_completion_urls_sends_the_participant_there(tmp_path):
+    # What docs/user/study.md says to do for the real study: each ending given the pool's url.
+    text = Path(PILOT).read_text(encoding="utf-8")
+    prolific_url = 'url = "https://app.prolific.com/submissions/complete?cc={code}"\n'
+    text = re.sub(r'(\[online\.completion\.\w+\]\n)', lambda m: m.group(1) + prolific_url, text)
+    protocol = tmp_path / "study.toml"
+    protocol.write_text(text, encoding="utf-8")
+    page = OnlineStudyPage(str(protocol), tmp_path / "logs", prolific("U1"), redirect_delay_s=0)
+    while page.session.current_step().kind != "consent":
+        act(page.view)
+    [b for b in buttons_in(page.view.body) if b.description == "I do not agree"][0].click()
+    assert redirect_of(page) == "https://app.prolific.com/submissions/complete?cc=PILOTDECLINE"
+    said = re.sub(r"<[^>]+>", "", " ".join(participant_texts(page)))
+    assert "Your completion code is PILOTDECLINE. You will be taken back to the study's website" in said
 
 
 def test_a_protocol_without_an_online_table_is_refused_for_the_researcher(tmp_path):
@@ -229,7 +248,7 @@ def test_an_age_under_the_band_shows_the_protocols_words_and_no_further_step(tmp
     if screened:
         assert page.session.current_step().kind == "ended" and ADULTS_ONLY in shown
         assert page.completion.code == "PILOTSCREEN"
-        assert redirect_of(page) == "http://localhost/prolific/complete?cc=PILOTSCREEN"
+        assert redirect_of(page) is None
         # No further step: no form, no button to go on, and the task's instructions never shown.
         assert not [b for b in buttons_in(page.view.body)]
         assert "please type" not in shown.lower()

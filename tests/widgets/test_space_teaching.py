@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from mt_widgets.core import SKILLS, TeachingEpisode
-from mt_widgets.widgets.space_teaching import COMPONENTS, SpaceTeachingCanvas, check_space_action
+from mt_widgets.widgets.space_teaching import COMPONENTS, HAND_RADIUS_PX, SpaceTeachingCanvas, check_space_action
 
 from .conftest import key, pointer
 
@@ -48,8 +48,10 @@ def test_a_drag_in_top_then_side_view_gives_the_3d_action_the_episode_records(wi
     scale_top, scale_side = widget.panel("top").scale, widget.panel("side").scale
     drag_action(widget, (40.0, -20.0), (-10.0, -30.0), event_kind)
     length = widget.action_length
-    # Top: right is +x, up is +y; side: right is +x (shared, so the side drag sets x again), up is +z.
-    expected = np.array([-10.0 / scale_side / length, 20.0 / scale_top / length, 30.0 / scale_side / length])
+    # Top: right is +x, up is +y; side: right is +x (shared: the side drag moves it on by its own
+    # sideways travel), up is +z.
+    expected = np.array([(40.0 / scale_top - 10.0 / scale_side) / length, 20.0 / scale_top / length,
+                         30.0 / scale_side / length])
     np.testing.assert_allclose(widget.pending_action, expected, rtol=1e-9)
     key(widget.canvas, "Enter")
     demonstration = widget.episode.demonstrations[0]
@@ -188,3 +190,76 @@ def test_a_whole_episode_ends_in_the_reproduction_played_in_one_batch_with_sleep
     assert len(arms) == widget.animation.n_frames + 2 and len(hands) == widget.animation.n_frames + 1
     assert all(args[0] == 3 for args in arms)   # three polylines: one per view
     assert len(COMPONENTS) == 3
+
+
+def _dashed_shafts(commands) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(start, end) pixels of each dashed shaft drawn (the optimal arrow's outline, then its shaft)."""
+    shafts, dashed = [], False
+    for index, (name, args) in enumerate(commands):
+        if name == "setLineDash":
+            dashed = bool(args[0])
+        elif name == "moveTo" and dashed and commands[index + 1][0] == "lineTo":
+            shafts.append((np.array(args[:2], dtype=float), np.array(commands[index + 1][1][:2], dtype=float)))
+    return shafts
+
+
+def test_a_short_optimal_arrow_shows_beyond_the_hand_and_its_true_size_is_stated(widget, recorder):
+    # The UR5's first query state (seed 0): the optimal action is 0.06 long, 3-5 px in the three views,
+    # which drawn to scale sat under the hand's 6 px dot. It is drawn at a visible length instead.
+    optimal = widget.episode.optimal_actions[0]
+    tool = widget._tool()
+    to_scale = [np.hypot(*(widget.panel(n).pixels(tool + widget.action_length * optimal) - widget.tool_pixel(n)))
+                for n in ("top", "side", "perspective")]
+    assert max(to_scale) < HAND_RADIUS_PX
+    widget.set_action([0.0, 0.0, -0.3])   # the user's arrow points away: the optimal one is not moved aside
+    recorder.clear()
+    widget.confirm()
+    shafts = _dashed_shafts(recorder.on(widget.plant_layer))
+    assert len(shafts) == 6, shafts   # outline and shaft in each of the three views
+    for (start, end), name in zip(shafts, ("top", "top", "side", "side", "perspective", "perspective")):
+        np.testing.assert_allclose(start, widget.tool_pixel(name), atol=0.06)
+        # The shaft alone reaches past the dot; the head is beyond it.
+        assert np.hypot(*(end - start)) > HAND_RADIUS_PX + 2, (name, start, end)
+        # In the optimal action's direction, as projected in that view.
+        direction = widget.panel(name).pixels(tool + widget.action_length * optimal) - widget.tool_pixel(name)
+        cosine = np.dot(end - start, direction) / np.hypot(*(end - start)) / np.hypot(*direction)
+        assert cosine > 0.99, (name, cosine)
+    size = float(np.linalg.norm(optimal))
+    words = widget.describe()
+    assert f"drawn longer than to scale so that it shows; its size is {size:.3f}" in words, words
+    texts = " ".join(args[0] for name, args in recorder.on(widget.plant_layer) if name == "fillText")
+    assert "drawn longer so that it shows: its size is " + f"{size:.3f}" in texts, texts
+
+
+def test_a_long_optimal_arrow_is_drawn_to_scale(skill, recorder):
+    widget = SpaceTeachingCanvas(TeachingEpisode(skill, seed=0), play=False)
+    widget.set_action([0.0, 0.0, 0.3])
+    widget.confirm()
+    widget.advance()   # state 2: the optimal arrow is 24-38 px long in every view
+    widget.set_action([0.0, 0.0, 0.3])
+    recorder.clear()
+    widget.confirm()
+    optimal, tool = widget.episode.optimal_actions[1], widget._tool()
+    shafts = _dashed_shafts(recorder.on(widget.plant_layer))
+    head = widget.theme.optimal_arrow.head
+    for (start, end), name in zip(shafts[1::2], ("top", "side", "perspective")):
+        tip = widget.panel(name).pixels(tool + widget.action_length * optimal)
+        assert np.hypot(*(tip - start)) > 20
+        # The shaft stops 0.9 of a head short of the true tip.
+        assert abs(np.hypot(*(tip - start)) - np.hypot(*(end - start)) - 0.9 * head) < 0.2, name
+    assert "longer than to scale" not in widget.describe()
+
+
+def test_a_drag_in_the_side_view_keeps_the_x_the_top_view_set(widget):
+    # A drag from the hand straight up in the side view sets the height only: x stays what the top
+    # view's drag set (it used to be reset to where the pointer was pressed, 0).
+    scale_top, scale_side, length = widget.panel("top").scale, widget.panel("side").scale, widget.action_length
+    drag_action(widget, (40.0, -20.0), (0.0, -30.0))
+    np.testing.assert_allclose(widget.pending_action,
+                               [40.0 / scale_top / length, 20.0 / scale_top / length, 30.0 / scale_side / length],
+                               rtol=1e-9)
+    # Pressing on the arrow's tip in the side view and moving it right moves x by as much.
+    tip = widget.panel("side").pixels(widget._tool() + length * widget.pending_action)
+    pointer(widget.canvas, "mouse_down", *tip)
+    pointer(widget.canvas, "mouse_up", *(tip + [12.0, 0.0]))
+    np.testing.assert_allclose(widget.pending_action[0], (40.0 / scale_top + 12.0 / scale_side) / length, rtol=1e-9)

@@ -125,6 +125,12 @@ class OnlineStudyPage(VBox):
 
     def _goodbye(self) -> VBox:
         completion = self.completion
+        if completion.url is None:
+            # No pool to go back to (a pilot's protocol gives this ending no url): the page is the end.
+            return VBox([HTML(f"<p style='max-width:760px;font-size:1.1em'>Your completion code is "
+                              f"<b class='mt-completion-code'>{html.escape(completion.code)}</b>. This is the end "
+                              f"of the study: keep the code if you were asked for it, then you can close this "
+                              f"page.</p>")])
         link = html.escape(completion.url, quote=True)
         return VBox([
             HTML(f"<p style='max-width:760px;font-size:1.1em'>Your completion code is "
