@@ -1,11 +1,14 @@
 """A registry's promised skills: built on first use, once, under the keys promised (``SkillRegistry.defer``)."""
 
+import subprocess
+import sys
 import threading
 
 import numpy as np
 import pytest
 
 from mt_widgets import SKILLS
+from mt_widgets.arms import SHIPPED_ARMS
 from mt_widgets.core import Skill, SkillRegistry
 
 SIM = SKILLS["sim-point"]
@@ -90,3 +93,21 @@ def test_a_promised_key_replaced_before_its_build_keeps_its_replacement():
     registry.defer(("a", "b"), CountingBuild("a", "b"))
     mine = registry.add(_copy("a"), replace=True)
     assert registry["b"].key == "b" and registry["a"] is mine
+
+
+def test_importing_the_package_builds_no_arm_and_skills_lists_every_shipped_one():
+    # A fresh process: this one's tests may have built the arms already.
+    script = ("from mt_widgets.core.skills import SKILLS, Skill\n"
+              "print(','.join(k for k, v in SKILLS._skills.items() if not isinstance(v, Skill)))\n"
+              "print(','.join(SKILLS))")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True, timeout=120)
+    unbuilt, listed = done.stdout.split()
+    arms = [key for arm in SHIPPED_ARMS for key in arm.keys]
+    assert unbuilt.split(",") == arms and len(arms) == 8
+    assert listed.split(",") == ["sim-point", "sim-line", "uarm-point", "uarm-line", *arms]
+
+
+@pytest.mark.parametrize("arm", SHIPPED_ARMS, ids=lambda arm: arm.robot)
+def test_a_shipped_arms_listed_titles_are_its_skills_own(arm):
+    assert [(SKILLS[key].title, key) for key in arm.keys] == list(arm.skills)
+    assert {SKILLS[key].robot for key in arm.keys} == {arm.robot}
