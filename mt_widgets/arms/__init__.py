@@ -23,6 +23,7 @@ from .shipped import (
     so101_plant,
     ur5_chain,
 )
+from .urdf_arm import arm_skills
 
 __all__ = ["CHAIN_ARMS", "PANDA_HOME", "SHIPPED_ARMS", "SO101_HOME", "SO101_JOINT_SPEED", "UR5_HOME", "ShippedArm",
-           "UR5Plant", "panda_chain", "panda_plant", "so101_chain", "so101_plant", "ur5_chain"]
+           "UR5Plant", "arm_skills", "panda_chain", "panda_plant", "so101_chain", "so101_plant", "ur5_chain"]
