@@ -28,12 +28,14 @@ MIN_VALID_SHARE = 0.1
 
 def arm_skills(description: dict, name: str, home, teaching_box, part, fixture, *, kinematic: bool = False,
                scene_box=None, conveyor: Conveyor | None = None, lift: float = 0.1, link_radius: float = 0.02,
-               max_condition: float = 60.0, min_singular_value: float = 0.05) -> dict[str, Skill]:
+               max_condition: float = 60.0, min_singular_value: float = 0.05, label: str | None = None
+               ) -> dict[str, Skill]:
     """An arm's ``<name>-reach`` and ``<name>-place`` skills (and ``<name>-conveyor`` with a conveyor).
 
     Args:
         description: the arm as a URDF reader gives it (``read_urdf(path, tool=...)``).
         name: the skills' prefix and the plants' robot name (a plain name).
+        label: the arm's name in the skills' titles and descriptions ("My arm"); default ``name``.
         home: (n,) the home pose (rad, or m for a prismatic joint): where inverse kinematics starts.
         teaching_box: ((x0, x1), (y0, y1), (z0, z1)) m or a ``Cuboid``: where query states put the tool.
         part, fixture: (3,) m: the reach skill's goal, the place skill's.
@@ -55,6 +57,8 @@ def arm_skills(description: dict, name: str, home, teaching_box, part, fixture, 
     """
     if not isinstance(name, str) or not name:
         raise ValueError(f"name: expected a non-empty name, got {name!r}")
+    if label is not None and (not isinstance(label, str) or not label.strip()):
+        raise ValueError(f"label: expected a non-empty text or None, got {label!r}")
     kinematic = as_bool("kinematic", kinematic)
     box = teaching_box if isinstance(teaching_box, Cuboid) else _box("teaching_box", teaching_box)
     part = as_float_array("part", part, ndim=1, shape=(3,))
@@ -81,8 +85,8 @@ def arm_skills(description: dict, name: str, home, teaching_box, part, fixture, 
     settings = dict(robot=name, kinematic=kinematic, link_radius=link_radius, min_singular_value=min_singular_value)
     table = ChainPlant(chain, home, box, scene_box, **settings)
     line = None if conveyor is None else ChainPlant(chain, home, box, scene_box, conveyor=conveyor, **settings)
-    for label, point in (("part", part), ("fixture", fixture)):
-        _reach(table, source, label, point)
+    for what, point in (("part", part), ("fixture", fixture)):
+        _reach(table, source, what, point)
     above = _reach(table, source, "lift", part + (0.0, 0.0, lift), f"the point {lift:g} m above the part")
     states = table.sample_states(np.random.default_rng(0), BOX_SAMPLES)
     valid = float(np.mean(table.is_valid_state(states)))
@@ -90,7 +94,7 @@ def arm_skills(description: dict, name: str, home, teaching_box, part, fixture, 
         raise ValueError(f"teaching_box: expected a box the tool of {source} can be taught in (at least "
                          f"{MIN_VALID_SHARE:.0%} of {BOX_SAMPLES} points in it reached, clear of the table and "
                          f"the arm, away from singular poses), got {valid:.0%} for {box}")
-    return production_line_skills(name, name, table, part, fixture, above, max_condition, line=line,
+    return production_line_skills(name, label or name, table, part, fixture, above, max_condition, line=line,
                                   conveyor_condition=max_condition)
 
 

@@ -9,6 +9,7 @@ Two forms::
     urdf = "my_arm.urdf"                  # relative to the protocol file
     tool = "flange"                       # the link whose origin is the tool point
     name = "mine"                         # the skills' prefix: "mine-reach", "mine-place"
+    label = "My arm"                      # optional: the arm's name in the skills' titles
     home = [0.0, 0.3, 1.2]                # rad (m for a prismatic joint): where inverse kinematics starts
     teaching_box = [[0.25, 0.40], [-0.15, 0.15], [0.05, 0.25]]   # m: where query states put the tool
     part = [0.32, -0.08, 0.08]            # m: the reach skill's goal
@@ -46,8 +47,8 @@ from mt_widgets.core import Skill
 from mt_widgets.core.chain_plant import Conveyor
 from mt_widgets.robot_models.urdf import URDFError, parse_urdf
 
-_URDF_FIELDS = ("urdf", "urdf_text", "tool", "name", "home", "teaching_box", "part", "fixture", "kinematic", "locked",
-                "lift", "link_radius", "max_condition", "min_singular_value", "scene_box", "conveyor")
+_URDF_FIELDS = ("urdf", "urdf_text", "tool", "name", "label", "home", "teaching_box", "part", "fixture", "kinematic",
+                "locked", "lift", "link_radius", "max_condition", "min_singular_value", "scene_box", "conveyor")
 _CONVEYOR_FIELDS = ("origin", "direction", "speed", "phase_range")
 
 
@@ -71,6 +72,7 @@ def resolve_protocol_arm(raw: dict, check, source: str, skills: dict) -> tuple[s
     given = check.get(table, ("arm", "urdf"), "text", nonempty=True)
     tool = check.get(table, ("arm", "tool"), "text", nonempty=True)
     name = check.get(table, ("arm", "name"), "text", name=True, default="arm")
+    label = check.get(table, ("arm", "label"), "text", nonempty=True, default=None)
     locked = table.get("locked", [])
     if not isinstance(locked, list) or not all(isinstance(joint, str) for joint in locked):
         check.fail(("arm", "locked"), f"expected a list of joint names, got {locked!r}"[:200])
@@ -104,7 +106,7 @@ def resolve_protocol_arm(raw: dict, check, source: str, skills: dict) -> tuple[s
     try:
         made = arm_skills(description, name, numbers["home"], numbers["teaching_box"], numbers["part"],
                           numbers["fixture"], kinematic=kinematic, scene_box=numbers["scene_box"], conveyor=conveyor,
-                          **options)
+                          label=label, **options)
     except (ValueError, TypeError) as error:
         # arm_skills names its argument first ("part: expected ..."); a chain's own error names the URDF.
         field = str(error).split(":", 1)[0]

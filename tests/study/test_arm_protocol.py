@@ -21,7 +21,8 @@ from mt_widgets.study import ProtocolError, Session, StudyFolder, export_bids, e
 from protocols import _table, phase, protocol_toml
 
 #: The lab's arm: its URDF beside the protocol, the tool between the jaws, the jaw held shut.
-ARM = {"urdf": "arms/so101_copy.urdf", "tool": "gripper_frame_link", "name": "lab", "locked": ["gripper"],
+ARM = {"urdf": "arms/so101_copy.urdf", "tool": "gripper_frame_link", "name": "lab", "label": "Lab arm",
+       "locked": ["gripper"],
        "kinematic": True, "home": list(SO101_HOME),
        "teaching_box": [list(SO101_TEACHING_BOX.xlim), list(SO101_TEACHING_BOX.ylim), list(SO101_TEACHING_BOX.zlim)],
        "part": [0.22, -0.08, 0.04], "fixture": [0.18, 0.09, 0.06], "lift": 0.08, "link_radius": 0.015,
@@ -76,6 +77,7 @@ def test_a_study_of_an_arm_from_a_urdf_beside_the_protocol_runs_through_export_a
     protocol = load_protocol(lab)
     reach = protocol.skills["lab-reach"]
     assert (reach.robot, reach.plant.n_joints, reach.plant.kinematic) == ("lab", 5, True)
+    assert reach.title == "Lab arm: reach the part on the table"
     assert reach.plant.chain.joint_names == ("shoulder_pan", "shoulder_lift", "elbow_flex", "wrist_flex", "wrist_roll")
     assert protocol.data["arm"]["urdf"] == "arms/so101_copy.urdf"
     assert protocol.data["arm"]["urdf_text"] == shipped_urdf("so101").read_text(encoding="utf-8")
