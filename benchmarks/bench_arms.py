@@ -32,7 +32,7 @@ import mt_widgets
 from mt_widgets.core.chain_plant import ChainPlant
 from mt_widgets.core.features import ToolFeatures
 from mt_widgets.core.serial_chain import SerialChain
-from mt_widgets.core.shipped_arms import PANDA_HOME, PANDA_SCENE, PANDA_TEACHING_BOX
+from mt_widgets.arms.shipped import PANDA_HOME, PANDA_SCENE, PANDA_TEACHING_BOX
 from mt_widgets.robot_models.urdf import read_urdf, shipped_urdf
 import numpy as np
 imported = time.perf_counter()

@@ -1,7 +1,9 @@
 """mt-widgets: teach novices to teach robots, with exact machine-teaching guidance.
 
-The science lives in ``mt_widgets.core`` (no Jupyter dependency); robot models read from their
-URDFs (files read outside the science) in ``mt_widgets.robot_models``; the widgets in
+The science lives in ``mt_widgets.core`` (no Jupyter dependency, no file read); robot models read
+from their URDFs in ``mt_widgets.robot_models``; the arms built from them on core's engine (the
+shipped UR5, Panda and SO-101, whose skills join ``SKILLS`` here, and a user's own) in
+``mt_widgets.arms``; the widgets in
 ``mt_widgets.widgets``; the study runner (protocol, participants, session, log, export) in
 ``mt_widgets.study``; synthetic teachers and in-silico studies in ``mt_widgets.in_silico``;
 statistics, power, figures and the comparison with the paper in ``mt_widgets.analysis``; a
@@ -14,6 +16,9 @@ The ``mt-widgets`` command (the lab, the demo, a study, a class's checks) is ``m
 
 from importlib.metadata import PackageNotFoundError, version
 
+# The shipped arms' skills join SKILLS (each arm read from its URDF when one of its skills is first
+# asked for): imported here so every ``SKILLS`` a program reaches holds them.
+from .arms import SHIPPED_ARMS  # noqa: F401
 from .core import (
     DEFAULT_LAMBDA,
     SKILLS,

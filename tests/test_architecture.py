@@ -1,14 +1,15 @@
 """The package's layers, read from its source with ast: who may import whom.
 
-robot_models (robot descriptions read from their URDF files) is the data layer beneath
-everything: it imports nothing of the package, and core builds its chains from what it reads,
-so the files are read outside the science. core (science) <- study (the runner) <- in_silico
-(simulated teachers) <- analysis, and
-core <- study <- classroom (a class's progress files). Two edges sit on core side by side and
-never import each other: widgets (the notebook views) and hardware (the uArm). apps (the pages
-and kiosks) is the top: it may use every layer, and no layer imports it; cli (the command) sits beside
-it and reads study and class folders. No import cycle,
-between modules or between subpackages; no import of a package module inside a function (the
+core (the science) imports nothing of the package and reads no file. robot_models (robot
+descriptions read from their URDF files) is the data layer: it imports nothing of the package
+either. arms sits on both: it reads the shipped arms' URDFs, builds their plants and skills on
+core's engine and promises them to core's SKILLS (the package root imports it, so every SKILLS a
+program reaches holds them); every layer above core may use it. core <- study (the runner) <-
+in_silico (simulated teachers) <- analysis, and core <- study <- classroom (a class's progress
+files). Two edges sit on core side by side and never import each other: widgets (the notebook
+views) and hardware (the uArm). apps (the pages and kiosks) is the top: it may use every layer,
+and no layer imports it; cli (the command) sits beside it and reads study and class folders. No
+import cycle, between modules or between subpackages; no import of a package module inside a function (the
 way cycles get hidden); nothing below the widgets imports a widget library.
 """
 
@@ -188,29 +189,40 @@ def test_no_package_module_is_imported_inside_a_function():
     assert hidden == []
 
 
-def test_the_package_root_imports_only_core():
-    assert {layer(t) for t in EDGES[PACKAGE]} <= {"core"}
+def test_the_package_root_imports_only_core_and_the_arms():
+    # The arms, so that the shipped arms' skills are in SKILLS whatever a program imports first.
+    assert {layer(t) for t in EDGES[PACKAGE]} <= {"core", "arms"}
 
 
 def test_core_imports_nothing_above_it_and_no_widget_serial_or_plotting_library():
+    # Not even the robot models: reading a URDF is I/O, done above core (mt_widgets.arms).
     above = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of("mt_widgets.core")
-             if t.startswith(PACKAGE) and layer(t) not in ("core", "robot_models")]
+             if t.startswith(PACKAGE) and layer(t) != "core"]
     libraries = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of("mt_widgets.core")
                  if t.split(".")[0] in CORE_FORBIDDEN]
     assert above == [] and libraries == []
 
 
 def test_the_robot_models_import_nothing_of_the_package():
-    # The URDF reader is beneath core: it hands core plain data and knows nothing of plants or skills.
+    # The URDF reader hands plain data up and knows nothing of plants or skills.
     found = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of("mt_widgets.robot_models")
              if t.startswith(PACKAGE + ".") and layer(t) != "robot_models"]
     assert found == []
 
 
-def test_the_study_runner_imports_only_core():
-    # The package root counts as core: it imports nothing else (test above).
+def test_the_arms_import_only_core_and_the_robot_models():
+    found = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of("mt_widgets.arms")
+             if t.startswith(PACKAGE) and layer(t) not in ("core", "robot_models", "arms")]
+    libraries = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of("mt_widgets.arms")
+                 if t.split(".")[0] in CORE_FORBIDDEN]
+    assert found == [] and libraries == []
+
+
+def test_the_study_runner_imports_only_core_and_the_arms():
+    # The package root counts as core and the arms: it imports nothing else (test above). A
+    # protocol may name an arm (mt_widgets/study/protocol_arm.py), which the arms layer builds.
     wrong = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of("mt_widgets.study")
-             if t.startswith(PACKAGE) and layer(t) not in ("core", "", "study")]
+             if t.startswith(PACKAGE) and layer(t) not in ("core", "", "study", "arms", "robot_models")]
     libraries = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of("mt_widgets.study")
                  if t.split(".")[0] in CORE_FORBIDDEN]
     assert wrong == [] and libraries == []
@@ -244,10 +256,11 @@ def test_the_widgets_and_the_hardware_never_import_each_other(package, other):
     assert wrong == []
 
 
-def test_the_widgets_and_the_hardware_import_only_core():
+def test_the_widgets_and_the_hardware_import_only_core_and_the_arms():
+    # The arms: the demo's arm chooser, the SO-101 connector's kinematics.
     for package in ("widgets", "hardware"):
         wrong = [f"{m}:{line} imports {t}" for m, t, line, _ in _imports_of(f"{PACKAGE}.{package}")
-                 if t.startswith(PACKAGE) and layer(t) not in ("core", "", package)]
+                 if t.startswith(PACKAGE) and layer(t) not in ("core", "", "arms", package)]
         assert wrong == []
 
 

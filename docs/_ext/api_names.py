@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 #: The packages in the order their names are claimed: the science first, the top-level package,
 #: which re-exports the science's most used names, last.
-ORDER = ("core", "study", "in_silico", "analysis", "widgets", "hardware", "classroom", "apps")
+ORDER = ("core", "arms", "study", "in_silico", "analysis", "widgets", "hardware", "classroom", "apps")
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,9 @@
 """The science of mt-widgets, with numpy and numba only (no Jupyter, no widgets, no serial).
 
 Arm dynamics, plants, feature maps, skills, the ridge learner, exact machine teaching,
-query-state selection, rollouts, and the teaching episode that ties them together.
+query-state selection, rollouts, and the teaching episode that ties them together. It reads no
+file and imports nothing else of the package: a robot's URDF reaches it as data, read and built
+into the shipped arms by ``mt_widgets.arms`` (which promises their skills to ``SKILLS``).
 """
 
 from .arm import ArmParameters, TwoLinkArm
@@ -36,11 +38,10 @@ from .plants import ContinuousPlant, KinematicPlant, Plant
 from .query_states import SeedSchedule, condition_number, sample_query_states
 from .reward_learner import RewardLearner
 from .serial_chain import SerialChain
-from .skills import CHAIN_ARMS, SKILLS, Skill, SkillRegistry
+from .skills import SKILLS, Skill, SkillRegistry
 from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
 from .trajectory import Trajectory, TrajectoryBatch
 from .uarm_plant import UARM_WORKSPACE_CM, UArmPlant
-from .ur5_plant import UR5Plant
 from .workspace import AnnulusSector, Box, Cuboid
 
 __all__ = [
@@ -53,8 +54,8 @@ __all__ = [
     "Trajectory", "TrajectoryBatch", "TwoLinkArm", "UARM_WORKSPACE_CM", "UArmPlant",
     "UnderdeterminedTeachingWarning", "action_difference", "analyse_demonstrations", "condition_number",
     "optimal_actions", "ridge_operator", "sample_query_states", "teaching_risk",
-    "CHAIN_ARMS", "ChainPlant", "Conveyor", "ConveyorFeatures", "ConveyorTarget", "Cuboid", "SerialChain",
-    "SpaceDrawing", "SpacePointTarget", "ToolFeatures", "UR5Plant", "ViewProjection",
+    "ChainPlant", "Conveyor", "ConveyorFeatures", "ConveyorTarget", "Cuboid", "SerialChain",
+    "SpaceDrawing", "SpacePointTarget", "ToolFeatures", "ViewProjection",
 ]
 __all__ += ["GaussianProcessLearner", "KernelRidgeLearner", "LEARNERS", "Learner", "LearnerTeaching",
             "NeuralNetworkLearner", "SingularFitError", "make_learner", "policy_risk", "teach"]

@@ -1,7 +1,9 @@
 """Skills: what a teacher teaches. A skill is a target policy Theta on a plant's features.
 
-``SKILLS`` holds the paper's four, the UR5's three (``ur5-`` keys), the Panda's three
-(``panda-``) and the SO-101's two (``so101-``), read-only. A user
+``SKILLS`` holds the paper's four, read-only; the shipped arms' skills (the UR5's three, ``ur5-``
+keys, the Panda's three, ``panda-``, the SO-101's two, ``so101-``) are promised to it by
+``mt_widgets.arms``, which reads their URDFs (core reads no file), and each arm is built when one
+of its skills is first asked for. A user
 defines their own with ``Skill(...)``: a plant, a feature map, Theta (R x S), and the start state
 its reproduction runs from; then passes it to a widget or a session directly, or adds it to a
 ``SkillRegistry`` they own.
@@ -9,13 +11,14 @@ its reproduction runs from; then passes it to a widget or a session directly, or
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .arm_plant import ArmPlant
-from .chain_plant import ChainPlant, Conveyor
+from .chain_plant import ChainPlant
 from .drawing import PlantDrawing, PoseSketch, TargetShape
 from .features import (
     ConveyorFeatures,
@@ -26,10 +29,8 @@ from .features import (
     ToolFeatures,
 )
 from .query_states import sample_query_states
-from .shipped_arms import panda_plant, so101_plant
 from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
 from .uarm_plant import UArmPlant
-from .ur5_plant import UR5Plant
 from .validation import UnknownKeyError, as_bool, as_count, as_float_array, as_positive
 
 
@@ -244,54 +245,6 @@ def _paper_skills() -> dict[str, Skill]:
     return {skill.key: skill for skill in skills}
 
 
-#: The UR5's production line (m, base frame; the base stands on the table top, z = 0): a part
-#: waiting on the table, the fixture it goes to, and a conveyor running across in front of the arm.
-UR5_PART = (0.55, -0.10, 0.10)
-UR5_FIXTURE = (0.40, 0.35, 0.12)
-UR5_CONVEYOR = Conveyor(origin=(0.45, -0.25, 0.10), direction=(0.0, 1.0, 0.0), speed=0.05, phase_range=(0.0, 0.6))
-
-
-def _ur5_skills() -> dict[str, Skill]:
-    """The UR5's three production-line skills: the taught action is the tool's velocity (m/s)."""
-    table = UR5Plant()
-    line = UR5Plant(conveyor=UR5_CONVEYOR)
-    home = np.concatenate([table.home, np.zeros(table.n_joints)])
-    part, fixture = np.array(UR5_PART), np.array(UR5_FIXTURE)
-    # reach: v = 0.8 (part - r), the tool closes 55% of the gap each second, from the home pose.
-    # (+ 0.0 turns the -0.0 entries of -k I into 0.0, so Theta prints as it reads.)
-    reach = np.hstack([-0.8 * np.eye(3), 0.8 * part[:, None]]) + 0.0
-    # place: from above the part (as if just picked), across to the fixture and down onto it;
-    # the vertical gain is half the horizontal one, so the tool crosses high and settles last.
-    gains = np.diag([1.0, 1.0, 0.5])
-    place = np.hstack([-gains, (gains @ fixture)[:, None]]) + 0.0
-    # The pose the inverse kinematics (UR5Plant.state_at) gives for the tool 15 cm above the part,
-    # rounded to 1e-4 rad (the tool within 0.1 mm of it; tests/core/test_ur5_skills.py checks).
-    # Written out rather than solved here: solving would compile numba kernels on import.
-    above_part = np.concatenate([[-0.3682, -1.2845, 1.6437, -1.5907, -1.6253, 0.0], np.zeros(6)])
-    # conveyor: v = 1.5 (o + s d - r) + speed d: pulled onto the moving part, plus the belt's own
-    # velocity as feed-forward, so the tool rides with the part without lagging behind it.
-    direction, origin, speed = np.array(UR5_CONVEYOR.direction), np.array(UR5_CONVEYOR.origin), UR5_CONVEYOR.speed
-    follow = np.hstack([-1.5 * np.eye(3), 1.5 * direction[:, None], (1.5 * origin + speed * direction)[:, None]]) + 0.0
-    # Thresholds: about the median condition number of S random query-state candidates
-    # (tests/core/test_ur5_skills.py measures them), as for the paper's skills.
-    skills = [
-        Skill("ur5-reach", "Reach the part on the table", table, ToolFeatures(table), reach, home,
-              SpacePointTarget(UR5_PART),
-              description="Move the tool to the part waiting on the table at (0.55, -0.10, 0.10) m: "
-                          "velocity = 0.8 (part - tool).", max_condition=50.0),
-        Skill("ur5-place", "Place the part at the fixture", table, ToolFeatures(table), place, above_part,
-              SpacePointTarget(UR5_FIXTURE),
-              description="Carry the part across to the fixture at (0.40, 0.35, 0.12) m, lowering it more slowly "
-                          "than it moves across.", max_condition=50.0),
-        Skill("ur5-conveyor", "Follow the part on the conveyor", line, ConveyorFeatures(line), follow,
-              np.concatenate([home, [0.0]]),
-              ConveyorTarget(UR5_CONVEYOR.origin, UR5_CONVEYOR.direction, UR5_CONVEYOR.phase_range),
-              description="Catch up with the part riding the conveyor (5 cm/s along y) and move with it.",
-              max_condition=70.0),
-    ]
-    return {skill.key: skill for skill in skills}
-
-
 def production_line_skills(prefix: str, arm: str, table: ChainPlant, part, fixture, above_part, max_condition: float,
                             line: ChainPlant | None = None,
                             conveyor_condition: float | None = None) -> dict[str, Skill]:
@@ -309,6 +262,7 @@ def production_line_skills(prefix: str, arm: str, table: ChainPlant, part, fixtu
         max_condition, conveyor_condition: the query-state thresholds (about the median condition
             number of S random candidates, as for the paper's skills).
     """
+    titles = dict((key, title) for title, key in production_line_titles(prefix, arm, line is not None))
     home = np.concatenate([table.home] + ([] if table.kinematic else [np.zeros(table.n_joints)]))
     part, fixture = np.asarray(part, dtype=float), np.asarray(fixture, dtype=float)
     reach = np.hstack([-0.8 * np.eye(3), 0.8 * part[:, None]]) + 0.0
@@ -317,11 +271,11 @@ def production_line_skills(prefix: str, arm: str, table: ChainPlant, part, fixtu
     at = ", ".join(f"{v:.2f}" for v in part)
     to = ", ".join(f"{v:.2f}" for v in fixture)
     skills = [
-        Skill(f"{prefix}-reach", f"{arm}: reach the part on the table", table, ToolFeatures(table), reach, home,
+        Skill(f"{prefix}-reach", titles[f"{prefix}-reach"], table, ToolFeatures(table), reach, home,
               SpacePointTarget(tuple(part)),
               description=f"Move the {arm}'s tool to the part waiting on the table at ({at}) m: "
                           "velocity = 0.8 (part - tool).", max_condition=max_condition),
-        Skill(f"{prefix}-place", f"{arm}: place the part at the fixture", table, ToolFeatures(table), place,
+        Skill(f"{prefix}-place", titles[f"{prefix}-place"], table, ToolFeatures(table), place,
               np.asarray(above_part, dtype=float), SpacePointTarget(tuple(fixture)),
               description=f"Carry the part across to the fixture at ({to}) m, lowering it more slowly than it moves "
                           "across.", max_condition=max_condition),
@@ -331,7 +285,7 @@ def production_line_skills(prefix: str, arm: str, table: ChainPlant, part, fixtu
         direction, origin = np.array(belt.direction), np.array(belt.origin)
         follow = np.hstack([-1.5 * np.eye(3), 1.5 * direction[:, None],
                             (1.5 * origin + belt.speed * direction)[:, None]]) + 0.0
-        skills.append(Skill(f"{prefix}-conveyor", f"{arm}: follow the part on the conveyor", line,
+        skills.append(Skill(f"{prefix}-conveyor", titles[f"{prefix}-conveyor"], line,
                             ConveyorFeatures(line), follow, np.concatenate([home, [belt.phase_range[0]]]),
                             ConveyorTarget(belt.origin, belt.direction, belt.phase_range),
                             description=f"Catch up with the part riding the conveyor ({100 * belt.speed:.0f} cm/s) "
@@ -339,40 +293,33 @@ def production_line_skills(prefix: str, arm: str, table: ChainPlant, part, fixtu
     return {skill.key: skill for skill in skills}
 
 
-#: The Panda's production line (m, base frame; the base on the table top, z = 0).
-PANDA_PART = (0.50, -0.15, 0.12)
-PANDA_FIXTURE = (0.40, 0.22, 0.15)
-PANDA_CONVEYOR = Conveyor(origin=(0.45, -0.25, 0.12), direction=(0.0, 1.0, 0.0), speed=0.05, phase_range=(0.0, 0.5))
+def production_line_titles(prefix: str, arm: str, conveyor: bool) -> tuple[tuple[str, str], ...]:
+    """(title, key) of each skill ``production_line_skills(prefix, arm, ...)`` defines, without building one.
 
-#: The SO-101's table top (m, base frame): a part in front of it to the right, a fixture to the left.
-SO101_PART = (0.22, -0.08, 0.04)
-SO101_FIXTURE = (0.18, 0.09, 0.06)
-
-
-def _panda_skills() -> dict[str, Skill]:
-    """The Panda's three production-line skills (``production_line_skills``)."""
-    # The pose the inverse kinematics (ChainPlant.state_at) gives for the tool 15 cm above the part,
-    # rounded to 1e-4 rad (within 0.1 mm of it; tests/core/test_arm_skills.py checks), written out
-    # so that importing compiles no kernel.
-    above_part = np.concatenate([[-0.1257, -0.0099, -0.1412, -2.2396, -0.1149, 2.2294, 0.7854], np.zeros(7)])
-    return production_line_skills("panda", "Panda", panda_plant(), PANDA_PART, PANDA_FIXTURE, above_part, 65.0,
-                                  line=panda_plant(PANDA_CONVEYOR), conveyor_condition=72.0)
+    ``conveyor``: whether the arm has a conveyor line (then ``<prefix>-conveyor`` too).
+    """
+    titles = ((f"{arm}: reach the part on the table", f"{prefix}-reach"),
+              (f"{arm}: place the part at the fixture", f"{prefix}-place"))
+    return titles + (((f"{arm}: follow the part on the conveyor", f"{prefix}-conveyor"),) if conveyor else ())
 
 
-def _so101_skills() -> dict[str, Skill]:
-    """The SO-101's table-top skills: reach and place (``production_line_skills``, no conveyor)."""
-    # The inverse kinematics' pose for the jaws 8 cm above the part, rounded to 1e-4 rad (as the Panda's).
-    above_part = np.array([0.4148, -0.894, 0.7088, 0.9771, 0.0237])
-    return production_line_skills("so101", "SO-101", so101_plant(), SO101_PART, SO101_FIXTURE, above_part, 128.0)
+class _Promise:
+    """Skills under known keys, built by ``build()`` the first time one of them is asked for."""
+
+    def __init__(self, keys: tuple[str, ...], build: Callable[[], Iterable[Skill]]):
+        self.keys, self.build = keys, build
 
 
 class SkillRegistry(Mapping):
     """Skills by key, owned by whoever needs them: a course, a lab's study, a notebook.
 
     ``registry[key]`` gives a skill; a missing key raises a ``KeyError`` that names the known
-    ones. ``add`` puts a skill in (a key is taken once unless ``replace=True``). A registry made
-    with ``read_only=True`` (``SKILLS``) refuses changes: make your own, e.g.
-    ``SkillRegistry(SKILLS.values())``, and add to that.
+    ones. ``add`` puts a skill in (a key is taken once unless ``replace=True``); ``defer`` promises
+    skills under new keys, built when one of them is first asked for (listing the keys or asking
+    ``key in registry`` builds nothing). A registry made with ``read_only=True`` (``SKILLS``) refuses
+    changes: make your own, e.g. ``SkillRegistry(SKILLS.values())``, and add to that. It still takes
+    promises of new keys, which never replace or remove a skill: that is how ``mt_widgets.arms``
+    gives ``SKILLS`` the shipped arms' skills without core reading their URDFs.
 
     Args:
         skills: ``Skill`` objects to start with.
@@ -381,7 +328,9 @@ class SkillRegistry(Mapping):
 
     def __init__(self, skills: Iterable[Skill] = (), *, read_only: bool = False):
         read_only = as_bool("read_only", read_only)
-        self._skills: dict[str, Skill] = {}
+        self._skills: dict[str, Skill | _Promise] = {}
+        # Two threads asking for a promised skill at once (a study server's pages) get one build.
+        self._building = threading.Lock()
         for skill in skills:
             self._put(skill, replace=False)
         self.read_only = read_only
@@ -418,12 +367,57 @@ class SkillRegistry(Mapping):
         self[key]  # the KeyError naming the known skills
         del self._skills[key]
 
+    def defer(self, keys, build: Callable[[], Iterable[Skill]]) -> None:
+        """Promise skills under ``keys`` (new ones), built by ``build()`` when one of them is first asked for.
+
+        ``build`` returns the skills, exactly one under each promised key (checked when it runs).
+        """
+        if isinstance(keys, str) or not isinstance(keys, Iterable):
+            raise TypeError(f"keys: expected skill keys (str), got {keys!r}")
+        keys = tuple(keys)
+        if not keys or not all(isinstance(key, str) and key for key in keys) or len(set(keys)) != len(keys):
+            raise ValueError(f"keys: expected distinct non-empty skill keys, got {keys!r}")
+        if not callable(build):
+            raise TypeError(f"build: expected a function returning the skills, got {type(build).__name__}")
+        taken = [key for key in keys if key in self._skills]
+        if taken:
+            raise ValueError(f"keys: expected keys not yet taken, got {taken} (already {self._skills[taken[0]]!r})")
+        promise = _Promise(keys, build)
+        for key in keys:
+            self._skills[key] = promise
+
+    def _keep(self, promise: _Promise) -> None:
+        with self._building:
+            waiting = [key for key in promise.keys if self._skills.get(key) is promise]
+            if not waiting:
+                return  # built meanwhile by another thread
+            built = {}
+            for skill in promise.build():
+                if not isinstance(skill, Skill):
+                    raise TypeError(f"build: expected Skills, got {type(skill).__name__}")
+                built[skill.key] = skill
+            if sorted(built) != sorted(promise.keys):
+                raise ValueError(f"build: expected skills under the promised keys {list(promise.keys)}, "
+                                 f"got {list(built)}")
+            for key in waiting:  # a key replaced since (``add(..., replace=True)``) keeps its replacement
+                self._skills[key] = built[key]
+
     def __getitem__(self, key) -> Skill:
         try:
-            return self._skills[key]
+            found = self._skills[key]
         except (KeyError, TypeError):
             raise UnknownKeyError(f"skill: expected one of the known skills ({', '.join(sorted(self._skills))}), "
                                   f"got {key!r}") from None
+        if isinstance(found, _Promise):
+            self._keep(found)
+            found = self._skills[key]
+        return found
+
+    def __contains__(self, key) -> bool:
+        try:
+            return key in self._skills  # a promised key counts, unbuilt
+        except TypeError:
+            return False
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._skills)
@@ -436,18 +430,13 @@ class SkillRegistry(Mapping):
         return f"<{kind}SkillRegistry: {', '.join(self._skills)}>"
 
 
-#: The paper's four skills, by key: "sim-point", "sim-line", "uarm-point", "uarm-line", then the
-#: UR5's production line (issue 31): "ur5-reach", "ur5-place", "ur5-conveyor"; the Panda's "panda-reach",
-#: "panda-place", "panda-conveyor"; the SO-101's "so101-reach", "so101-place" (read-only).
-SKILLS: SkillRegistry = SkillRegistry([*_paper_skills().values(), *_ur5_skills().values(), *_panda_skills().values(),
-                                       *_so101_skills().values()], read_only=True)
+#: The paper's four skills, by key: "sim-point", "sim-line", "uarm-point", "uarm-line" (read-only). Once
+#: ``mt_widgets`` is imported (any ``from mt_widgets.core import SKILLS`` imports it first), also the
+#: shipped arms' ``mt_widgets.arms`` promises: the UR5's production line (issue 31): "ur5-reach",
+#: "ur5-place", "ur5-conveyor"; the Panda's "panda-reach", "panda-place", "panda-conveyor"; the
+#: SO-101's "so101-reach", "so101-place".
+SKILLS: SkillRegistry = SkillRegistry(_paper_skills().values(), read_only=True)
 
 #: The paper's own four keys, in the paper's order (the protocols, the demo and the planar views use these).
 PAPER_SKILL_KEYS = ("sim-point", "sim-line", "uarm-point", "uarm-line")
 
-#: The shipped arms beyond the paper's and the UR5, for an arm chooser (the demo's): (label,
-#: ((title, key), ...)) each, the skills taken from ``SKILLS`` by the plant's robot name.
-CHAIN_ARMS = tuple(
-    (label, tuple((skill.title, key) for key, skill in SKILLS.items() if skill.robot == robot))
-    for label, robot in (("Franka Panda (3-D)", "panda"), ("SO-101 (3-D)", "so101"))
-)

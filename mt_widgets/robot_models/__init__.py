@@ -2,7 +2,7 @@
 
 ``urdf`` reads a URDF (a shipped arm's, in ``urdf_files/``, or a user's file) into the
 description ``mt_widgets.core.serial_chain.SerialChain`` builds its chain from. This subpackage
-imports nothing of the package: it is the data layer beneath ``core``.
+imports nothing of the package, and core imports nothing of it: ``mt_widgets.arms`` joins the two.
 """
 
 from .urdf import (

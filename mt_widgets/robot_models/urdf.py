@@ -3,7 +3,8 @@
 ``core`` does no file I/O, so a robot model reaches it as data: this module reads a URDF (the
 source of truth: kinematics, inertias, limits) with the standard library's XML parser and keeps
 what a serial chain from the root link to one tool frame needs. It imports nothing of the
-package: it is the data layer beneath ``core`` (tests/test_architecture.py).
+package and core imports nothing of it: ``mt_widgets.arms`` hands what it reads to core
+(tests/test_architecture.py).
 
 Understood joints: revolute, continuous (a revolute joint without a range), prismatic and fixed.
 A joint that moves but is not on the path root -> tool (a gripper's finger) is refused unless it

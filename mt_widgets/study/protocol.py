@@ -40,6 +40,11 @@ File format (TOML, or the same structure in JSON; ``format = 1``)::
     [skills]                            # optional: a user's own skills
     module = "my_skills.py"             # a Python file (relative to this file); its Skills by key
 
+    [arm]                               # optional: the arm taught, a shipped one (robot = "panda")
+    urdf = "my_arm.urdf"                # or a URDF beside this file, with tool, name, home,
+    tool = "flange"                     # teaching_box, part, fixture: its skills "<name>-reach",
+    ...                                 # "<name>-place" (mt_widgets/study/protocol_arm.py)
+
     [[phases]]                          # in order; one table per phase
     id = "P1"
     skill = "sim-point"                 # a key of mt_widgets.SKILLS, of [skills], or "module:name"
@@ -76,7 +81,8 @@ shipped TOML protocols load on every Python the package claims. JSON works every
 
 The module tree of a protocol: ``protocol_model`` (the frozen model), ``protocol_schema``
 (validation), ``protocol_source`` (line numbers in the source), ``skill_modules`` (a user's
-skills), ``session_plan`` (sessions and windows), ``online``, ``steps``, ``analysis_plan``.
+skills), ``protocol_arm`` (the ``[arm]`` table), ``session_plan`` (sessions and windows),
+``online``, ``steps``, ``analysis_plan``.
 """
 
 

@@ -32,7 +32,8 @@ from mt_widgets.core.validation import as_bool
 
 from .analysis_plan import ALTERNATIVES, PAPER_CHANGES, TESTS, AnalysisPlan, Change, changes_that_fit
 from .online import parse_online
-from .protocol_model import OPTIONAL_TEXTS, Phase, Practice, Protocol, ProtocolError
+from .protocol_arm import check_arm_skills, resolve_protocol_arm
+from .protocol_model import OPTIONAL_TEXTS, Phase, Practice, Protocol, ProtocolError, ProtocolSkills
 from .protocol_source import SourceLocator, path_name
 from .session_plan import ProtocolSession, bids_label, parse_window
 from .skill_modules import resolve_protocol_skills
@@ -139,11 +140,15 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
             raise ProtocolError(f"expected a JSON object at the top, got {type(raw).__name__}", source, 1)
     check = Checker(SourceLocator(text, kind), source)
     skills, skills_table = resolve_protocol_skills(raw, check, source)
+    with_arm = dict(skills)
+    arm, arm_table = resolve_protocol_arm(raw, check, source, with_arm)
+    if arm_table is not None:
+        skills = ProtocolSkills(with_arm)
 
     top_keys = ("format", "name", "title", "groups", "lambda", "seed", "query_states", "reproduction_duration_s",
                 "assignment", "texts", "practice", "phases", "skills", "guidance_modality", "withdrawal", "before",
                 "after", "analysis", "session", "sessions", "online", "reproduce_after",
-                "matched_difficulty", "demonstration_modality", "learner")
+                "matched_difficulty", "demonstration_modality", "learner", "arm")
     check.unknown(raw, (), top_keys)
     version = check.get(raw, ("format",), "integer")
     if version != FORMAT_VERSION:
@@ -211,6 +216,9 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
     main = ProtocolSession(first_id, 0, phases, before, after, texts, None, practice=True, default_consent=True)
     sessions = [main] + _parse_sessions(check, raw, groups, skills, phase_ids, step_ids, folder, check_files,
                                         texts, first_id)
+    if arm is not None:
+        check_arm_skills(check, arm, skills, practice, [(("phases", i, "skill"), p) for i, p in enumerate(phases)]
+                         + [(("sessions",), p) for session in sessions[1:] for p in session.phases])
     online = parse_online(check, raw)
     reproduce_after = check.get(raw, ("reproduce_after",), "text", default="episode", choices=REPRODUCTION_TIMINGS)
     matched = _parse_matched_difficulty(check, raw)
@@ -220,6 +228,8 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
     data = copy.deepcopy(raw)
     if skills_table is not None:
         data["skills"] = skills_table
+    if arm_table is not None:
+        data["arm"] = arm_table
     for position, steps in (("before", before), ("after", after)):
         # A video's content is part of the protocol (and so of its hash); its file name stays as
         # written, so the hash does not depend on where the study runs.

@@ -15,7 +15,8 @@ from __future__ import annotations
 
 from ipywidgets import HTML, Box, Button, Checkbox, HBox, ToggleButtons, ToggleButtonsStyle, VBox
 
-from mt_widgets.core import CHAIN_ARMS, SKILLS, Skill
+from mt_widgets.arms import CHAIN_ARMS
+from mt_widgets.core import SKILLS, Skill
 from mt_widgets.core.validation import as_bool
 
 from .animation import retire

@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 
 from mt_widgets import SKILLS, RidgeLearner, TeachingEpisode, optimal_actions, teaching_risk
+from mt_widgets.arms import SO101_JOINT_SPEED, panda_plant, so101_plant
 from mt_widgets.core.chain_plant import ChainPlant
 from mt_widgets.core.features import ToolFeatures
 from mt_widgets.core.query_states import condition_number, sample_query_states
 from mt_widgets.core.serial_chain import SerialChain
-from mt_widgets.core.shipped_arms import SO101_JOINT_SPEED, panda_plant, so101_plant
 from mt_widgets.core.workspace import Cuboid
 from mt_widgets.robot_models.urdf import load_shipped
 

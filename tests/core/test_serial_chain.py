@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from mt_widgets import SKILLS
+from mt_widgets.arms import ur5_chain
 from mt_widgets.core import chain_dynamics as dyn
 from mt_widgets.core.serial_chain import SerialChain
-from mt_widgets.core.ur5_plant import ur5_chain
 from mt_widgets.robot_models.urdf import SHIPPED, URDFError, load_shipped, parse_urdf, read_urdf
 
 pin = pytest.importorskip("pinocchio")

@@ -70,7 +70,7 @@ def test_space_targets_and_drawings_refuse_bad_input_by_name():
     with pytest.raises(ValueError, match=r"zlim: expected \(low, high\) with low < high"):
         Cuboid((0, 1), (0, 1), (1, 0))
     # The belt's line is checked in one place for the plant's conveyor and for the target riding it.
-    from mt_widgets.core.ur5_plant import Conveyor
+    from mt_widgets.core.chain_plant import Conveyor
     for line in (lambda **k: ConveyorTarget(**k), lambda **k: Conveyor(speed=0.1, **k)):
         with pytest.raises(ValueError, match=r"phase_range: expected \(low, high\) with low < high"):
             line(origin=(0.5, 0, 0.1), direction=(0, 1, 0), phase_range=(0.2, 0.1))

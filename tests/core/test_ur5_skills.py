@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 from mt_widgets import SKILLS, RidgeLearner, TeachingEpisode, optimal_actions, teaching_risk
+from mt_widgets.arms import UR5Plant
 from mt_widgets.core import FunctionFeatures
 from mt_widgets.core.features import ToolFeatures
 from mt_widgets.core.query_states import condition_number
-from mt_widgets.core.ur5_plant import UR5Plant
 
 UR5_KEYS = ["ur5-reach", "ur5-place", "ur5-conveyor"]
 

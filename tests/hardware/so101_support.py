@@ -5,7 +5,7 @@ from __future__ import annotations
 from importlib.metadata import distribution
 from pathlib import Path
 
-from mt_widgets.core.shipped_arms import so101_chain as shipped_so101_chain
+from mt_widgets.arms import so101_chain as shipped_so101_chain
 from mt_widgets.hardware.feetech import SO101_IDS, SimulatedBus
 
 #: A calibration as lerobot-calibrate writes it (the numbers of a real arm's order of magnitude).

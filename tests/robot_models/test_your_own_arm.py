@@ -15,9 +15,15 @@ def test_the_worked_example_of_a_users_own_arm_teaches_it_exactly(tmp_path, monk
     (tmp_path / "my_arm.urdf").write_text(re.search(r"```xml\n(.*?)```", text, re.S).group(1))
     monkeypatch.chdir(tmp_path)
     namespace = {}
-    exec(re.search(r"```python\n(.*?)```", text, re.S).group(1), namespace)
+    for block in re.findall(r"```python\n(.*?)```", text, re.S):
+        exec(block, namespace)
     episode = namespace["episode"]
     assert episode.error < 1e-12
     assert np.linalg.norm(episode.reproduction.final_position - (0.32, -0.08, 0.08)) < 2e-3
     assert namespace["chain"].joint_names == ("turn", "shoulder", "elbow") and namespace["plant"].robot == "my_arm"
     assert sorted(namespace["skills"]) == ["mine-place", "mine-reach"]
+    # The one call builds the same skills, checked.
+    checked, skills = namespace["checked"], namespace["skills"]
+    for key in ("mine-reach", "mine-place"):
+        np.testing.assert_array_equal(checked[key].theta, skills[key].theta)
+        np.testing.assert_allclose(checked[key].start, skills[key].start, atol=1e-12)

@@ -1,4 +1,4 @@
-"""Tutorials 06 and 08 run whether the student drew by hand first (none, some or every arrow) or not.
+"""Tutorials 06, 08 and 13 run whether the student drew by hand first (none, some or every arrow) or not.
 
 Each tutorial's code cells run in order, as Shift+Enter runs them; after the cell that shows the
 widget, a "student" confirms arrows on it as the pointer does. The cells that follow must pass
@@ -58,3 +58,22 @@ def test_tutorial_08_after_drawing_by_hand(recorder, count, monkeypatch):
     episode = namespace["episode"]
     assert len(episode.demonstrations) == count
     assert episode.phase == ("finished" if count == 5 else "teaching")
+
+
+@pytest.mark.slow   # the whole tutorial 13 (UR5 query states, reproductions, a URDF arm): about 5-10 s each
+@pytest.mark.parametrize("count", [0, 2, 4])
+def test_tutorial_13_after_drawing_a_3d_demonstration_by_hand(recorder, count, monkeypatch):
+    monkeypatch.delenv("MT_WIDGETS_CLASS_FOLDER", raising=False)
+
+    def draw(episode):
+        for _ in range(count):   # an arrow dragged in the top view, confirmed, then past machine teaching's arrow
+            episode.teaching.set_action([0.05, -0.04, -0.03], method="pointer")
+            episode.teaching.confirm()
+            episode.next()
+
+    namespace = run_drawing_by_hand("13_teaching_an_industrial_arm.ipynb", "teach_ur5", draw)
+    teach = namespace["teach_ur5"]
+    assert teach.demonstrations == [[0.05, -0.04, -0.03]] * count
+    assert teach.phase == ("finished" if count == 4 else "teaching")
+    assert (teach.result is not None) == (count == 4)
+    assert namespace["by_code"].result.error < 1e-12

@@ -21,7 +21,7 @@ import threading
 import time
 from collections.abc import Callable
 
-from mt_widgets.core.shipped_arms import so101_chain
+from mt_widgets.arms import so101_chain
 
 from ..errors import UnsafeMoveError
 from .arm import ARM_JOINTS, GRIPPER, SO101_IDS
@@ -67,7 +67,7 @@ class SO101:
             calibration LeRobot wrote into the servos.
         kinematics: the arm's serial chain (:class:`mt_widgets.core.serial_chain.SerialChain`
             of the five arm joints to ``gripper_frame_link``) or an :class:`ArmKinematics`; None:
-            the SO-101's own, from the URDF the package ships (``mt_widgets.core.shipped_arms``).
+            the SO-101's own, from the URDF the package ships (``mt_widgets.arms.shipped``).
             It is what keeps every link above the table.
         timeout: seconds a servo may take to answer (a USB adapter's latency timer is often 16 ms).
         envelope: keyword arguments of :class:`SO101Envelope` (table_height, clearance, margin,
