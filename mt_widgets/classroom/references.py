@@ -26,7 +26,7 @@ from mt_widgets.core.query_states import condition_number as _condition_number
 
 def ridge_fit(Phi, U, lam) -> np.ndarray:
     """Theta_hat (R, S) of ridge regression."""
-    return RidgeLearner(lam).fit(Phi, U)
+    return RidgeLearner(lam).fit(Phi, U).theta
 
 
 def teaching_error(theta_hat, theta) -> float:

@@ -8,13 +8,14 @@ together for power by simulation. ``run_through_sessions`` (``mt_widgets.in_sili
 drives the session engine, one demonstration at a time, to write real logs.
 
 Each episode is the batched form of a teaching episode: for one episode every participant of a
-study answers the same query states (the paper's "pre-determined" states). For the paper's ridge
-(``mt_widgets.core.episode_batch``) one SVD of Phi gives the learner's map and the optimal arrows
-for all of them, and the fit and its scores (``||Theta_hat - Theta||``) are one batched product.
-Every other learner of ``LEARNERS`` goes through ``mt_widgets.core.learner_batch``: a linear
-smoother's matrix depends on the query states only, so it batches as ridge does; a learner with a
-batched fit (the network, the reward learner) fits each set's teachers in one call. Its teaching
-error is the policy risk, as in a real study with that learner (``TeachingEpisode``).
+study answers the same query states (the paper's "pre-determined" states). Every learner of
+``LEARNERS`` goes through ``mt_widgets.core.learner_batch.episode_batch``, which batches it as it
+declares: a learner with a Theta on the features (``ParametricSmoother``, the paper's ridge) by one
+SVD of Phi per set, giving its map and the optimal arrows for all of them, the fit and its scores
+(``||Theta_hat - Theta||``) one batched product; any other linear smoother by its matrix, which
+depends on the query states only; a learner with a batched fit (the network, the reward learner)
+by fitting each set's teachers in one call. Without a Theta the teaching error is the policy
+risk, as in a real study with that learner (``TeachingEpisode``).
 
 **The synthetic teachers' assumption per learner.** The teacher model (``teachers``) was fitted to
 the paper's ridge studies: a teacher's action blends their own idea of the skill with the arrows
@@ -36,7 +37,7 @@ import numpy as np
 import pandas as pd
 
 from mt_widgets.core.episode_batch import EpisodeBatch
-from mt_widgets.core.learner_batch import LearnerEpisodeBatch
+from mt_widgets.core.learner_batch import LearnerEpisodeBatch, episode_batch
 from mt_widgets.core.learner_teaching import learnt_policy
 from mt_widgets.core.validation import as_bool, as_count
 from mt_widgets.study.participants import block_assignment
@@ -65,13 +66,9 @@ from .teachers import (
 # -- the batched engine ----------------------------------------------------------------------------
 
 def _episode_batch(protocol, skill, states):
-    """The batched episode of ``skill`` on states (K, N, state_dim) with the protocol's learner: the
-    paper's ridge (``EpisodeBatch``, with the protocol's lambda) or any other (``LearnerEpisodeBatch``,
-    the learner made as the study makes it: ``study_learner``)."""
-    learner = study_learner(protocol.learner, skill)
-    if learner is None:
-        return EpisodeBatch.of(skill, states, protocol.lam, protocol.reproduction_duration_s)
-    return LearnerEpisodeBatch.of(skill, states, learner, protocol.reproduction_duration_s)
+    """The batched episode of ``skill`` on states (K, N, state_dim) with the protocol's learner, made
+    as the study makes it (``study_learner``), batched as it declares (``learner_batch.episode_batch``)."""
+    return episode_batch(skill, states, study_learner(protocol, skill), protocol.reproduction_duration_s)
 
 
 @dataclass
@@ -227,9 +224,9 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
 
     started = time.perf_counter()
     reproductions, diverged = {}, np.zeros((n_participants, len(plan)), dtype=bool)
-    if reproduce and protocol.learner != "ridge":
-        # Another learner's policy is rolled out one participant at a time (the plant's generic
-        # integrator, as a TeachingEpisode's reproduction with that learner).
+    if reproduce and not all(isinstance(r.batch, EpisodeBatch) for r in results):
+        # A learner without a Theta: its policy is rolled out one participant at a time (the plant's
+        # generic integrator, as a TeachingEpisode's reproduction with that learner).
         for e, step in enumerate(plan):
             batch = results[e].batch
             for p in range(n_participants):
@@ -242,7 +239,7 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
         for skill_key in dict.fromkeys(step["skill"] for step in plan):
             columns = [e for e, step in enumerate(plan) if step["skill"] == skill_key]
             thetas = np.concatenate([results[e].theta_hat for e in columns])
-            # One rollout batch per skill: every episode of that skill shares the plant and start.
+            # A Theta for every episode: one rollout batch per skill (its episodes share plant and start).
             batch = results[columns[0]].batch.reproduce(thetas, record_every=record_every)
             for k, e in enumerate(columns):
                 for p in range(n_participants):

@@ -43,11 +43,12 @@ import re
 from pathlib import Path
 
 import mt_widgets
+from mt_widgets.core.learner import is_parametric_smoother
 
 from .log import read_log
 from .pseudonyms import codes_for
 from .study_folder import StudyFolder
-from .study_learners import PAPER_LEARNER, learner_parameters, study_learner
+from .study_learners import learner_parameters, study_learner
 from .tidy import excluded_participants, participant_logs
 
 BIDS_VERSION = "1.9.0"
@@ -134,7 +135,9 @@ def _beh_sidecar(protocol) -> dict:
         columns[f"action_{i + 1}"] = {"Description": f"Component {i + 1} of the demonstrated action.", "Units": action}
         columns[f"optimal_{i + 1}"] = {"Description": f"Component {i + 1} of the optimal action.", "Units": action}
     learner = {"Learner": protocol.learner}
-    if protocol.learner == PAPER_LEARNER:
+    learners = {s.key: study_learner(protocol, s) for s in sorted(skills, key=lambda s: s.key)}
+    if all(is_parametric_smoother(made) for made in learners.values()):
+        # A Theta on the features (the paper's ridge): the paper's sidecar, its lambda by name.
         learner["LearnerRidgeLambda"] = protocol.lam
     else:
         # Another learner has no Theta: the error is its policy risk, and its parameters are per
@@ -143,8 +146,7 @@ def _beh_sidecar(protocol) -> dict:
                                                     "policy: the RMS distance of its actions from the target's over "
                                                     "the skill's evaluation states (mt_widgets.core.learner_teaching; "
                                                     "n/a if the episode was not completed).", "Units": action}
-        learner["LearnerParameters"] = {s.key: learner_parameters(study_learner(protocol.learner, s))
-                                        for s in sorted(skills, key=lambda s: s.key)}
+        learner["LearnerParameters"] = {key: learner_parameters(made) for key, made in learners.items()}
     return {"TaskName": protocol.name, "TaskDescription": protocol.title,
             "Instructions": protocol.texts["instructions"].strip(), "PositionUnits": unit,
             # Which robot learner the demonstrations taught (mt_widgets.core.LEARNERS), and its parameters.

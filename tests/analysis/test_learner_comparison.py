@@ -60,7 +60,7 @@ def test_the_batched_engine_scores_every_learner_as_its_teaching_episode_does(pr
         skill = protocol.skill(demos["skill"].iloc[0])
         states = np.array([json.loads(s) for s in demos["state"]])
         actions = demos[["action_1", "action_2"]].to_numpy()
-        single = TeachingEpisode.from_actions(skill, states, actions, learner=study_learner(protocol.learner, skill))
+        single = TeachingEpisode.from_actions(skill, states, actions, learner=study_learner(protocol, skill))
         episodes = study.episodes
         row = episodes[(episodes["participant"] == participant) & (episodes["phase"] == phase)
                        & (episodes["episode"] == episode)].iloc[0]

@@ -93,7 +93,8 @@ def test_each_episode_logs_the_reward_learners_guidance_fit_and_risk(study):
             begun = started[(done["phase_index"], done["episode"])]
             skill = SKILLS[done["skill"]]
             states, actions = np.array(begun["query_states"]), np.array(done["actions"])
-            assert begun["learner"] == done["learner"] == "reward" and begun["learner_parameters"] == {"lam": 1e-3}
+            assert begun["learner"] == done["learner"] == "reward"
+            assert begun["learner_parameters"] == {"lam": 1e-3, "inputs": "state"}
             assert len(states) == 8
             # The guidance is the reward learner's machine teaching on these states.
             np.testing.assert_allclose(begun["optimal"], teach(learner, skill, states).optimal, atol=1e-9)
