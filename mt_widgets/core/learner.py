@@ -5,9 +5,10 @@ fitted policy (a ``FittedPolicy``: a small frozen object per learner family, wit
 can evaluate at any inputs X* (M, D); a linear learner's (``LinearPolicy``) holds its Theta.
 What the inputs are is the learner's ``inputs`` (a constructor argument of every learner): the
 skill's features phi(x) (the paper's ridge), the raw state, or the task space (end-effector
-position and velocity); ``learner_inputs`` in ``learner_teaching`` builds them from a skill. A *linear smoother* is a learner whose fitted policy is linear in the demonstrated
-actions, ``pi_hat(X*) = S(X*) U`` with S depending on the inputs only: for those machine teaching
-is least squares in U, exact where the target is representable (``learner_teaching``).
+position and velocity); ``learner_inputs`` in ``learner_teaching`` builds them from a skill.
+A *linear smoother* is a learner whose fitted policy is linear in the demonstrated actions,
+``pi_hat(X*) = S(X*) U`` with S depending on the inputs only: for those machine teaching is
+least squares in U, exact where the target is representable (``learner_teaching``).
 """
 
 from __future__ import annotations

@@ -140,7 +140,8 @@ def test_the_bids_sidecar_names_the_reward_learner_and_its_parameters(study):
     code = code_of(folder.folder, "P01")
     sidecar = json.loads((out / f"sub-{code}" / "beh" / f"sub-{code}_task-rewardsim_beh.json").read_text())
     assert sidecar["Learner"] == "reward" and "LearnerRidgeLambda" not in sidecar
-    assert sidecar["LearnerParameters"] == {"uarm-line": {"lam": 1e-3}, "uarm-point": {"lam": 1e-3}}
+    expected = {"lam": 1e-3, "inputs": "state"}
+    assert sidecar["LearnerParameters"] == {"uarm-line": expected, "uarm-point": expected}
     assert "policy risk" in sidecar["teaching_error"]["Description"]
 
 
