@@ -552,8 +552,18 @@ class EpisodeResult:
         """The teaching error E = ||vec(theta_hat) - vec(theta)||."""
         return self.episode.error
 
-    #: The study log's name for ``error``.
+    #: The name ``error`` had in the study log before theta_error and policy_risk had their own.
     teaching_error = error
+
+    @property
+    def theta_error(self) -> float | None:
+        """||Theta_hat - Theta|| where the learner has a Theta, else None (the episode's)."""
+        return self.episode.theta_error
+
+    @property
+    def policy_risk(self) -> float:
+        """The learnt policy's risk (the episode's), for every learner."""
+        return self.episode.policy_risk
 
     @property
     def rho1(self) -> float:

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .learner import Learner, RidgeLearner, is_parametric_smoother
+from .learner_teaching import evaluation_states
 from .skills import Skill
 from .validation import as_float_array, as_positive
 
@@ -37,7 +38,9 @@ class BatchOutcome:
 
     Attributes:
         theta_hat: (B, R, S) the learnt parameters.
-        error: (B,) the teaching error ||Theta_hat - Theta||_F.
+        theta_error: (B,) the teaching error ||Theta_hat - Theta||_F.
+        policy_risk: (B,) the learnt policies' risk over the skill's evaluation states
+            (``learner_teaching``), as ``TeachingEpisode.policy_risk``.
         rho1: (B,) ||A||_2 of each teacher's query states.
         rho2: (B,) ||U - U_bar||_F of each teacher's demonstrations.
         bound: (B,) rho1 * rho2 plus the norm of the part no demonstration removes (0 when
@@ -45,7 +48,8 @@ class BatchOutcome:
     """
 
     theta_hat: np.ndarray
-    error: np.ndarray
+    theta_error: np.ndarray
+    policy_risk: np.ndarray
     rho1: np.ndarray
     rho2: np.ndarray
     bound: np.ndarray
@@ -96,6 +100,8 @@ class EpisodeBatch(QuerySetBatch):
         rho1: (K,) ||A||_2 of each set.
         rank: (K,) the rank of each Phi.
         residual_norm: (K,) ||(A U_bar)^T - Theta||, 0 where exact teaching is possible.
+        evaluation_features: (M, S) the features of the skill's evaluation states (the policy risk's).
+        evaluation_targets: (M, R) the target's actions there.
     """
 
     skill: Skill
@@ -108,6 +114,8 @@ class EpisodeBatch(QuerySetBatch):
     rho1: np.ndarray
     rank: np.ndarray
     residual_norm: np.ndarray
+    evaluation_features: np.ndarray
+    evaluation_targets: np.ndarray
 
     @classmethod
     def of(cls, skill: Skill, query_states, learner: Learner | None = None,
@@ -128,7 +136,9 @@ class EpisodeBatch(QuerySetBatch):
         theta = np.asarray(skill.theta, dtype=float)
         A, optimal, rho1, rank = learner.batched_operators(Phi, theta.T)
         residual_norm = np.linalg.norm((A @ optimal - theta.T).reshape(len(A), -1), axis=1)
-        return cls(skill, states, learner, duration, Phi, A, optimal, rho1, rank, residual_norm)
+        evaluation = evaluation_states(skill)
+        return cls(skill, states, learner, duration, Phi, A, optimal, rho1, rank, residual_norm,
+                   skill.features(evaluation), skill.target_actions(evaluation))
 
     @property
     def lam(self) -> float:
@@ -157,9 +167,11 @@ class EpisodeBatch(QuerySetBatch):
         theta_hat = np.swapaxes(np.einsum("bsn,bnr->bsr", self.learner_map[which], actions), 1, 2)
         theta = np.asarray(self.skill.theta, dtype=float)
         error = np.linalg.norm((theta_hat - theta).reshape(len(actions), -1), axis=1)
+        learnt = np.einsum("ms,brs->bmr", self.evaluation_features, theta_hat)
+        risk = np.sqrt(np.mean(np.sum((learnt - self.evaluation_targets) ** 2, axis=2), axis=1))
         rho2 = np.linalg.norm((actions - self.optimal_actions[which]).reshape(len(actions), -1), axis=1)
         rho1 = self.rho1[which]
-        return BatchOutcome(theta_hat, error, rho1, rho2, rho1 * rho2 + self.residual_norm[which])
+        return BatchOutcome(theta_hat, error, risk, rho1, rho2, rho1 * rho2 + self.residual_norm[which])
 
     def reproduce(self, theta_hats, record_every: int | None = None):
         """Rolls out learnt skills (B, R, S) from the skill's start over ``duration`` seconds, as one

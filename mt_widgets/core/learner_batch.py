@@ -37,14 +37,16 @@ class LearnerBatchOutcome:
     """What B completed episodes taught, one row per teacher (``BatchOutcome``'s names).
 
     Attributes:
-        theta_hat: None (a learner other than ridge has no Theta).
-        error: (B,) the policy risk of what each teacher taught.
+        theta_hat: None (a learner without a Theta on the features has none).
+        theta_error: None, likewise.
+        policy_risk: (B,) the policy risk of what each teacher taught.
         rho1: (B,) the learnt policy's sensitivity to the actions at each teacher's query states.
         rho2: (B,) ||U - U_opt||_F of each teacher's demonstrations.
     """
 
     theta_hat: None
-    error: np.ndarray
+    theta_error: None
+    policy_risk: np.ndarray
     rho1: np.ndarray
     rho2: np.ndarray
 
@@ -122,7 +124,7 @@ class LearnerEpisodeBatch(QuerySetBatch):
         learnt = self.learnt_on_evaluation(actions, which)
         error = np.sqrt(np.mean(np.sum((learnt - self.evaluation_targets) ** 2, axis=2), axis=1))
         rho2 = np.linalg.norm((actions - self.optimal_actions[which]).reshape(len(actions), -1), axis=1)
-        return LearnerBatchOutcome(None, error, self.rho1[which], rho2)
+        return LearnerBatchOutcome(None, None, error, self.rho1[which], rho2)
 
 
 def episode_batch(skill: Skill, query_states, learner: Learner,

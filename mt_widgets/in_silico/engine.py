@@ -79,12 +79,19 @@ class _BatchOutcome:
     actions: np.ndarray       # (B, N, R)
     optimal: np.ndarray       # (B, N, R)
     theta_hat: np.ndarray | None   # (B, R, S); None for a learner without a Theta
-    error: np.ndarray         # (B,)
+    theta_error: np.ndarray | None   # (B,) ||Theta_hat - Theta||; None for a learner without a Theta
+    policy_risk: np.ndarray   # (B,)
     rho1: np.ndarray          # (B,)
     rho2: np.ndarray          # (B,)
     batch: EpisodeBatch | LearnerEpisodeBatch   # the episode's query states, learner and optimal arrows
     first_input: np.ndarray   # (B, N) s
     drawing: np.ndarray       # (B, N) s
+
+    @property
+    def error(self) -> np.ndarray:
+        """(B,) the error the analysis compares (``analysis.tables.error_measure``'s rule): Theta's
+        error where the learner has a Theta, else the policy risk."""
+        return self.policy_risk if self.theta_error is None else self.theta_error
 
 
 
@@ -136,8 +143,8 @@ def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study
         if step["reproduced"]:
             population.see_reproduction()
         results.append(_BatchOutcome(actions if keep_demonstrations else None,
-                                      optimal if keep_demonstrations else None, outcome.theta_hat, outcome.error,
-                                      outcome.rho1, outcome.rho2, batch, first, drawing))
+                                      optimal if keep_demonstrations else None, outcome.theta_hat, outcome.theta_error,
+                                      outcome.policy_risk, outcome.rho1, outcome.rho2, batch, first, drawing))
         if progress is not None:
             progress.update()
     return results
@@ -264,7 +271,8 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
                 "phase": step["phase"], "phase_index": step["phase_index"], "episode": step["episode"],
                 "skill": step["skill"],
                 "guidance": int(guided), "n_demonstrations": step["demonstrations"],
-                "teaching_error": float(r.error[p]), "rho1": float(r.rho1[p]), "rho2": float(r.rho2[p]),
+                "theta_error": None if r.theta_error is None else float(r.theta_error[p]),
+                "policy_risk": float(r.policy_risk[p]), "rho1": float(r.rho1[p]), "rho2": float(r.rho2[p]),
                 # Only ridge has a Theta_hat (another learner's is empty, as in a real study's tidy file).
                 "theta_hat": None if r.theta_hat is None else json.dumps(np.round(r.theta_hat[p], 12).tolist()),
                 "reproduction_diverged": bool(diverged[p, e]) if reproduce else None,

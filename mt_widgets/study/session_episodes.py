@@ -201,7 +201,8 @@ class SessionEpisodes:
         self.log.append(
             "episode_finished", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
             skill=started["skill"], guidance=started["guidance"], actions=teaching.actions,
-            optimal=teaching.optimal_actions, theta_hat=theta_hat, teaching_error=teaching.error,
+            optimal=teaching.optimal_actions, theta_hat=theta_hat, theta_error=teaching.theta_error,
+            policy_risk=teaching.policy_risk,
             rho1=teaching.rho1, rho2=teaching.rho2, bound=bound, residual=residual,
             contributions=teaching.contribution_norms, exact=teaching.exact, **learnt,
             reproduction={"diverged": trajectory.diverged, "diverged_at": trajectory.diverged_at,

@@ -220,7 +220,7 @@ def p_value(target, control):
         ("sign", "retention as before minus after", {"retention": """
 def retention(episodes):
     first = episodes[episodes["episode"] == 1].pivot_table(index="participant", columns="phase",
-                                                         values="teaching_error")
+                                                         values="theta_error")
     return first["P1"] - first["P4"]
 """}, 7.0),
         ("student", "Student's t, one-sided", {"p_value": """
