@@ -33,7 +33,9 @@ def test_each_teacher_is_fitted_and_scored_as_a_single_episode_would_be(skill):
     for b, k in enumerate(which):
         single = analyse_demonstrations(batch.features[k], actions[b], skill.theta, 0.01)
         assert outcome.theta_hat[b] == pytest.approx(single.theta_hat, abs=1e-10)
-        assert outcome.error[b] == pytest.approx(single.risk, abs=1e-10)
+        assert outcome.theta_error[b] == pytest.approx(single.risk, abs=1e-10)
+        episode = TeachingEpisode.from_actions(skill, batch.query_states[k], actions[b], learner=RidgeLearner(0.01))
+        assert outcome.policy_risk[b] == pytest.approx(episode.policy_risk, rel=1e-12)
         assert outcome.rho1[b] == pytest.approx(single.rho1, abs=1e-12)
         assert outcome.rho2[b] == pytest.approx(single.rho2, abs=1e-10)
         assert outcome.bound[b] == pytest.approx(single.bound, abs=1e-10)
@@ -52,7 +54,7 @@ def test_a_batch_is_many_teaching_episodes_with_the_same_names_and_values(skill)
         assert batch.optimal_actions[b] == pytest.approx(episode.optimal_actions, abs=1e-10)
         assert batch.exact[b] == episode.exact and batch.rank[b] == episode.rank
         assert batch.residual_norm[b] == pytest.approx(episode.residual_norm, abs=1e-10)
-        for name in ("theta_hat", "error", "rho1", "rho2", "bound"):
+        for name in ("theta_hat", "theta_error", "policy_risk", "rho1", "rho2", "bound"):
             assert getattr(outcome, name)[b] == pytest.approx(getattr(episode, name), abs=1e-10), name
         assert np.asarray(trajectories[b].states)[-1] == pytest.approx(
             np.asarray(episode.reproduction.states)[-1], abs=1e-9)
@@ -61,7 +63,7 @@ def test_a_batch_is_many_teaching_episodes_with_the_same_names_and_values(skill)
 def test_the_optimal_demonstration_teaches_the_skill_exactly(skill):
     batch = EpisodeBatch.of(skill, _states(skill, 2), RidgeLearner(0.01))
     outcome = batch.complete(batch.optimal_actions)
-    assert outcome.error == pytest.approx([0, 0], abs=1e-9)
+    assert outcome.theta_error == pytest.approx([0, 0], abs=1e-9)
     assert outcome.rho2 == pytest.approx([0, 0], abs=1e-12)
 
 
