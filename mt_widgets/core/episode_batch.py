@@ -167,8 +167,9 @@ class EpisodeBatch(QuerySetBatch):
         theta_hat = np.swapaxes(np.einsum("bsn,bnr->bsr", self.learner_map[which], actions), 1, 2)
         theta = np.asarray(self.skill.theta, dtype=float)
         error = np.linalg.norm((theta_hat - theta).reshape(len(actions), -1), axis=1)
-        learnt = np.einsum("ms,brs->bmr", self.evaluation_features, theta_hat)
-        risk = np.sqrt(np.mean(np.sum((learnt - self.evaluation_targets) ** 2, axis=2), axis=1))
+        # The learnt policies on the evaluation states, (B, R, M): a batched product (BLAS), not einsum.
+        gap = theta_hat @ self.evaluation_features.T - self.evaluation_targets.T
+        risk = np.sqrt(np.sum(gap * gap, axis=(1, 2)) / len(self.evaluation_features))
         rho2 = np.linalg.norm((actions - self.optimal_actions[which]).reshape(len(actions), -1), axis=1)
         rho1 = self.rho1[which]
         return BatchOutcome(theta_hat, error, risk, rho1, rho2, rho1 * rho2 + self.residual_norm[which])
