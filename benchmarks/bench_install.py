@@ -39,7 +39,7 @@ IMPORTS = {
 }
 SCIENCE = ("from mt_widgets import SKILLS, RidgeLearner, optimal_actions; s = SKILLS['sim-point']; "
            "P = s.features(s.query_states(seed=0)); "
-           "RidgeLearner(lam=0.01).fit(P, optimal_actions(P, s.theta, lam=0.01))")
+           "RidgeLearner(lam=0.01).fit(P, optimal_actions(P, s.theta, lam=0.01)).theta")
 
 
 def site_packages_mb(venv: Path) -> float:

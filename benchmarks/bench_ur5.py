@@ -370,7 +370,7 @@ def main() -> int:
             actions = episode.optimal_actions + 0.01 * np.random.default_rng(seed).standard_normal(
                 episode.optimal_actions.shape)
             start = time.perf_counter()
-            theta_hat = RidgeLearner(lam=episode.lam).fit(episode.features, actions)
+            theta_hat = RidgeLearner(lam=episode.lam).fit(episode.features, actions).theta
             optimal_actions(episode.features, skill.theta, episode.lam)
             skill.reproduce(theta_hat, record_every=20)
             latencies.append(time.perf_counter() - start)

@@ -29,6 +29,11 @@ RETIRED = [
     ("mt_widgets.robot_models.urdf", "description_module"),
     ("mt_widgets.robot_models.urdf", "generate"),
     ("mt_widgets.robot_models.urdf", "read_serial_chain"),
+    # The learner is the one seam (issue 42): no name picks ridge's road; a learner's protocols do.
+    ("mt_widgets.study.study_learners", "PAPER_LEARNER"),
+    ("mt_widgets.core.episode", "TeachingEpisode.ridge"),
+    ("mt_widgets.core.episode", "TeachingEpisode._require_ridge"),
+    ("mt_widgets.core.kernel_learners", "_check_inputs"),
 ]
 
 

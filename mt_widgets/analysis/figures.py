@@ -28,7 +28,7 @@ from mt_widgets.core import SKILLS, Box
 from mt_widgets.core.validation import as_bool
 from mt_widgets.study.analysis_plan import PAPER_CHANGES
 
-from .tables import episodes_frame, participant_changes, phase_summary, study_groups
+from .tables import ERROR_LABELS, episodes_frame, error_measure, participant_changes, phase_summary, study_groups
 
 #: Okabe-Ito colours, a line style and a marker per group.
 GROUP_STYLE = {
@@ -118,11 +118,12 @@ def plot_error_by_episode(episodes, error_bars: str = "sem", confidence: float =
                 ax.axvspan(i - 0.5, i + 0.5, color="#CCCCCC", alpha=0.35, lw=0, zorder=0)
     ax.set_xticks(range(len(labels)))
     ax.set_xticklabels(labels, rotation=45, ha="right")
-    ax.set_ylabel("teaching error $E_{l2}$")
+    measure = error_measure(frame)
+    ax.set_ylabel(f"{measure}: {ERROR_LABELS[measure]}")
     ax.set_xlabel("phase and episode" + (f" (grey: guidance shown to the {' and '.join(shown_to)} group)"
                                          if shown_to else ""))
     what = {"sem": "mean ± SEM", "sd": "mean ± SD", "ci": f"mean, {confidence:.0%} CI"}[error_bars]
-    ax.set_title(f"Teaching error across the study ({what})")
+    ax.set_title(f"{ERROR_LABELS[measure].split(' ||')[0].capitalize()} ({measure}) across the study ({what})")
     ax.set_ylim(bottom=0)
     ax.legend(frameon=False)
     return figure
@@ -175,7 +176,7 @@ def plot_changes(episodes, changes=PAPER_CHANGES, seed: int = 0, groups=None) ->
         ax.set_xticks(range(len(groups)))
         ax.set_xticklabels(groups)
         ax.set_title(f"{change.label}\n({change.meaning})", fontsize=10)
-    axes[0].set_ylabel("change of teaching error (after - before)")
+    axes[0].set_ylabel(f"change of {error_measure(frame)} (after - before)")
     return figure
 
 
@@ -398,11 +399,12 @@ def teaching_report(episodes, demonstrations, participant, changes=PAPER_CHANGES
 
     ax = figure.add_subplot(grid[1, :])
     same = frame[frame["group"] == group]
-    group_mean = same.groupby(["phase", "episode"], sort=False)["teaching_error"].mean()
+    measure = error_measure(frame)
+    group_mean = same.groupby(["phase", "episode"], sort=False)[measure].mean()
     ax.plot(x, [group_mean[(r.phase, r.episode)] for r in mine.itertuples()], color="#999999", lw=1.5, ls="--",
             marker=".", gid="group-error", label=f"average of the {group} group (n = {same.participant.nunique()})")
     style = _style(group)
-    ax.plot(x, mine["teaching_error"].to_numpy(), color=style["color"], marker="o", lw=2, gid="participant-error",
+    ax.plot(x, mine[measure].to_numpy(), color=style["color"], marker="o", lw=2, gid="participant-error",
             label="you")
     if "guidance" in mine.columns:
         for i, shown in enumerate(mine["guidance"].astype(int)):
@@ -410,7 +412,7 @@ def teaching_report(episodes, demonstrations, participant, changes=PAPER_CHANGES
                 ax.axvspan(i - 0.5, i + 0.5, color="#CCCCCC", alpha=0.35, lw=0, zorder=0)
     ax.set_xticks(x)
     ax.set_xticklabels(labels, rotation=45, ha="right", fontsize=8)
-    ax.set_ylabel("teaching error (lower is better)")
+    ax.set_ylabel(f"{ERROR_LABELS[measure].split(' ||')[0]} (lower is better)")
     ax.set_ylim(bottom=0)
     ax.set_title("How close the robot's learnt skill came to the true one" +
                  (" (grey: with guidance)" if mine.get("guidance", pd.Series([0])).astype(int).any() else ""),

@@ -66,7 +66,8 @@ def baseline_comparison(result, reference: dict | None = None, experiment: str |
     frame = pd.DataFrame(episodes)
     rows = []
     for phase, paper in implied_baselines(reference, experiment).items():
-        errors = frame[(frame.phase == phase) & (frame.episode == 1)].teaching_error.to_numpy(dtype=float)
+        # The paper's E_l2: Theta's error (its learner, ridge, has a Theta).
+        errors = frame[(frame.phase == phase) & (frame.episode == 1)].theta_error.to_numpy(dtype=float)
         rows.append({"phase": phase, "paper_mean": paper, "in_silico_mean": float(errors.mean()),
                      "in_silico_sd": float(errors.std(ddof=1)) if errors.size > 1 else float("nan"),
                      "n": int(errors.size)})

@@ -14,8 +14,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from mt_widgets.core.learner import is_parametric_smoother
 from mt_widgets.study.study_folder import StudyFolder
-from mt_widgets.study.study_learners import PAPER_LEARNER, learnt_policy_of
+from mt_widgets.study.study_learners import learnt_policy_of, study_learner
 from mt_widgets.study.tidy import read_study
 
 from .example_studies import EXAMPLE_STUDY
@@ -107,9 +108,11 @@ def analyse_study(folder=None, alternative: str | None = None, alpha: float | No
         trajectories_for = [firsts[g] for g in groups if g in firsts.index]
     if trajectories_for:
         panels = trajectory_panels(protocol)
-        # Only ridge logs a Theta_hat to roll out; another learner's policy is fitted again from
-        # the logged states and actions (deterministic: the one the participant saw).
-        refitted = None if protocol.learner == PAPER_LEARNER else refitted_trajectories(
+        # A learner with a Theta on the features (ridge) logs Theta_hat to roll out; another
+        # learner's policy is fitted again from the logged states and actions (deterministic: the
+        # one the participant saw).
+        has_theta = all(is_parametric_smoother(study_learner(protocol, skill)) for skill in protocol.skills.values())
+        refitted = None if has_theta else refitted_trajectories(
             episodes, demonstrations, protocol, trajectories_for, [p for panel in panels for p in panel],
             trajectory_duration)
         figures["trajectories"] = plot_trajectories(episodes, trajectories_for, panels=panels,
@@ -142,6 +145,6 @@ def refitted_trajectories(episodes, demonstrations, protocol, participants, phas
         skill = protocol.skills[row.skill]
         states = np.array([json.loads(state) for state in mine["state"]], dtype=float)
         actions = mine[action_columns[:skill.plant.action_dim]].to_numpy(dtype=float)
-        policy = learnt_policy_of(protocol.learner, skill, states, actions, protocol.lam)
+        policy = learnt_policy_of(protocol, skill, states, actions)
         out[(row.participant, row.phase, int(row.episode))] = skill.reproduce_policy(policy, duration, record_every)
     return out

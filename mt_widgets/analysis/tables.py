@@ -1,8 +1,10 @@
 """The tables of a teaching study: its episode rows, summarised by phase and by change.
 
 Everything starts from the tidy episode rows (``mt_widgets.study.tidy``: one row per
-completed episode with ``participant``, ``group``, ``phase``, ``episode`` and
-``teaching_error``, the paper's E_l2). From them:
+completed episode with ``participant``, ``group``, ``phase``, ``episode``, ``theta_error`` (the
+paper's E_l2, where the learner has a Theta) and ``policy_risk`` (every learner)). The error the
+analysis compares is ``error_measure``'s: theta_error where every episode has one, else the policy
+risk. From them:
 
 - ``episodes_frame``: the rows checked and in protocol order.
 - ``phase_summary``: per group, phase and episode, the mean, SD, median and a t confidence
@@ -53,7 +55,36 @@ def study_groups(frame: pd.DataFrame, groups=None) -> tuple[str, ...]:
     return tuple(g for g in GROUPS if g in present) + others
 
 
-_REQUIRED = ("participant", "group", "phase", "episode", "teaching_error")
+_REQUIRED = ("participant", "group", "phase", "episode")
+
+#: The two errors an episode reports (``TeachingEpisode.theta_error`` and ``policy_risk``).
+ERROR_MEASURES = ("theta_error", "policy_risk")
+
+#: How figures and tables name each error.
+ERROR_LABELS = {"theta_error": "teaching error ||Theta_hat - Theta||", "policy_risk": "policy risk"}
+
+
+def error_measure(frame: pd.DataFrame) -> str:
+    """The error a study's analysis compares: ``theta_error`` (the paper's E_l2) where every episode
+    has one (a learner with a Theta), else ``policy_risk``."""
+    for measure in ERROR_MEASURES:
+        if measure in frame.columns and frame[measure].notna().all():
+            return measure
+    raise ValueError(f"episodes: expected a theta_error or a policy_risk in every row, got columns "
+                     f"{list(frame.columns)}")
+
+
+def _split_old_error(frame: pd.DataFrame) -> None:
+    """Rows written when both errors were one ``teaching_error`` (older tidy files and frames):
+    Theta's error where a row has a theta_hat (or no theta_hat column: the paper's E), else the
+    policy risk."""
+    if "teaching_error" not in frame.columns or any(m in frame.columns for m in ERROR_MEASURES):
+        return
+    has_theta = (frame["theta_hat"].notna() & (frame["theta_hat"].astype(str) != "")) if "theta_hat" in frame.columns \
+        else pd.Series(True, index=frame.index)
+    frame["theta_error"] = frame["teaching_error"].where(has_theta)
+    frame["policy_risk"] = frame["teaching_error"].where(~has_theta)
+    del frame["teaching_error"]
 
 
 def episodes_frame(episodes, groups=None) -> pd.DataFrame:
@@ -65,11 +96,13 @@ def episodes_frame(episodes, groups=None) -> pd.DataFrame:
         groups: the protocol's groups (rows of other groups are refused), or None.
 
     Returns:
-        A copy with ``episode`` as int, ``teaching_error`` as float and ``participant``,
+        A copy with ``episode`` as int, ``theta_error`` and ``policy_risk`` as float (NaN where
+        an episode has none; a frame with the one ``teaching_error`` of older files is split) and ``participant``,
         ``group``, ``phase`` as str, sorted by participant, phase order (sessions in order) and
         episode, with a ``position`` column: the phase's rank in the protocol.
     """
     frame = episodes.copy() if isinstance(episodes, pd.DataFrame) else pd.DataFrame(list(episodes))
+    _split_old_error(frame)
     missing = [column for column in _REQUIRED if column not in frame.columns]
     if missing:
         raise ValueError(f"episodes: expected columns {list(_REQUIRED)}, missing {missing} "
@@ -80,7 +113,9 @@ def episodes_frame(episodes, groups=None) -> pd.DataFrame:
     frame["group"] = frame["group"].astype(str)
     frame["phase"] = frame["phase"].astype(str)
     frame["episode"] = frame["episode"].astype(int)
-    frame["teaching_error"] = frame["teaching_error"].astype(float)
+    for measure in ERROR_MEASURES:
+        frame[measure] = frame[measure].astype(float) if measure in frame.columns else np.nan
+    error_measure(frame)   # one of them in every row, or refused by name
     study_groups(frame, groups)
     order = _phase_order(frame)
     frame["position"] = [order[phase] for phase in frame["phase"]]
@@ -122,8 +157,9 @@ def phase_summary(episodes, confidence: float = 0.95, groups=None) -> pd.DataFra
     groups = study_groups(frame, groups)
     rows = []
     order = _phase_order(frame)
+    measure = error_measure(frame)
     for (group, phase, episode), part in frame.groupby(["group", "phase", "episode"], sort=False):
-        errors = part["teaching_error"].to_numpy()
+        errors = part[measure].to_numpy()
         low, high = confidence_interval(errors, confidence)
         rows.append({"group": group, "phase": phase, "episode": int(episode), "label": f"{phase}E{episode}",
                      "n": errors.size, "mean": errors.mean(), "sd": _sd(errors), "sem": _sem(errors),
@@ -168,7 +204,7 @@ def episode_errors(frame: pd.DataFrame, phase: str, episode: int | None) -> pd.S
             raise ValueError(f"changes: expected episode {episode} of phase {phase!r}, got episodes "
                              f"{sorted(frame.loc[frame['phase'] == phase, 'episode'].unique())}")
     # A repeated episode (a participant redid one) counts once: its last completed attempt.
-    return rows.groupby("participant")["teaching_error"].last()
+    return rows.groupby("participant")[error_measure(frame)].last()
 
 
 def participant_changes(episodes, changes=PAPER_CHANGES) -> pd.DataFrame:

@@ -26,7 +26,7 @@ from mt_widgets.core.query_states import condition_number as _condition_number
 
 def ridge_fit(Phi, U, lam) -> np.ndarray:
     """Theta_hat (R, S) of ridge regression."""
-    return RidgeLearner(lam).fit(Phi, U)
+    return RidgeLearner(lam).fit(Phi, U).theta
 
 
 def teaching_error(theta_hat, theta) -> float:
@@ -127,7 +127,7 @@ def spring_skill(base: Skill, k, d, point) -> Skill:
 def retention(episodes):
     """Each participant's E(P4, episode 1) - E(P1, episode 1), a Series indexed by participant."""
     first = episodes[episodes["episode"] == 1].pivot_table(index="participant", columns="phase",
-                                                         values="teaching_error")
+                                                         values="theta_error")
     return (first["P4"] - first["P1"]).rename(None)
 
 

@@ -19,8 +19,8 @@ from .features import (
     PositionFeatures,
     ToolFeatures,
 )
-from .kernel_learners import GaussianProcessLearner, KernelRidgeLearner, SingularFitError
-from .learner import DEFAULT_LAMBDA, Learner, RidgeLearner
+from .kernel_learners import GaussianProcessLearner, KernelPolicy, KernelRidgeLearner, SingularFitError
+from .learner import DEFAULT_LAMBDA, FittedPolicy, Learner, LinearPolicy, RidgeLearner
 from .learner_teaching import LEARNERS, LearnerTeaching, make_learner, policy_risk, teach
 from .machine_teaching import (
     ActionDifference,
@@ -32,11 +32,11 @@ from .machine_teaching import (
     ridge_operator,
     teaching_risk,
 )
-from .network_learner import NeuralNetworkLearner
+from .network_learner import NetworkPolicy, NeuralNetworkLearner
 from .nonlinear_skills import NONLINEAR_SKILLS
 from .plants import ContinuousPlant, KinematicPlant, Plant
 from .query_states import SeedSchedule, condition_number, sample_query_states
-from .reward_learner import RewardLearner
+from .reward_learner import RewardLearner, RewardPolicy
 from .serial_chain import SerialChain
 from .skills import SKILLS, Skill, SkillRegistry
 from .targets import ConveyorTarget, LineTarget, PointTarget, SpacePointTarget, Target
@@ -60,3 +60,4 @@ __all__ = [
 __all__ += ["GaussianProcessLearner", "KernelRidgeLearner", "LEARNERS", "Learner", "LearnerTeaching",
             "NeuralNetworkLearner", "SingularFitError", "make_learner", "policy_risk", "teach"]
 __all__ += ["NONLINEAR_SKILLS", "RewardLearner"]
+__all__ += ["FittedPolicy", "KernelPolicy", "LinearPolicy", "NetworkPolicy", "RewardPolicy"]

@@ -15,8 +15,11 @@ given the episode knows what the robot learnt and how far it is from the skill:
 - ``reproduction``: the learnt skill rolled out from the skill's start, computed once, on first
   use, and kept, so a view that plays it and a log that records it share one rollout.
 
-Everything is computed from one SVD of Phi (``ridge_operator``), the same rank rule as
-``RidgeLearner`` and ``optimal_actions``. Nothing here does I/O or knows about widgets.
+Everything is computed from one SVD of Phi (the learner's ``operator``: ``ridge_operator`` for
+ridge), the same rank rule as ``RidgeLearner`` and ``optimal_actions``. That is the path of every
+learner with a Theta on the skill's features (``learner.ParametricSmoother``); any other learner's
+episode reports the policy risk and its own machine teaching (``TeachingEpisode``'s ``learner``).
+Nothing here does I/O or knows about widgets.
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .learner import DEFAULT_LAMBDA, Learner, RidgeLearner
+from .learner import DEFAULT_LAMBDA, Learner, RidgeLearner, is_parametric_smoother
 from .learner_teaching import action_sensitivity, evaluation_states, learnt_policy, policy_risk, teach
 from .machine_teaching import (
     ActionDifference,
@@ -34,7 +37,6 @@ from .machine_teaching import (
     action_difference,
     analyse_with,
     optimal_from,
-    ridge_operator,
 )
 from .skills import Skill
 from .validation import as_float_array, as_positive
@@ -133,17 +135,19 @@ class TeachingEpisode:
             ``skill.query_states(seed=seed)`` (N = S, the rank condition's minimum).
         seed: seed of the default query states (int, ``SeedSequence``, ``Generator`` or None);
             only when ``query_states`` is not given.
-        lam: the ridge learner's parameter (>= 0; default ``DEFAULT_LAMBDA``), also used for the
-            optimal actions. With a ``RidgeLearner`` given, its own ``lam`` is the one source: a
-            different explicit ``lam`` beside it is refused.
+        lam: the default learner's ridge parameter (>= 0; default ``DEFAULT_LAMBDA``). With a
+            learner given that has a ``lam`` of its own, that is the one source: a different
+            explicit ``lam`` beside it is refused.
         duration: seconds of the reproduction (default: the skill's ``default_duration``).
-        learner: another learner than the paper's ridge (``mt_widgets.core.LEARNERS``; None: ridge
-            with ``lam``). Then the optimal actions are its machine teaching's (``teach``),
-            ``error`` is the policy risk (``learner_teaching``), ``rho1`` and each demonstration's
-            ``contribution_norm`` come from ``action_sensitivity``, ``exact`` says whether the
-            target is representable from the query states, and the reproduction rolls out the
-            learnt policy. What only ridge has (``theta_hat``, ``analysis``, ``contributions``,
-            ``residual``, ``bound``) raises an ``EpisodeStateError`` that says so.
+        learner: the learner (``mt_widgets.core.LEARNERS``; None: ``RidgeLearner(lam)``, the
+            paper's). Every learner takes one path, chosen by what it declares: a learner with a
+            Theta on the skill's features (``learner.ParametricSmoother``: ridge) gets the paper's
+            analysis from its operator A (``theta_hat``, ``theta_error``, ``analysis``,
+            ``contributions``, ``residual``, ``bound``); any other gets its machine teaching's
+            optimal actions (``teach``), ``rho1`` and each demonstration's ``contribution_norm``
+            from ``action_sensitivity``, ``exact`` when the target is representable from the query
+            states, and asking it for what only a Theta gives raises an ``EpisodeStateError``.
+            ``policy_risk`` and ``reproduction`` exist for every learner.
 
     Attributes:
         features: (N, S) Phi.
@@ -165,12 +169,15 @@ class TeachingEpisode:
         if not isinstance(skill, Skill):
             raise TypeError(f"skill: expected a mt_widgets.core.Skill, got {type(skill).__name__}")
         self.skill = skill
-        if isinstance(learner, RidgeLearner):
+        # Whatever the learner, its own ``lam`` (when it has one) is the one source: an explicit lam
+        # beside a learner with another is refused.
+        own = None if learner is None else learner.get_params().get("lam")
+        if own is not None:
             learner.check_params()
-            if lam is not None and as_positive("lam", lam, allow_zero=True) != float(learner.lam):
-                raise ValueError(f"lam: expected none (or the ridge learner's own lam {learner.lam}) beside "
-                                 f"{learner!r}, got {lam}: the learner's lam is the one source")
-            lam = learner.lam
+            if lam is not None and as_positive("lam", lam, allow_zero=True) != float(own):
+                raise ValueError(f"lam: expected none (or the learner's own lam {own}) beside {learner!r}, got "
+                                 f"{lam}: the learner's lam is the one source")
+            lam = own
         self.lam = as_positive("lam", DEFAULT_LAMBDA if lam is None else lam, allow_zero=True)
         self.duration = skill.default_duration if duration is None else as_positive("duration", duration)
         if query_states is None:
@@ -190,10 +197,12 @@ class TeachingEpisode:
         self._reproduction = None
         self._analysis = None
         self._policy_risk = None
-        if not isinstance(self.learner, RidgeLearner):
+        if not is_parametric_smoother(self.learner):
             self._init_learner()
             return
-        operator = ridge_operator(self.features, self.lam)
+        # A learner with a Theta on the skill's features (the paper's ridge): the paper's analysis,
+        # from one SVD of Phi.
+        operator = self.learner.operator(self.features)
         self._operator = operator
         self._A = operator.matrix()                      # (S, N)
         self._a_norms = np.linalg.norm(self._A, axis=0)  # (N,) ||a_n||
@@ -203,7 +212,7 @@ class TeachingEpisode:
         self.rho1 = operator.rho1()
 
     def _init_learner(self) -> None:
-        """Machine teaching for a learner other than ridge (see ``learner`` in the class docstring)."""
+        """Machine teaching for a learner without a Theta on the features (``learner`` in the class docstring)."""
         self._evaluation = evaluation_states(self.skill)
         teaching = teach(self.learner, self.skill, self.query_states, self._evaluation)
         self.teaching = teaching
@@ -215,14 +224,16 @@ class TeachingEpisode:
         self._operator = None
 
     @property
-    def ridge(self) -> bool:
-        """Whether the learner is the paper's ridge regression (Theta and its analysis exist)."""
+    def has_theta(self) -> bool:
+        """Whether the learner has a Theta on the skill's features (a ``ParametricSmoother`` such as
+        the paper's ridge): then Theta_hat and the paper's analysis exist."""
         return self._operator is not None
 
-    def _require_ridge(self, name: str) -> None:
-        if not self.ridge:
-            raise EpisodeStateError(f"{name}: only the ridge learner has a Theta; this episode's learner is "
-                                    f"{self.learner!r}: use error (the policy risk) and reproduction")
+    def _require_theta(self, name: str) -> None:
+        if not self.has_theta:
+            raise EpisodeStateError(f"{name}: only a learner with a Theta on the skill's features (learner."
+                                    f"ParametricSmoother, such as ridge) has one; this episode's learner is "
+                                    f"{self.learner!r}: use policy_risk and reproduction")
 
     @classmethod
     def from_actions(cls, skill: Skill, query_states, actions, *, lam: float | None = None,
@@ -371,7 +382,7 @@ class TeachingEpisode:
         """The complete episode's ``TeachingAnalysis``: ``analyse_demonstrations``' numbers,
         computed once through the same function (``analyse_with``) from the episode's own SVD."""
         self._require_complete("analysis")
-        self._require_ridge("analysis")
+        self._require_theta("analysis")
         if self._analysis is None:
             self._analysis = analyse_with(self._operator, self.actions, self.skill.theta)
         return self._analysis
@@ -380,34 +391,27 @@ class TeachingEpisode:
     def theta_hat(self) -> np.ndarray:
         """(R, S) the learnt policy, Theta_hat^T = A U."""
         self._require_complete("theta_hat")
-        self._require_ridge("theta_hat")
+        self._require_theta("theta_hat")
         return self.analysis.theta_hat
 
     @property
     def error(self) -> float:
-        """E = ||vec(Theta_hat) - vec(Theta)||_2, the teaching error; for another learner than ridge,
-        the policy risk of what it learnt (``learner_teaching``)."""
+        """The teaching error as the paper's analysis reads it: ``theta_error`` where the learner has
+        a Theta, else ``policy_risk`` (the two named quantities are the ones to report)."""
         self._require_complete("error")
-        if not self.ridge:
-            if self._analysis is None:
-                policy = learnt_policy(self.learner, self.skill, self.query_states, self.actions)
-                self._analysis = policy_risk(policy(self._evaluation), self.skill.target_actions(self._evaluation))
-            return self._analysis
-        return self.analysis.risk
+        return self.theta_error if self.has_theta else self.policy_risk
 
     @property
     def theta_error(self) -> float | None:
         """||vec(Theta_hat) - vec(Theta)||_2 where the learner has a Theta (ridge), else None."""
         self._require_complete("theta_error")
-        return self.analysis.risk if self.ridge else None
+        return self.analysis.risk if self.has_theta else None
 
     @property
     def policy_risk(self) -> float:
         """The policy risk of what the learner learnt (``learner_teaching``), for every learner:
         the root-mean-square distance to the target's actions over the skill's evaluation states."""
         self._require_complete("policy_risk")
-        if not self.ridge:
-            return self.error
         if self._policy_risk is None:
             evaluation = evaluation_states(self.skill)
             policy = learnt_policy(self.learner, self.skill, self.query_states, self.actions)
@@ -425,7 +429,7 @@ class TeachingEpisode:
     def bound(self) -> float:
         """rho1 * rho2 (+ the residual norm when the rank condition fails), an upper bound on E."""
         self._require_complete("bound")
-        self._require_ridge("bound")
+        self._require_theta("bound")
         return self.rho1 * self.rho2 + self.residual_norm
 
     @property
@@ -438,7 +442,7 @@ class TeachingEpisode:
         residual's), with equality only when they are aligned.
         """
         self._require_complete("contributions")
-        self._require_ridge("contributions")
+        self._require_theta("contributions")
         gaps = np.array([d.gap for d in self.demonstrations])           # (N, R)
         return gaps[:, :, None] * self._A.T[:, None, :]                  # (N, R, S)
 
@@ -451,7 +455,7 @@ class TeachingEpisode:
     @property
     def residual(self) -> np.ndarray:
         """(R, S) (A U_bar)^T - Theta: the part of the error no demonstration can remove (0 when exact)."""
-        self._require_ridge("residual")
+        self._require_theta("residual")
         return (self._A @ self.optimal_actions).T - self.skill.theta
 
     @property
@@ -465,7 +469,7 @@ class TeachingEpisode:
         Rolled out on first use and kept: every reader (a view, a log, a result) gets this one.
         """
         self._require_complete("reproduction")
-        if self._reproduction is None and not self.ridge:
+        if self._reproduction is None and not self.has_theta:
             policy = learnt_policy(self.learner, self.skill, self.query_states, self.actions)
             self._reproduction = self.skill.reproduce_policy(policy, duration=self.duration)
         if self._reproduction is None:
@@ -548,8 +552,18 @@ class EpisodeResult:
         """The teaching error E = ||vec(theta_hat) - vec(theta)||."""
         return self.episode.error
 
-    #: The study log's name for ``error``.
+    #: The name ``error`` had in the study log before theta_error and policy_risk had their own.
     teaching_error = error
+
+    @property
+    def theta_error(self) -> float | None:
+        """||Theta_hat - Theta|| where the learner has a Theta, else None (the episode's)."""
+        return self.episode.theta_error
+
+    @property
+    def policy_risk(self) -> float:
+        """The learnt policy's risk (the episode's), for every learner."""
+        return self.episode.policy_risk
 
     @property
     def rho1(self) -> float:

@@ -7,7 +7,8 @@ demonstrations, with the same names and the same definitions (``theta_hat``, ``e
 
 One episode of a study gives every teacher the same skill and (per study) the same query
 states, so one SVD of each feature matrix serves all the teachers who answer it. An
-``EpisodeBatch`` holds, for K sets of query states, the learner's map
+``EpisodeBatch`` (for any ``learner.ParametricSmoother`` on the skill's features; the paper's ridge
+is one) holds, for K sets of query states, the learner's map
 ``A = (Phi^T Phi + lam I)^-1 Phi^T``, the optimal actions ``U_bar`` and ``rho1 = ||A||_2``;
 ``complete`` fits B teachers' demonstrations at once (``Theta_hat^T = A U``) and scores them
 (the teaching error, rho2, the bound), exactly as ``analyse_demonstrations`` does one at a time;
@@ -24,55 +25,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
-from .learner import DEFAULT_LAMBDA
-from .ridge_kernels import rank_of, ridge_gain
+from .learner import Learner, RidgeLearner, is_parametric_smoother
+from .learner_teaching import evaluation_states
 from .skills import Skill
 from .validation import as_float_array, as_positive
-
-
-def batched_ridge_maps(Phi, theta_t, lam):
-    """(A (K, S, N), U_bar (K, N, R), rho1 (K,), rank (K,)) for features Phi (K, N, S).
-
-    ``theta_t`` is Theta^T (S, R). numpy decomposes the K matrices in one stacked SVD (numba's
-    would need scipy: ``ridge_kernels``), and the rank follows the single learner's rule
-    (``ridge_kernels.rank_of``); the compiled ``_maps_from_svd`` builds the maps from it.
-    """
-    left, singular, right_t = np.linalg.svd(Phi, full_matrices=False)
-    ranks = np.asarray(rank_of(singular, Phi.shape[1:]), dtype=np.int64).reshape(len(Phi))
-    with np.errstate(divide="ignore", invalid="ignore"):   # a zero singular value is beyond the rank
-        gains = ridge_gain(singular, float(lam))
-    A, optimal, rho1 = _maps_from_svd(left, gains, right_t, ranks, theta_t)
-    return A, optimal, rho1, ranks
-
-
-@njit(cache=True)
-def _maps_from_svd(left, gains, right_t, ranks, theta_t):
-    """(A, U_bar, rho1) of ``batched_ridge_maps`` from the K thin SVDs' vectors, the ridge gains of
-    their singular values (``ridge_kernels.ridge_gain``) and their ranks."""
-    K, N, _ = left.shape
-    S = right_t.shape[2]
-    R = theta_t.shape[1]
-    A = np.zeros((K, S, N))
-    optimal = np.zeros((K, N, R))
-    rho1 = np.zeros(K)
-    for k in range(K):
-        for i in range(ranks[k]):
-            gain = gains[k, i]
-            inverse_gain = 1.0 / gain
-            if gain > rho1[k]:
-                rho1[k] = gain
-            for s in range(S):
-                for n in range(N):
-                    A[k, s, n] += gain * right_t[k, i, s] * left[k, n, i]
-            for r in range(R):
-                along = 0.0
-                for s in range(S):
-                    along += right_t[k, i, s] * theta_t[s, r]
-                for n in range(N):
-                    optimal[k, n, r] += inverse_gain * left[k, n, i] * along
-    return A, optimal, rho1
 
 
 @dataclass(frozen=True)
@@ -81,7 +38,9 @@ class BatchOutcome:
 
     Attributes:
         theta_hat: (B, R, S) the learnt parameters.
-        error: (B,) the teaching error ||Theta_hat - Theta||_F.
+        theta_error: (B,) the teaching error ||Theta_hat - Theta||_F.
+        policy_risk: (B,) the learnt policies' risk over the skill's evaluation states
+            (``learner_teaching``), as ``TeachingEpisode.policy_risk``.
         rho1: (B,) ||A||_2 of each teacher's query states.
         rho2: (B,) ||U - U_bar||_F of each teacher's demonstrations.
         bound: (B,) rho1 * rho2 plus the norm of the part no demonstration removes (0 when
@@ -89,7 +48,8 @@ class BatchOutcome:
     """
 
     theta_hat: np.ndarray
-    error: np.ndarray
+    theta_error: np.ndarray
+    policy_risk: np.ndarray
     rho1: np.ndarray
     rho2: np.ndarray
     bound: np.ndarray
@@ -127,12 +87,12 @@ class QuerySetBatch:
 class EpisodeBatch(QuerySetBatch):
     """One episode of a skill on K sets of query states, for many teachers at once.
 
-    Build with ``EpisodeBatch.of(skill, query_states, lam, duration)``.
+    Build with ``EpisodeBatch.of(skill, query_states, learner, duration)``.
 
     Attributes:
         skill: the ``Skill`` taught.
         query_states: (K, N, state_dim) the states of each set.
-        lam: the learner's ridge parameter.
+        learner: the ``ParametricSmoother`` (the paper's ``RidgeLearner``) whose operators A these are.
         duration: seconds of each reproduction (the skill's ``default_duration`` unless given).
         features: (K, N, S) Phi of each set.
         learner_map: (K, S, N) A of each set.
@@ -140,11 +100,13 @@ class EpisodeBatch(QuerySetBatch):
         rho1: (K,) ||A||_2 of each set.
         rank: (K,) the rank of each Phi.
         residual_norm: (K,) ||(A U_bar)^T - Theta||, 0 where exact teaching is possible.
+        evaluation_features: (M, S) the features of the skill's evaluation states (the policy risk's).
+        evaluation_targets: (M, R) the target's actions there.
     """
 
     skill: Skill
     query_states: np.ndarray
-    lam: float
+    learner: Learner
     duration: float
     features: np.ndarray
     learner_map: np.ndarray
@@ -152,21 +114,36 @@ class EpisodeBatch(QuerySetBatch):
     rho1: np.ndarray
     rank: np.ndarray
     residual_norm: np.ndarray
+    evaluation_features: np.ndarray
+    evaluation_targets: np.ndarray
 
     @classmethod
-    def of(cls, skill: Skill, query_states, lam: float = DEFAULT_LAMBDA,
+    def of(cls, skill: Skill, query_states, learner: Learner | None = None,
            duration: float | None = None) -> EpisodeBatch:
-        """Decomposes the learner's map for each of K sets of query states (K, N, state_dim)."""
+        """Decomposes the learner's map for each of K sets of query states (K, N, state_dim).
+
+        ``learner``: a ``ParametricSmoother`` on the skill's features (default: ``RidgeLearner()``);
+        another learner is refused by name (``learner_batch.episode_batch`` batches every learner)."""
         if not isinstance(skill, Skill):
             raise TypeError(f"skill: expected a Skill, got {type(skill).__name__}")
+        learner = RidgeLearner() if learner is None else learner
+        if not is_parametric_smoother(learner):
+            raise TypeError(f"learner: expected a parametric smoother on the skill's features (learner."
+                            f"ParametricSmoother with inputs 'features', e.g. RidgeLearner), got {learner!r}")
         states = as_float_array("query_states", query_states, ndim=3, shape=(None, None, skill.state_dim))
-        lam = as_positive("lam", lam, allow_zero=True)
         duration = skill.default_duration if duration is None else as_positive("duration", duration)
         Phi = skill.features(states.reshape(-1, states.shape[-1])).reshape(states.shape[:2] + (-1,))
         theta = np.asarray(skill.theta, dtype=float)
-        A, optimal, rho1, rank = batched_ridge_maps(np.ascontiguousarray(Phi), np.ascontiguousarray(theta.T), lam)
+        A, optimal, rho1, rank = learner.batched_operators(Phi, theta.T)
         residual_norm = np.linalg.norm((A @ optimal - theta.T).reshape(len(A), -1), axis=1)
-        return cls(skill, states, lam, duration, Phi, A, optimal, rho1, rank, residual_norm)
+        evaluation = evaluation_states(skill)
+        return cls(skill, states, learner, duration, Phi, A, optimal, rho1, rank, residual_norm,
+                   skill.features(evaluation), skill.target_actions(evaluation))
+
+    @property
+    def lam(self) -> float:
+        """The learner's ``lam`` (its ridge parameter)."""
+        return self.learner.lam
 
     @property
     def exact(self) -> np.ndarray:
@@ -190,9 +167,12 @@ class EpisodeBatch(QuerySetBatch):
         theta_hat = np.swapaxes(np.einsum("bsn,bnr->bsr", self.learner_map[which], actions), 1, 2)
         theta = np.asarray(self.skill.theta, dtype=float)
         error = np.linalg.norm((theta_hat - theta).reshape(len(actions), -1), axis=1)
+        # The learnt policies on the evaluation states, (B, R, M): a batched product (BLAS), not einsum.
+        gap = theta_hat @ self.evaluation_features.T - self.evaluation_targets.T
+        risk = np.sqrt(np.sum(gap * gap, axis=(1, 2)) / len(self.evaluation_features))
         rho2 = np.linalg.norm((actions - self.optimal_actions[which]).reshape(len(actions), -1), axis=1)
         rho1 = self.rho1[which]
-        return BatchOutcome(theta_hat, error, rho1, rho2, rho1 * rho2 + self.residual_norm[which])
+        return BatchOutcome(theta_hat, error, risk, rho1, rho2, rho1 * rho2 + self.residual_norm[which])
 
     def reproduce(self, theta_hats, record_every: int | None = None):
         """Rolls out learnt skills (B, R, S) from the skill's start over ``duration`` seconds, as one

@@ -12,13 +12,12 @@ states with a vanishing lam) raises ``SingularFitError`` rather than returning N
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from .learner import Learner, check_demonstrations
+from .learner import Learner, check_demonstrations, check_inputs
 from .validation import as_float_array, as_positive
-
-#: What the learners accept as ``inputs``: the skill's features, the raw state, the task space.
-INPUT_SPACES = ("features", "state", "task")
 
 
 class SingularFitError(ValueError):
@@ -31,10 +30,23 @@ def rbf_kernel(A, B, length_scale: float) -> np.ndarray:
     return np.exp(-np.maximum(squared, 0.0) / (2.0 * length_scale * length_scale))
 
 
-def _check_inputs(inputs) -> str:
-    if inputs not in INPUT_SPACES:
-        raise ValueError(f"inputs: expected one of {', '.join(INPUT_SPACES)}, got {inputs!r}")
-    return inputs
+@dataclass(frozen=True)
+class KernelPolicy:
+    """A kernel learner's fitted policy ``pi(x*) = k(x*, X) w``.
+
+    Attributes:
+        kernel: the learner as it was fitted (an unfitted twin: later ``set_params`` leave it).
+        X: (N, D) the query inputs.
+        weights: (N, R) the weights w of the query inputs.
+    """
+
+    kernel: Learner
+    X: np.ndarray
+    weights: np.ndarray
+
+    def predict(self, X_star) -> np.ndarray:
+        X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, self.X.shape[1]))
+        return self.kernel._gram(X_star, self.X) @ self.weights
 
 
 class _RBFSmoother(Learner):
@@ -42,7 +54,7 @@ class _RBFSmoother(Learner):
 
     def check_params(self) -> None:
         as_positive("length_scale", self.length_scale)
-        _check_inputs(self.inputs)
+        check_inputs(self.inputs)
         as_positive("linear_weight", self.linear_weight, allow_zero=True)
 
     def _kernel(self, A, B) -> np.ndarray:
@@ -72,16 +84,13 @@ class _RBFSmoother(Learner):
                 f"states with a regularisation this small); use distinct query states or a larger regularisation")
         return (vectors / shifted) @ vectors.T
 
-    def fit(self, X, U):
-        """Learns from inputs X (N, D) and actions U (N, R); returns (X, weights (N, R))."""
-        X, U = check_demonstrations(X, U)
-        return X, self._inverse(X) @ U   # _inverse checks the hyper-parameters
+    policy_type = KernelPolicy
 
-    def predict(self, fitted, X_star) -> np.ndarray:
-        self.check_params()
-        X, weights = fitted
-        X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, X.shape[1]))
-        return self._gram(X_star, X) @ weights
+    def fit(self, X, U) -> KernelPolicy:
+        """Learns from inputs X (N, D) and actions U (N, R); returns the ``KernelPolicy``."""
+        X, U = check_demonstrations(X, U)
+        weights = self._inverse(X) @ U   # _inverse checks the hyper-parameters
+        return KernelPolicy(self.clone(), X, weights)
 
     def smoother(self, X, X_star) -> np.ndarray:
         self.check_params()

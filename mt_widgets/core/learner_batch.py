@@ -1,8 +1,10 @@
 """The batched teaching episode for any learner: many teachers' demonstrations of one skill at once.
 
-``EpisodeBatch`` (``episode_batch``) is the paper's ridge episode batched: one SVD per set of query
-states gives the learner's map, and the teaching error is ``||Theta_hat - Theta||``.
-``LearnerEpisodeBatch`` is the same episode for every other learner, scored as a
+``episode_batch`` picks the batch by what the learner declares, as ``TeachingEpisode`` does:
+``EpisodeBatch`` (``episode_batch``) for a learner with a Theta on the skill's features
+(``learner.ParametricSmoother``: the paper's ridge), one stacked SVD per set of query states
+giving its map, the teaching error ``||Theta_hat - Theta||``. ``LearnerEpisodeBatch`` is the same
+episode for every other learner, scored as a
 ``TeachingEpisode`` with that learner scores one: the teaching error is the policy risk
 (``learner_teaching``), rho1 and the optimal arrows are the learner's (``action_sensitivity``,
 ``teach``), rho2 is ``||U - U_opt||_F``. Two kinds of learner batch:
@@ -23,8 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .episode_batch import QuerySetBatch
-from .learner import Learner, has_batched_fit, is_linear_smoother
+from .episode_batch import EpisodeBatch, QuerySetBatch
+from .learner import Learner, has_batched_fit, is_linear_smoother, is_parametric_smoother
 from .learner_teaching import action_sensitivity, evaluation_states, learner_inputs, teach
 from .skills import Skill
 from .validation import as_float_array, as_positive
@@ -35,14 +37,16 @@ class LearnerBatchOutcome:
     """What B completed episodes taught, one row per teacher (``BatchOutcome``'s names).
 
     Attributes:
-        theta_hat: None (a learner other than ridge has no Theta).
-        error: (B,) the policy risk of what each teacher taught.
+        theta_hat: None (a learner without a Theta on the features has none).
+        theta_error: None, likewise.
+        policy_risk: (B,) the policy risk of what each teacher taught.
         rho1: (B,) the learnt policy's sensitivity to the actions at each teacher's query states.
         rho2: (B,) ||U - U_opt||_F of each teacher's demonstrations.
     """
 
     theta_hat: None
-    error: np.ndarray
+    theta_error: None
+    policy_risk: np.ndarray
     rho1: np.ndarray
     rho2: np.ndarray
 
@@ -120,4 +124,14 @@ class LearnerEpisodeBatch(QuerySetBatch):
         learnt = self.learnt_on_evaluation(actions, which)
         error = np.sqrt(np.mean(np.sum((learnt - self.evaluation_targets) ** 2, axis=2), axis=1))
         rho2 = np.linalg.norm((actions - self.optimal_actions[which]).reshape(len(actions), -1), axis=1)
-        return LearnerBatchOutcome(None, error, self.rho1[which], rho2)
+        return LearnerBatchOutcome(None, None, error, self.rho1[which], rho2)
+
+
+def episode_batch(skill: Skill, query_states, learner: Learner,
+                  duration: float | None = None) -> EpisodeBatch | LearnerEpisodeBatch:
+    """The batched episode of ``skill`` on K sets of query states (K, N, state_dim) with ``learner``:
+    ``EpisodeBatch`` for a ``ParametricSmoother`` on the skill's features, ``LearnerEpisodeBatch``
+    for any other linear smoother or learner with a batched fit (the one choice, by protocol)."""
+    if is_parametric_smoother(learner):
+        return EpisodeBatch.of(skill, query_states, learner, duration)
+    return LearnerEpisodeBatch.of(skill, query_states, learner, duration)

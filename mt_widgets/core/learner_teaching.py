@@ -29,6 +29,7 @@ never above the target actions' risk. It is a local optimum, and it says so (``e
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import dataclass
 
 import numpy as np
@@ -99,7 +100,8 @@ def make_learner(name: str, skill=None, **parameters) -> Learner:
         if skill is None:
             raise ValueError(f"length_scale: expected a kernel width for {name!r}, or a skill to take the "
                              f"typical one from, got neither")
-        parameters["length_scale"] = typical_length_scale(skill, parameters.get("inputs", "task"))
+        inputs = parameters.get("inputs", inspect.signature(cls).parameters["inputs"].default)
+        parameters["length_scale"] = typical_length_scale(skill, inputs)
     try:
         learner = cls(**parameters)
     except TypeError as error:

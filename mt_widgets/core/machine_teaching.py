@@ -21,54 +21,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .learner import DEFAULT_LAMBDA, check_demonstrations
-from .ridge_kernels import optimal_actions_kernel, ridge_gain, svd_with_rank
+from .ridge_kernels import RidgeOperator, optimal_actions_kernel, ridge_gain, ridge_operator
 from .validation import as_float_array, as_positive
 
 
 class UnderdeterminedTeachingWarning(UserWarning):
     """The query states do not span the feature space: exact teaching is impossible."""
-
-
-@dataclass(frozen=True)
-class RidgeOperator:
-    """The SVD of Phi and what follows from it for a given lam."""
-
-    left: np.ndarray        # W: (N, k)
-    singular: np.ndarray    # s: (k,)
-    right_t: np.ndarray     # V^T: (k, S)
-    lam: float
-    rank: int
-
-    @property
-    def n_features(self) -> int:
-        return self.right_t.shape[1]
-
-    @property
-    def exact(self) -> bool:
-        """Can some demonstration on these states teach any Theta exactly?"""
-        return self.rank == self.n_features
-
-    @property
-    def gains(self) -> np.ndarray:
-        """s / (s^2 + lam), zero for directions Phi does not span."""
-        kept = np.arange(len(self.singular)) < self.rank
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(kept, ridge_gain(self.singular, self.lam), 0.0)
-
-    def matrix(self) -> np.ndarray:
-        """A = (Phi^T Phi + lam I)^-1 Phi^T, (S, N)."""
-        return (self.right_t.T * self.gains) @ self.left.T
-
-    def rho1(self) -> float:
-        return float(np.max(self.gains)) if self.rank else 0.0
-
-
-def ridge_operator(Phi, lam: float) -> RidgeOperator:
-    """Decomposes the learner's map from actions to parameters for features Phi (N, S)."""
-    Phi = as_float_array("Phi", Phi, ndim=2)
-    lam = as_positive("lam", lam, allow_zero=True)
-    left, singular, right_t, rank = svd_with_rank(np.ascontiguousarray(Phi))
-    return RidgeOperator(left, singular, right_t, lam, int(rank))
 
 
 def _check_theta(theta, n_features: int) -> np.ndarray:

@@ -13,11 +13,45 @@ network per perturbed action, at the cost of about one fit.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from .kernel_learners import _check_inputs
-from .learner import Learner, check_demonstrations
+from .learner import Learner, check_demonstrations, check_inputs
 from .validation import as_count, as_float_array, as_positive
+
+
+@dataclass(frozen=True)
+class NetworkBatch:
+    """B trained networks (each weight with a leading axis B) and the standardisation they were
+    trained with (inputs: ``centre``, ``scale``; actions: ``u_centre`` (B, R), ``u_scale`` (B,))."""
+
+    centre: np.ndarray
+    scale: np.ndarray
+    u_centre: np.ndarray
+    u_scale: np.ndarray
+    W1: np.ndarray
+    b1: np.ndarray
+    W2: np.ndarray
+    b2: np.ndarray
+
+    def predict(self, X_star) -> np.ndarray:
+        """(B, M, R) the B networks' actions at inputs X_star (M, D)."""
+        X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, len(self.centre)))
+        Z = (X_star - self.centre) / self.scale
+        out = np.tanh(Z @ self.W1 + self.b1[:, None, :]) @ self.W2 + self.b2[:, None, :]
+        return out * self.u_scale[:, None, None] + self.u_centre[:, None, :]
+
+
+@dataclass(frozen=True)
+class NetworkPolicy:
+    """One trained network's policy (``fit``): ``networks`` holds it as a batch of one."""
+
+    networks: NetworkBatch
+
+    def predict(self, X_star) -> np.ndarray:
+        """(M, R) the network's actions at inputs X_star (M, D)."""
+        return self.networks.predict(X_star)[0]
 
 
 class NeuralNetworkLearner(Learner):
@@ -33,6 +67,7 @@ class NeuralNetworkLearner(Learner):
     """
 
     name = "neural-network"
+    policy_type = NetworkPolicy
 
     def __init__(self, hidden: int = 16, steps: int = 150, learning_rate: float = 0.05, weight_decay: float = 1e-3,
                  seed: int = 0, inputs: str = "task"):
@@ -45,14 +80,14 @@ class NeuralNetworkLearner(Learner):
         as_positive("learning_rate", self.learning_rate)
         as_positive("weight_decay", self.weight_decay)
         as_count("seed", self.seed, minimum=0)
-        _check_inputs(self.inputs)
+        check_inputs(self.inputs)
 
-    def fit(self, X, U):
-        """Learns from inputs X (N, D) and actions U (N, R); returns the trained network."""
+    def fit(self, X, U) -> NetworkPolicy:
+        """Learns from inputs X (N, D) and actions U (N, R); returns the trained ``NetworkPolicy``."""
         X, U = check_demonstrations(X, U)
-        return _first(self.fit_batch(X, U[None]))
+        return NetworkPolicy(self.fit_batch(X, U[None]))
 
-    def fit_batch(self, X, U_batch):
+    def fit_batch(self, X, U_batch) -> NetworkBatch:
         """Trains B networks at the same inputs X (N, D) on actions U_batch (B, N, R)."""
         self.check_params()
         X = as_float_array("X", X, ndim=2)
@@ -86,30 +121,10 @@ class NeuralNetworkLearner(Learner):
                 squares[i] = beta2 * squares[i] + (1 - beta2) * grad * grad
                 params[i] = params[i] - self.learning_rate * (moments[i] / (1 - beta1**step)) / (
                     np.sqrt(squares[i] / (1 - beta2**step)) + eps)
-        return _Networks(centre, scale, u_centre[:, 0, :], u_scale[:, 0, 0], *params)
-
-    def predict(self, fitted, X_star) -> np.ndarray:
-        return fitted.predict(X_star)[0]
+        return NetworkBatch(centre, scale, u_centre[:, 0, :], u_scale[:, 0, 0], *params)
 
     def predict_batch(self, fitted, X_star) -> np.ndarray:
         """(B, M, R) the actions of B networks from ``fit_batch`` at inputs X_star (M, D)."""
+        if not isinstance(fitted, NetworkBatch):
+            raise TypeError(f"fitted: expected a NetworkBatch (what fit_batch returns), got {type(fitted).__name__}")
         return fitted.predict(X_star)
-
-
-class _Networks:
-    """B trained networks and the standardisation they were trained with."""
-
-    def __init__(self, centre, scale, u_centre, u_scale, W1, b1, W2, b2):
-        self.centre, self.scale, self.u_centre, self.u_scale = centre, scale, u_centre, u_scale
-        self.W1, self.b1, self.W2, self.b2 = W1, b1, W2, b2
-
-    def predict(self, X_star) -> np.ndarray:
-        X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, len(self.centre)))
-        Z = (X_star - self.centre) / self.scale
-        out = np.tanh(Z @ self.W1 + self.b1[:, None, :]) @ self.W2 + self.b2[:, None, :]
-        return out * self.u_scale[:, None, None] + self.u_centre[:, None, :]
-
-
-def _first(networks: _Networks) -> _Networks:
-    return _Networks(networks.centre, networks.scale, networks.u_centre[:1], networks.u_scale[:1],
-                     networks.W1[:1], networks.b1[:1], networks.W2[:1], networks.b2[:1])

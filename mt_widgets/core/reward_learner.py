@@ -31,10 +31,13 @@ target is representable; with 8 query states MT teaches each to machine precisio
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .kernel_learners import SingularFitError
-from .learner import Learner, check_demonstrations
+from .learner import Learner, check_demonstrations, check_inputs
+from .plants import KinematicPlant
 from .validation import as_float_array, as_positive
 
 #: The least eigenvalue the learnt W may have. The policy needs only ``W + I`` positive definite
@@ -45,29 +48,88 @@ from .validation import as_float_array, as_positive
 MIN_EIGENVALUE = -0.5
 
 
+@dataclass(frozen=True)
+class RewardPolicies:
+    """B learnt quadratic rewards, W (B, 2, 2) and b (B, 2), and the optimal actions for each."""
+
+    W: np.ndarray
+    b: np.ndarray
+
+    def predict(self, X_star) -> np.ndarray:
+        """(B, M, 2): the optimal actions ``(W + I)^-1 (b - W r)`` of each reward at positions X_star (M, 2)."""
+        X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, 2))
+        system = self.W + np.eye(2)
+        if np.any(np.linalg.cond(system) > 1e12):
+            raise SingularFitError("fitted: the learnt reward has no unique best action (W + I is singular)")
+        right = self.b[:, :, None] - np.swapaxes(X_star @ self.W, 1, 2)       # (B, 2, M)
+        return np.swapaxes(np.linalg.solve(system, right), 1, 2)
+
+
+@dataclass(frozen=True)
+class RewardPolicy:
+    """One learnt reward (W (2, 2), b (2,)) and its optimal policy (what ``RewardLearner.fit`` returns)."""
+
+    W: np.ndarray
+    b: np.ndarray
+
+    def __post_init__(self):
+        object.__setattr__(self, "W", as_float_array("W", self.W, ndim=2, shape=(2, 2)))
+        object.__setattr__(self, "b", as_float_array("b", self.b, ndim=1, shape=(2,)))
+
+    def predict(self, X_star) -> np.ndarray:
+        """The optimal actions ``(W + I)^-1 (b - W r)`` (M, 2) at positions X_star (M, 2)."""
+        return RewardPolicies(self.W[None], self.b[None]).predict(X_star)[0]
+
+    def reward(self, X, U) -> np.ndarray:
+        """The learnt reward R(r, u) (N,) of actions U at positions X; its goal is ``pinv(W) b``."""
+        X = as_float_array("X", X, ndim=2, shape=(None, 2))
+        U = as_float_array("U", U, ndim=2, shape=X.shape)
+        reached = X + U
+        # -1/2 (y - g)^T W (y - g) up to a constant: -1/2 y^T W y + b^T y.
+        return -0.5 * np.einsum("ni,ij,nj->n", reached, self.W, reached) + reached @ self.b - 0.5 * np.sum(U * U,
+                                                                                                          axis=1)
+
+
 class RewardLearner(Learner):
     """Learns a quadratic reward by inverse optimal control and acts optimally for it (module docstring).
 
     Args:
         lam: the ridge on the reward's parameters (W, b) (> 0).
+        inputs: "state" only (the positions r on the uArm's plane; the argument every learner takes).
     """
 
     name = "reward"
-    inputs = "state"
+    policy_type = RewardPolicy
 
-    def __init__(self, lam: float = 1e-3):
+    def __init__(self, lam: float = 1e-3, inputs: str = "state"):
         self.lam = lam
+        self.inputs = inputs
 
     def check_params(self) -> None:
         as_positive("lam", self.lam)
+        check_inputs(self.inputs, ("state",))
 
-    def fit(self, X, U):
+    @classmethod
+    def cannot_represent(cls, skill) -> str | None:
+        """Its policies act on the plane's positions of a kinematic plant ``r <- r + u`` (2-D states
+        and actions), and each is linear in the position (a quadratic reward's optimum)."""
+        plant = skill.plant
+        if not (isinstance(plant, KinematicPlant) and skill.state_dim == 2 and plant.action_dim == 2):
+            return (f"it learns rewards over planar positions of a kinematic plant (2 state and 2 action "
+                    f"numbers, r <- r + u), and skill {skill.key!r}'s plant ({type(plant).__name__}) has "
+                    f"{skill.state_dim} state and {plant.action_dim} action numbers")
+        if skill.policy is not None:
+            return (f"its policies are the optima of quadratic rewards (linear in the position) and skill "
+                    f"{skill.key!r} has a nonlinear target policy")
+        return None
+
+    def fit(self, X, U) -> RewardPolicy:
         """Learns the reward (W (2, 2), b (2,)) from positions X (N, 2) and actions U (N, 2)."""
         X, U = check_demonstrations(X, U)
-        W, b = self.fit_batch(X, U[None])
-        return W[0], b[0]
+        fitted = self.fit_batch(X, U[None])
+        return RewardPolicy(fitted.W[0], fitted.b[0])
 
-    def fit_batch(self, X, U_batch):
+    def fit_batch(self, X, U_batch) -> RewardPolicies:
         """Learns B rewards (W (B, 2, 2), b (B, 2)) at positions X (N, 2) from actions U_batch (B, N, 2)."""
         self.check_params()
         X = as_float_array("X", X, ndim=2)
@@ -86,28 +148,10 @@ class RewardLearner(Learner):
         w11, w12, w22, b1, b2 = np.moveaxis(np.linalg.solve(gram, transposed @ target)[..., 0], -1, 0)
         values, vectors = np.linalg.eigh(np.stack([np.stack([w11, w12], -1), np.stack([w12, w22], -1)], -2))
         W = (vectors * np.maximum(values, MIN_EIGENVALUE)[:, None, :]) @ np.swapaxes(vectors, 1, 2)
-        return W, np.stack([b1, b2], axis=-1)
-
-    def predict(self, fitted, X_star) -> np.ndarray:
-        """The optimal actions ``(W + I)^-1 (b - W r)`` (M, 2) at positions X_star (M, 2)."""
-        W, b = fitted
-        return self.predict_batch((np.asarray(W, dtype=float)[None], np.asarray(b, dtype=float)[None]), X_star)[0]
+        return RewardPolicies(W, np.stack([b1, b2], axis=-1))
 
     def predict_batch(self, fitted, X_star) -> np.ndarray:
         """(B, M, 2): the optimal actions of B learnt rewards (``fit_batch``) at positions X_star (M, 2)."""
-        W, b = fitted
-        X_star = as_float_array("X_star", X_star, ndim=2, shape=(None, 2))
-        system = W + np.eye(2)
-        if np.any(np.linalg.cond(system) > 1e12):
-            raise SingularFitError(f"{self!r}: the learnt reward has no unique best action (W + I is singular)")
-        right = b[:, :, None] - np.swapaxes(X_star @ W, 1, 2)       # (B, 2, M)
-        return np.swapaxes(np.linalg.solve(system, right), 1, 2)
-
-    def reward(self, fitted, X, U) -> np.ndarray:
-        """The learnt reward R(r, u) (N,) of actions U at positions X; its goal is ``pinv(W) b``."""
-        W, b = fitted
-        X = as_float_array("X", X, ndim=2, shape=(None, 2))
-        U = as_float_array("U", U, ndim=2, shape=X.shape)
-        reached = X + U
-        # -1/2 (y - g)^T W (y - g) up to a constant: -1/2 y^T W y + b^T y.
-        return -0.5 * np.einsum("ni,ij,nj->n", reached, W, reached) + reached @ b - 0.5 * np.sum(U * U, axis=1)
+        if not isinstance(fitted, RewardPolicies):
+            raise TypeError(f"fitted: expected RewardPolicies (what fit_batch returns), got {type(fitted).__name__}")
+        return fitted.predict(X_star)

@@ -11,7 +11,12 @@ which numpy's per-call cost is a microsecond or two: one fit plus the optimal ac
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
+from numba import njit
+
+from .validation import as_float_array, as_positive
 
 _EPSILON = float(np.finfo(np.float64).eps)
 
@@ -58,3 +63,88 @@ def optimal_actions_kernel(Phi, theta, lam):
     singular = singular[:rank]
     projected = (right_t[:rank] @ theta.T) / ridge_gain(singular, lam)[:, None]  # (rank, R)
     return left[:, :rank] @ projected, rank
+
+
+@dataclass(frozen=True)
+class RidgeOperator:
+    """The SVD of Phi and what follows from it for a given lam."""
+
+    left: np.ndarray        # W: (N, k)
+    singular: np.ndarray    # s: (k,)
+    right_t: np.ndarray     # V^T: (k, S)
+    lam: float
+    rank: int
+
+    @property
+    def n_features(self) -> int:
+        return self.right_t.shape[1]
+
+    @property
+    def exact(self) -> bool:
+        """Can some demonstration on these states teach any Theta exactly?"""
+        return self.rank == self.n_features
+
+    @property
+    def gains(self) -> np.ndarray:
+        """s / (s^2 + lam), zero for directions Phi does not span."""
+        kept = np.arange(len(self.singular)) < self.rank
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(kept, ridge_gain(self.singular, self.lam), 0.0)
+
+    def matrix(self) -> np.ndarray:
+        """A = (Phi^T Phi + lam I)^-1 Phi^T, (S, N)."""
+        return (self.right_t.T * self.gains) @ self.left.T
+
+    def rho1(self) -> float:
+        return float(np.max(self.gains)) if self.rank else 0.0
+
+
+def ridge_operator(Phi, lam: float) -> RidgeOperator:
+    """Decomposes the learner's map from actions to parameters for features Phi (N, S)."""
+    Phi = as_float_array("Phi", Phi, ndim=2)
+    lam = as_positive("lam", lam, allow_zero=True)
+    left, singular, right_t, rank = svd_with_rank(np.ascontiguousarray(Phi))
+    return RidgeOperator(left, singular, right_t, lam, int(rank))
+
+
+def batched_ridge_maps(Phi, theta_t, lam):
+    """(A (K, S, N), U_bar (K, N, R), rho1 (K,), rank (K,)) for features Phi (K, N, S).
+
+    ``theta_t`` is Theta^T (S, R). numpy decomposes the K matrices in one stacked SVD (numba's
+    would need scipy: ``ridge_kernels``), and the rank follows the single learner's rule
+    (``ridge_kernels.rank_of``); the compiled ``_maps_from_svd`` builds the maps from it.
+    """
+    left, singular, right_t = np.linalg.svd(Phi, full_matrices=False)
+    ranks = np.asarray(rank_of(singular, Phi.shape[1:]), dtype=np.int64).reshape(len(Phi))
+    with np.errstate(divide="ignore", invalid="ignore"):   # a zero singular value is beyond the rank
+        gains = ridge_gain(singular, float(lam))
+    A, optimal, rho1 = _maps_from_svd(left, gains, right_t, ranks, theta_t)
+    return A, optimal, rho1, ranks
+
+
+@njit(cache=True)
+def _maps_from_svd(left, gains, right_t, ranks, theta_t):
+    """(A, U_bar, rho1) of ``batched_ridge_maps`` from the K thin SVDs' vectors, the ridge gains of
+    their singular values (``ridge_kernels.ridge_gain``) and their ranks."""
+    K, N, _ = left.shape
+    S = right_t.shape[2]
+    R = theta_t.shape[1]
+    A = np.zeros((K, S, N))
+    optimal = np.zeros((K, N, R))
+    rho1 = np.zeros(K)
+    for k in range(K):
+        for i in range(ranks[k]):
+            gain = gains[k, i]
+            inverse_gain = 1.0 / gain
+            if gain > rho1[k]:
+                rho1[k] = gain
+            for s in range(S):
+                for n in range(N):
+                    A[k, s, n] += gain * right_t[k, i, s] * left[k, n, i]
+            for r in range(R):
+                along = 0.0
+                for s in range(S):
+                    along += right_t[k, i, s] * theta_t[s, r]
+                for n in range(N):
+                    optimal[k, n, r] += inverse_gain * left[k, n, i] * along
+    return A, optimal, rho1

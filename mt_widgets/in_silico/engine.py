@@ -8,13 +8,14 @@ together for power by simulation. ``run_through_sessions`` (``mt_widgets.in_sili
 drives the session engine, one demonstration at a time, to write real logs.
 
 Each episode is the batched form of a teaching episode: for one episode every participant of a
-study answers the same query states (the paper's "pre-determined" states). For the paper's ridge
-(``mt_widgets.core.episode_batch``) one SVD of Phi gives the learner's map and the optimal arrows
-for all of them, and the fit and its scores (``||Theta_hat - Theta||``) are one batched product.
-Every other learner of ``LEARNERS`` goes through ``mt_widgets.core.learner_batch``: a linear
-smoother's matrix depends on the query states only, so it batches as ridge does; a learner with a
-batched fit (the network, the reward learner) fits each set's teachers in one call. Its teaching
-error is the policy risk, as in a real study with that learner (``TeachingEpisode``).
+study answers the same query states (the paper's "pre-determined" states). Every learner of
+``LEARNERS`` goes through ``mt_widgets.core.learner_batch.episode_batch``, which batches it as it
+declares: a learner with a Theta on the features (``ParametricSmoother``, the paper's ridge) by one
+SVD of Phi per set, giving its map and the optimal arrows for all of them, the fit and its scores
+(``||Theta_hat - Theta||``) one batched product; any other linear smoother by its matrix, which
+depends on the query states only; a learner with a batched fit (the network, the reward learner)
+by fitting each set's teachers in one call. Without a Theta the teaching error is the policy
+risk, as in a real study with that learner (``TeachingEpisode``).
 
 **The synthetic teachers' assumption per learner.** The teacher model (``teachers``) was fitted to
 the paper's ridge studies: a teacher's action blends their own idea of the skill with the arrows
@@ -36,7 +37,7 @@ import numpy as np
 import pandas as pd
 
 from mt_widgets.core.episode_batch import EpisodeBatch
-from mt_widgets.core.learner_batch import LearnerEpisodeBatch
+from mt_widgets.core.learner_batch import LearnerEpisodeBatch, episode_batch
 from mt_widgets.core.learner_teaching import learnt_policy
 from mt_widgets.core.validation import as_bool, as_count
 from mt_widgets.study.participants import block_assignment
@@ -65,13 +66,9 @@ from .teachers import (
 # -- the batched engine ----------------------------------------------------------------------------
 
 def _episode_batch(protocol, skill, states):
-    """The batched episode of ``skill`` on states (K, N, state_dim) with the protocol's learner: the
-    paper's ridge (``EpisodeBatch``, with the protocol's lambda) or any other (``LearnerEpisodeBatch``,
-    the learner made as the study makes it: ``study_learner``)."""
-    learner = study_learner(protocol.learner, skill)
-    if learner is None:
-        return EpisodeBatch.of(skill, states, protocol.lam, protocol.reproduction_duration_s)
-    return LearnerEpisodeBatch.of(skill, states, learner, protocol.reproduction_duration_s)
+    """The batched episode of ``skill`` on states (K, N, state_dim) with the protocol's learner, made
+    as the study makes it (``study_learner``), batched as it declares (``learner_batch.episode_batch``)."""
+    return episode_batch(skill, states, study_learner(protocol, skill), protocol.reproduction_duration_s)
 
 
 @dataclass
@@ -82,12 +79,19 @@ class _BatchOutcome:
     actions: np.ndarray       # (B, N, R)
     optimal: np.ndarray       # (B, N, R)
     theta_hat: np.ndarray | None   # (B, R, S); None for a learner without a Theta
-    error: np.ndarray         # (B,)
+    theta_error: np.ndarray | None   # (B,) ||Theta_hat - Theta||; None for a learner without a Theta
+    policy_risk: np.ndarray   # (B,)
     rho1: np.ndarray          # (B,)
     rho2: np.ndarray          # (B,)
     batch: EpisodeBatch | LearnerEpisodeBatch   # the episode's query states, learner and optimal arrows
     first_input: np.ndarray   # (B, N) s
     drawing: np.ndarray       # (B, N) s
+
+    @property
+    def error(self) -> np.ndarray:
+        """(B,) the error the analysis compares (``analysis.tables.error_measure``'s rule): Theta's
+        error where the learner has a Theta, else the policy risk."""
+        return self.policy_risk if self.theta_error is None else self.theta_error
 
 
 
@@ -139,8 +143,8 @@ def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study
         if step["reproduced"]:
             population.see_reproduction()
         results.append(_BatchOutcome(actions if keep_demonstrations else None,
-                                      optimal if keep_demonstrations else None, outcome.theta_hat, outcome.error,
-                                      outcome.rho1, outcome.rho2, batch, first, drawing))
+                                      optimal if keep_demonstrations else None, outcome.theta_hat, outcome.theta_error,
+                                      outcome.policy_risk, outcome.rho1, outcome.rho2, batch, first, drawing))
         if progress is not None:
             progress.update()
     return results
@@ -227,9 +231,9 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
 
     started = time.perf_counter()
     reproductions, diverged = {}, np.zeros((n_participants, len(plan)), dtype=bool)
-    if reproduce and protocol.learner != "ridge":
-        # Another learner's policy is rolled out one participant at a time (the plant's generic
-        # integrator, as a TeachingEpisode's reproduction with that learner).
+    if reproduce and not all(isinstance(r.batch, EpisodeBatch) for r in results):
+        # A learner without a Theta: its policy is rolled out one participant at a time (the plant's
+        # generic integrator, as a TeachingEpisode's reproduction with that learner).
         for e, step in enumerate(plan):
             batch = results[e].batch
             for p in range(n_participants):
@@ -242,7 +246,7 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
         for skill_key in dict.fromkeys(step["skill"] for step in plan):
             columns = [e for e, step in enumerate(plan) if step["skill"] == skill_key]
             thetas = np.concatenate([results[e].theta_hat for e in columns])
-            # One rollout batch per skill: every episode of that skill shares the plant and start.
+            # A Theta for every episode: one rollout batch per skill (its episodes share plant and start).
             batch = results[columns[0]].batch.reproduce(thetas, record_every=record_every)
             for k, e in enumerate(columns):
                 for p in range(n_participants):
@@ -267,7 +271,8 @@ def run_in_silico(n_participants: int = 32, protocol=None, parameters: TeacherPa
                 "phase": step["phase"], "phase_index": step["phase_index"], "episode": step["episode"],
                 "skill": step["skill"],
                 "guidance": int(guided), "n_demonstrations": step["demonstrations"],
-                "teaching_error": float(r.error[p]), "rho1": float(r.rho1[p]), "rho2": float(r.rho2[p]),
+                "theta_error": None if r.theta_error is None else float(r.theta_error[p]),
+                "policy_risk": float(r.policy_risk[p]), "rho1": float(r.rho1[p]), "rho2": float(r.rho2[p]),
                 # Only ridge has a Theta_hat (another learner's is empty, as in a real study's tidy file).
                 "theta_hat": None if r.theta_hat is None else json.dumps(np.round(r.theta_hat[p], 12).tolist()),
                 "reproduction_diverged": bool(diverged[p, e]) if reproduce else None,

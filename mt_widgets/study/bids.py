@@ -43,12 +43,13 @@ import re
 from pathlib import Path
 
 import mt_widgets
+from mt_widgets.core.learner import is_parametric_smoother
 
 from .log import read_log
 from .pseudonyms import codes_for
 from .study_folder import StudyFolder
-from .study_learners import PAPER_LEARNER, learner_parameters, study_learner
-from .tidy import excluded_participants, participant_logs
+from .study_learners import learner_parameters, study_learner
+from .tidy import episode_errors, excluded_participants, participant_logs
 
 BIDS_VERSION = "1.9.0"
 
@@ -121,8 +122,14 @@ def _beh_sidecar(protocol) -> dict:
         "drawing_duration": {"Description": "From the first input to the confirmation.", "Units": "s"},
         "response_time": {"Description": "From the state appearing to the demonstration being recorded.",
                           "Units": "s"},
-        "teaching_error": {"Description": "The episode's teaching error ||Theta_hat - Theta||_F (the same on each "
-                                          "row of the episode; n/a if the episode was not completed)."},
+        "theta_error": {"Description": "The episode's teaching error ||Theta_hat - Theta||_F (the same on each "
+                                       "row of the episode; n/a if the episode was not completed or its learner "
+                                       "has no Theta)."},
+        "policy_risk": {"Description": "The episode's policy risk: the RMS distance of the learnt policy's actions "
+                                       "from the target's over the skill's evaluation states "
+                                       "(mt_widgets.core.learner_teaching; the same on each row of the episode; n/a "
+                                       "if the episode was not completed or its log predates the field).",
+                        "Units": action},
         "rho1": {"Description": "The episode's ||A||_2 (how the query states amplify action errors)."},
         "rho2": {"Description": "The episode's ||U - U_bar||_F (distance of the actions from the optimal ones).",
                  "Units": action},
@@ -134,17 +141,14 @@ def _beh_sidecar(protocol) -> dict:
         columns[f"action_{i + 1}"] = {"Description": f"Component {i + 1} of the demonstrated action.", "Units": action}
         columns[f"optimal_{i + 1}"] = {"Description": f"Component {i + 1} of the optimal action.", "Units": action}
     learner = {"Learner": protocol.learner}
-    if protocol.learner == PAPER_LEARNER:
+    learners = {s.key: study_learner(protocol, s) for s in sorted(skills, key=lambda s: s.key)}
+    if all(is_parametric_smoother(made) for made in learners.values()):
+        # A Theta on the features (the paper's ridge): the paper's sidecar, its lambda by name.
         learner["LearnerRidgeLambda"] = protocol.lam
     else:
-        # Another learner has no Theta: the error is its policy risk, and its parameters are per
-        # skill (a kernel's width is the skill's typical distance).
-        columns["teaching_error"] = {"Description": "The episode's teaching error, the policy risk of the learnt "
-                                                    "policy: the RMS distance of its actions from the target's over "
-                                                    "the skill's evaluation states (mt_widgets.core.learner_teaching; "
-                                                    "n/a if the episode was not completed).", "Units": action}
-        learner["LearnerParameters"] = {s.key: learner_parameters(study_learner(protocol.learner, s))
-                                        for s in sorted(skills, key=lambda s: s.key)}
+        # Another learner has no Theta (its theta_error is n/a), and its parameters are per skill (a
+        # kernel's width is the skill's typical distance).
+        learner["LearnerParameters"] = {key: learner_parameters(made) for key, made in learners.items()}
     return {"TaskName": protocol.name, "TaskDescription": protocol.title,
             "Instructions": protocol.texts["instructions"].strip(), "PositionUnits": unit,
             # Which robot learner the demonstrations taught (mt_widgets.core.LEARNERS), and its parameters.
@@ -297,7 +301,8 @@ def _write_participant(out: Path, label: str, task: str, events: list[dict], sid
                "optimal_1": event["optimal"][0], "optimal_2": event["optimal"][1],
                "time_to_first_input": event["time_to_first_input_s"],
                "drawing_duration": event["drawing_duration_s"], "response_time": event["response_time_s"],
-               "teaching_error": done.get("teaching_error"), "rho1": done.get("rho1"), "rho2": done.get("rho2"),
+               **dict(zip(("theta_error", "policy_risk"), episode_errors(done) if done else (None, None))),
+               "rho1": done.get("rho1"), "rho2": done.get("rho2"),
                "reproduction_diverged": done["reproduction"]["diverged"] if done else None}
         row.update({f"state_{i + 1}": value for i, value in enumerate(event["state"])})
         row.update({f"{name}_{i + 1}": event[name][i] for name in ("action", "optimal")
@@ -308,7 +313,8 @@ def _write_participant(out: Path, label: str, task: str, events: list[dict], sid
     extra = [f"{name}_{i + 1}" for name in ("action", "optimal") for i in range(2, more_actions)]
     columns = ["onset", "phase", "phase_index", "episode", "trial", "skill", "guidance_shown", "guidance_modality",
                *state_columns, "action_1", "action_2", "optimal_1", "optimal_2", *extra, "time_to_first_input",
-               "drawing_duration", "response_time", "teaching_error", "rho1", "rho2", "reproduction_diverged"]
+               "drawing_duration", "response_time", "theta_error", "policy_risk", "rho1", "rho2",
+               "reproduction_diverged"]
     folder = out / f"sub-{label}" / (f"ses-{session}" if session else "") / "beh"
     folder.mkdir(parents=True)
     stem = f"sub-{label}" + (f"_ses-{session}" if session else "") + f"_task-{task}_beh"

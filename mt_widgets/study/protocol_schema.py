@@ -219,6 +219,7 @@ def parse_protocol(text: str, source: str = "<string>", kind: str | None = None,
     if arm is not None:
         check_arm_skills(check, arm, skills, practice, [(("phases", i, "skill"), p) for i, p in enumerate(phases)]
                          + [(("sessions",), p) for session in sessions[1:] for p in session.phases])
+    _check_learner_represents(check, learner, sessions, skills)
     online = parse_online(check, raw)
     reproduce_after = check.get(raw, ("reproduce_after",), "text", default="episode", choices=REPRODUCTION_TIMINGS)
     matched = _parse_matched_difficulty(check, raw)
@@ -266,6 +267,18 @@ def _parse_learner(check, raw: dict) -> str:
         check.fail(("learner",), f"unknown learner {learner!r}; expected one of the available learners "
                                  f"({', '.join(LEARNERS)})")
     return learner
+
+
+def _check_learner_represents(check, learner: str, sessions, skills) -> None:
+    """Refuses a protocol whose learner cannot represent a skill its phases teach (``Learner.
+    cannot_represent``): its machine teaching could not teach that skill, and its guidance would
+    show arrows toward a policy the learner never reaches."""
+    taught = dict.fromkeys(phase.skill for session in sessions for phase in session.phases)
+    for key in taught:
+        reason = LEARNERS[learner].cannot_represent(skills[key])
+        if reason is not None:
+            check.fail(("learner",), f"learner {learner!r} cannot represent skill {key!r}: {reason}; choose a "
+                                     f"learner that can (one of {', '.join(LEARNERS)}) or another skill")
 
 
 def _parse_matched_difficulty(check, raw: dict):

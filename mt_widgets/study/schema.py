@@ -49,18 +49,23 @@ Participant log events (one JSON object a line; ``mt_widgets.study.log`` writes 
 - ``episode_started``: phase, phase_index, episode (1-based), skill, guidance (bool),
   n_demonstrations, query_states (N x state_dim), features (N x S), theta (R x S), lam,
   optimal (N x R), exact (bool), guidance_modality, seed {study_seed, spawn_key}; for a
-  protocol's learner other than ridge also learner (its name) and learner_parameters.
+  protocol's learner without a Theta on the features also learner (its name) and
+  learner_parameters.
 - ``demonstration``: phase, phase_index, episode, index (0-based), state, action, optimal,
   guidance_shown (bool), time_to_first_input_s, drawing_duration_s, response_time_s (from
   the state's appearance to the submission, measured by the engine), input (method, redraws,
   ... as given by the caller), modality ("hand" for an input method "hand", else "drawn").
 - ``episode_finished``: phase, phase_index, episode, skill, guidance, actions (N x R),
-  optimal, theta_hat (R x S), teaching_error, rho1, rho2, bound, residual, contributions
-  (N,), exact, reproduction {diverged, diverged_at, final_position, duration_s}, started_at,
-  duration_s (wall clock from episode_started, interruptions included). For a learner other than
-  ridge: theta_hat, bound and residual are null, teaching_error is the policy risk
-  (``mt_widgets.core.learner_teaching``), and learner and learnt_actions (N x R, the fitted policy
-  at the query states) are added (``mt_widgets.study.study_learners``).
+  optimal, theta_hat (R x S), theta_error (||Theta_hat - Theta||), policy_risk (the learnt policy's
+  RMS distance from the target's actions over the skill's evaluation states,
+  ``mt_widgets.core.learner_teaching``), rho1, rho2, bound, residual, contributions (N,), exact,
+  reproduction {diverged, diverged_at, final_position, duration_s}, started_at, duration_s (wall
+  clock from episode_started, interruptions included). For a learner without a Theta on the
+  features: theta_hat, theta_error, bound and residual are null, and learner and learnt_actions
+  (N x R, the fitted policy at the query states) are added (``mt_widgets.study.study_learners``).
+  Logs written before theta_error and policy_risk had their own names hold one teaching_error
+  instead (Theta's error with a theta_hat, else the policy risk); they still read
+  (``mt_widgets.study.tidy.episode_errors``).
 - ``session_finished``.
 """
 

@@ -30,7 +30,7 @@ Driver API (the widget app, scripts and synthetic teachers all use this)::
                                                              "drawing_duration_s": 0.8})
             # feedback.optimal is the optimal action when step.guidance, else None
         elif step.kind == "episode_end":
-            result = session.finish_episode()      # theta_hat, teaching_error, trajectory
+            result = session.finish_episode()      # theta_hat, theta_error, policy_risk, trajectory
         else:                                      # welcome, consent, instructions,
             session.advance()                      # phase_intro, reproduction
     session.close()

@@ -22,7 +22,7 @@ from mt_widgets.core.validation import as_positive
 
 from .log import to_jsonable
 from .session_types import EpisodeResult, Feedback, SessionStateError
-from .study_learners import PAPER_LEARNER, learner_parameters, learnt_actions, study_learner
+from .study_learners import learner_parameters, learnt_actions, study_learner
 from .timeline import Slot, episode_query_states
 
 #: Timing keys ``submit_demonstration`` reads (seconds, None when unknown).
@@ -63,15 +63,16 @@ class SessionEpisodes:
         self._teaching_episodes[(phase.index, slot.episode)] = teaching
 
     def _new_teaching_episode(self, skill, states) -> TeachingEpisode:
-        """The episode of ``skill`` on ``states`` with this protocol's learner (ridge: its lambda)
-        and reproduction length."""
-        return TeachingEpisode(skill, states, lam=self.protocol.lam, duration=self.protocol.reproduction_duration_s,
-                               learner=study_learner(self.protocol.learner, skill))
+        """The episode of ``skill`` on ``states`` with this protocol's learner (``study_learner``:
+        ridge's lambda is the protocol's) and reproduction length."""
+        return TeachingEpisode(skill, states, duration=self.protocol.reproduction_duration_s,
+                               learner=study_learner(self.protocol, skill))
 
     def _learner_fields(self, teaching: TeachingEpisode) -> dict:
-        """What ``episode_started`` logs of a learner other than ridge (nothing for ridge: the paper
-        protocols' log stays as it was): its name and parameters."""
-        if self.protocol.learner == PAPER_LEARNER:
+        """What ``episode_started`` logs of a learner without a Theta on the features: its name and
+        parameters (a learner with one logs Theta_hat and the analysis: the paper protocols' log
+        stays as it was)."""
+        if teaching.has_theta:
             return {}
         return {"learner": self.protocol.learner, "learner_parameters": learner_parameters(teaching.learner)}
 
@@ -190,7 +191,7 @@ class SessionEpisodes:
             self._teaching_episodes[key] = episode
         teaching = self._teaching_episodes[key]
         trajectory = teaching.reproduction
-        if teaching.ridge:
+        if teaching.has_theta:
             theta_hat, bound, residual, learnt = teaching.theta_hat, teaching.bound, teaching.residual_norm, {}
         else:
             # No Theta: what every learner gives, its fitted policy at the query states (the
@@ -200,7 +201,8 @@ class SessionEpisodes:
         self.log.append(
             "episode_finished", phase=started["phase"], phase_index=slot.phase_index, episode=slot.episode,
             skill=started["skill"], guidance=started["guidance"], actions=teaching.actions,
-            optimal=teaching.optimal_actions, theta_hat=theta_hat, teaching_error=teaching.error,
+            optimal=teaching.optimal_actions, theta_hat=theta_hat, theta_error=teaching.theta_error,
+            policy_risk=teaching.policy_risk,
             rho1=teaching.rho1, rho2=teaching.rho2, bound=bound, residual=residual,
             contributions=teaching.contribution_norms, exact=teaching.exact, **learnt,
             reproduction={"diverged": trajectory.diverged, "diverged_at": trajectory.diverged_at,
@@ -221,7 +223,7 @@ class SessionEpisodes:
             ("skill", episode.skill.key == started["skill"]
              and np.array_equal(episode.skill.theta, np.asarray(started["theta"], dtype=float)),
              f"the skill {started['skill']!r} and its theta", repr(episode.skill.key)),
-            ("lam", episode.lam == self.protocol.lam, f"the protocol's lam {self.protocol.lam}", episode.lam),
+            ("lam", episode.lam == logged.lam, f"the protocol's lam {logged.lam}", episode.lam),
             ("learner", repr(episode.learner) == repr(logged.learner), f"the protocol's learner {logged.learner!r}",
              repr(episode.learner)),
             ("duration", episode.duration == duration, f"the protocol's reproduction of {duration} s",

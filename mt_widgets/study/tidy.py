@@ -6,9 +6,12 @@ the standard library: analysis code may load the CSVs with pandas, the runner ne
 episodes.csv columns (``EPISODE_COLUMNS``): study, participant, group, session (the protocol
 session's id, "main" for a one-session protocol), phase, phase_index
 (0-based), episode (1-based within the phase), skill, guidance (0/1), n_demonstrations,
-teaching_error, rho1, rho2, theta_hat (JSON list of rows; empty for a learner other than ridge,
-whose teaching_error is the policy risk), reproduction_diverged (0/1),
-started_at (ISO 8601 UTC), duration_s.
+theta_error (||Theta_hat - Theta||; empty for a learner without a Theta), policy_risk (the learnt
+policy's RMS distance from the target's actions over the skill's evaluation states; every learner;
+empty for a log written before it was logged), rho1, rho2, theta_hat (JSON list of rows; empty for
+a learner without a Theta), reproduction_diverged (0/1), started_at (ISO 8601 UTC), duration_s.
+A log written when the two errors were one field, ``teaching_error``, still reads: it is the
+theta_error where the episode has a theta_hat, else the policy_risk (``episode_errors``).
 
 demonstrations.csv columns (``DEMONSTRATION_COLUMNS``): study, participant, group, session, phase,
 phase_index, episode, index (0-based), skill, state (JSON list), action_1, action_2,
@@ -34,11 +37,21 @@ from .schema import migrate_study_meta
 from .study_folder import OUTCOME_FILE, STUDY_FILE
 
 EPISODE_COLUMNS = ("study", "participant", "group", "session", "phase", "phase_index", "episode", "skill", "guidance",
-                   "n_demonstrations", "teaching_error", "rho1", "rho2", "theta_hat", "reproduction_diverged",
-                   "started_at", "duration_s")
+                   "n_demonstrations", "theta_error", "policy_risk", "rho1", "rho2", "theta_hat",
+                   "reproduction_diverged", "started_at", "duration_s")
 DEMONSTRATION_COLUMNS = ("study", "participant", "group", "session", "phase", "phase_index", "episode", "index",
                          "skill", "state", "action_1", "action_2", "optimal_1", "optimal_2", "guidance_shown",
                          "time_to_first_input_s", "drawing_duration_s", "action_3", "optimal_3")
+
+
+def episode_errors(event: dict) -> tuple[float | None, float | None]:
+    """(theta_error, policy_risk) of an ``episode_finished`` event. A log written when they were
+    one field, ``teaching_error``, holds Theta's error where the event has a theta_hat (the paper's
+    ridge) and the policy risk otherwise; its other error was not logged (None)."""
+    if "policy_risk" in event:
+        return event.get("theta_error"), event["policy_risk"]
+    error = event["teaching_error"]
+    return (error, None) if event.get("theta_hat") is not None else (None, error)
 
 
 def participant_logs(study_folder) -> list[Path]:
@@ -114,8 +127,9 @@ def read_study(study_folder) -> tuple[list[dict], list[dict]]:
                     "phase": event["phase"], "phase_index": event["phase_index"], "episode": event["episode"],
                     "skill": event["skill"],
                     "guidance": int(bool(event["guidance"])), "n_demonstrations": len(event["actions"]),
-                    "teaching_error": event["teaching_error"], "rho1": event["rho1"], "rho2": event["rho2"],
-                    # Only ridge has a Theta_hat (another learner's is null in the log: study_learners).
+                    **dict(zip(("theta_error", "policy_risk"), episode_errors(event))),
+                    "rho1": event["rho1"], "rho2": event["rho2"],
+                    # Only a learner with a Theta logs Theta_hat (another's is null: study_learners).
                     "theta_hat": None if event["theta_hat"] is None else json.dumps(event["theta_hat"]),
                     "reproduction_diverged": int(bool(event["reproduction"]["diverged"])),
                     "started_at": event["started_at"], "duration_s": event["duration_s"]})

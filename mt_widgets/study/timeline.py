@@ -29,6 +29,7 @@ import numpy as np
 
 from mt_widgets.core import SeedSchedule
 from mt_widgets.core.episode_batch import EpisodeBatch
+from mt_widgets.core.learner import RidgeLearner
 
 
 class StepKind(str, Enum):
@@ -147,7 +148,7 @@ def planned_episodes(protocol, session: str | None = None) -> list[PlannedEpisod
 def learner_sensitivity(skill, states, lam: float) -> float:
     """||A||_F of the learner's ridge map on ``states``: how much a unit slip of the arrows moves
     the learnt policy (the same slip costs more where it is larger)."""
-    batch = EpisodeBatch.of(skill, np.asarray(states, dtype=float)[None], lam)
+    batch = EpisodeBatch.of(skill, np.asarray(states, dtype=float)[None], RidgeLearner(lam))
     return float(np.linalg.norm(batch.learner_map[0]))
 
 

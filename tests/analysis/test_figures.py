@@ -42,7 +42,7 @@ def test_fig3a_plots_each_groups_mean_error_per_episode(study):
     rows = study.episodes
     for group in ("target", "control"):
         line = _line(figure, group)
-        expected = rows[rows.group == group].groupby(["phase_index", "episode"]).teaching_error.mean().to_numpy()
+        expected = rows[rows.group == group].groupby(["phase_index", "episode"]).theta_error.mean().to_numpy()
         assert line.get_ydata() == pytest.approx(expected)
         assert list(line.get_xdata()) == list(range(12))
     labels = [t.get_text() for t in figure.axes[0].get_xticklabels()]
@@ -52,7 +52,7 @@ def test_fig3a_plots_each_groups_mean_error_per_episode(study):
 def test_fig3a_error_bars_are_the_standard_error(study):
     figure = plot_error_by_episode(study.episodes, error_bars="sem")
     rows = study.episodes[(study.episodes.group == "target") & (study.episodes.phase == "P1")]
-    errors = rows.teaching_error.to_numpy()
+    errors = rows.theta_error.to_numpy()
     sem = errors.std(ddof=1) / np.sqrt(errors.size)
     # The error bar's segment for P1E1 spans mean - sem to mean + sem.
     bars = [c for c in figure.axes[0].collections if len(c.get_segments()) == 12]
@@ -96,7 +96,7 @@ def test_the_report_shows_the_participants_own_errors_and_arrows(study, tmp_path
     participant = study.episodes.participant.iloc[-1]
     figure = teaching_report(study.episodes, study.demonstrations, participant)
     mine = study.episodes[study.episodes.participant == participant]
-    assert _line(figure, "participant-error").get_ydata() == pytest.approx(mine.teaching_error.to_numpy())
+    assert _line(figure, "participant-error").get_ydata() == pytest.approx(mine.theta_error.to_numpy())
     demos = study.demonstrations
     demos = demos[(demos.participant == participant) & (demos.phase == "P1")]
     u = demos[["action_1", "action_2"]].to_numpy()

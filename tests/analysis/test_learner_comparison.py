@@ -60,11 +60,11 @@ def test_the_batched_engine_scores_every_learner_as_its_teaching_episode_does(pr
         skill = protocol.skill(demos["skill"].iloc[0])
         states = np.array([json.loads(s) for s in demos["state"]])
         actions = demos[["action_1", "action_2"]].to_numpy()
-        single = TeachingEpisode.from_actions(skill, states, actions, learner=study_learner(protocol.learner, skill))
+        single = TeachingEpisode.from_actions(skill, states, actions, learner=study_learner(protocol, skill))
         episodes = study.episodes
         row = episodes[(episodes["participant"] == participant) & (episodes["phase"] == phase)
                        & (episodes["episode"] == episode)].iloc[0]
-        np.testing.assert_allclose(row["teaching_error"], single.error, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(row["policy_risk"], single.policy_risk, rtol=1e-9, atol=1e-12)
         np.testing.assert_allclose(row["rho1"], single.rho1, rtol=1e-9)
         np.testing.assert_allclose(demos[["optimal_1", "optimal_2"]].to_numpy(), single.optimal_actions, atol=1e-9)
         checked += 1

@@ -80,7 +80,7 @@ def test_the_your_own_skill_tutorials_puck_is_taught_with_real_drags_on_the_demo
     # worth of the optimal one ...
     assert np.all(np.abs(demos - reference.optimal) <= 1.5 * one_pixel)
     # ... and the error the page shows is the one the learner gives for these very actions.
-    theta_hat = RidgeLearner(lam=reference.lam).fit(reference.features, demos)
+    theta_hat = RidgeLearner(lam=reference.lam).fit(reference.features, demos).theta
     error = teaching_risk(theta_hat, park.theta)
     assert s["error"] == pytest.approx(error, rel=1e-9, abs=1e-12)
     assert error < 0.2, "aimed at the optimal arrows, the puck learns its skill closely"

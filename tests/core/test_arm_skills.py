@@ -29,7 +29,7 @@ def test_mt_teaches_every_skill_of_the_panda_and_the_so101_exactly(key):
         Phi = skill.features(states)
         for lam in (0.0, 1e-3, 0.1):
             U = optimal_actions(Phi, skill.theta, lam)
-            assert teaching_risk(RidgeLearner(lam=lam).fit(Phi, U), skill.theta) < 1e-12
+            assert teaching_risk(RidgeLearner(lam=lam).fit(Phi, U).theta, skill.theta) < 1e-12
     episode = TeachingEpisode(skill, seed=4)
     for action in episode.optimal_actions:
         episode.demonstrate(action)

@@ -43,7 +43,7 @@ def test_the_result_matches_the_learner_the_risk_and_the_bound():
     for action in U:
         episode.demonstrate(action)
     Phi = skill.features(episode.query_states)
-    theta_hat = RidgeLearner(DEFAULT_LAMBDA).fit(Phi, U)
+    theta_hat = RidgeLearner(DEFAULT_LAMBDA).fit(Phi, U).theta
     np.testing.assert_allclose(episode.theta_hat, theta_hat, atol=1e-10)
     np.testing.assert_allclose(episode.theta_hat, (_ridge_map(Phi, DEFAULT_LAMBDA) @ U).T, atol=1e-9)
     assert episode.error == pytest.approx(teaching_risk(theta_hat, skill.theta), rel=1e-10)

@@ -14,8 +14,8 @@ def test_ridge_given_as_a_learner_is_the_papers_episode():
     states = skill.query_states(seed=4)
     plain, given = TeachingEpisode(skill, states, lam=0.05), TeachingEpisode(skill, states, learner=RidgeLearner(0.05))
     np.testing.assert_array_equal(plain.optimal_actions, given.optimal_actions)
-    assert given.lam == 0.05 and given.ridge and plain.rho1 == given.rho1
-    with pytest.raises(ValueError, match="lam: expected none \\(or the ridge learner's own lam 0.05\\)"):
+    assert given.lam == 0.05 and given.has_theta and plain.rho1 == given.rho1
+    with pytest.raises(ValueError, match="lam: expected none \\(or the learner's own lam 0.05\\)"):
         TeachingEpisode(skill, states, lam=0.2, learner=RidgeLearner(0.05))
     # The default's value given explicitly is a second source too: refused, not overridden.
     with pytest.raises(ValueError, match="got 0.01: the learner's lam is the one source"):
@@ -33,7 +33,7 @@ def test_a_kernel_learners_episode_guides_with_its_mt_and_scores_the_policy_risk
     episode = TeachingEpisode(skill, states, learner=learner)
     teaching = teach(learner, skill, states)
     np.testing.assert_allclose(episode.optimal_actions, teaching.optimal)
-    assert not episode.ridge and not episode.exact and episode.rho1 > 0
+    assert not episode.has_theta and not episode.exact and episode.rho1 > 0
     first = episode.demonstrate(episode.optimal_actions[0] + [1.0, 0.0])
     # The gain bounds how much this gap can move the risk (a linear smoother: exactly linear).
     moved = risk_of_actions(learner, skill, states, np.vstack([first.action, episode.optimal_actions[1:]]))
@@ -41,7 +41,7 @@ def test_a_kernel_learners_episode_guides_with_its_mt_and_scores_the_policy_risk
     episode.restore(episode.optimal_actions[1:])
     assert episode.error == pytest.approx(risk_of_actions(learner, skill, states, episode.actions), rel=1e-12)
     for ridge_only in ("theta_hat", "analysis", "contributions", "bound", "residual"):
-        with pytest.raises(EpisodeStateError, match="only the ridge learner has a Theta"):
+        with pytest.raises(EpisodeStateError, match="only a learner with a Theta on the skill.s features"):
             getattr(episode, ridge_only)
     path = episode.reproduction.positions
     assert np.linalg.norm(path[-1] - [23.0, 11.0]) < 3.0 and episode.reproduced

@@ -10,7 +10,7 @@ from sklearn.kernel_ridge import KernelRidge
 
 from mt_widgets.core import SKILLS, RidgeLearner, Skill, optimal_actions
 from mt_widgets.core.kernel_learners import GaussianProcessLearner, KernelRidgeLearner, SingularFitError, rbf_kernel
-from mt_widgets.core.learner import has_batched_fit, is_linear_smoother
+from mt_widgets.core.learner import FittedPolicy, LinearPolicy, has_batched_fit, is_linear_smoother
 from mt_widgets.core.learner_teaching import (
     LEARNERS,
     evaluation_states,
@@ -89,9 +89,12 @@ def test_ridge_implements_the_interface_with_its_figures_unchanged():
     Phi = skill.features(states)
     U = np.random.default_rng(0).normal(size=(5, 2))
     learner = RidgeLearner(0.01)
-    theta_hat = learner.fit(Phi, U)
+    fitted = learner.fit(Phi, U)
+    assert isinstance(fitted, LinearPolicy) and isinstance(fitted, FittedPolicy)
+    theta_hat = fitted.theta
     eval_phi = skill.features(evaluation_states(skill, 30))
-    np.testing.assert_allclose(learner.predict(theta_hat, eval_phi), eval_phi @ theta_hat.T)
+    np.testing.assert_allclose(learner.predict(fitted, eval_phi), eval_phi @ theta_hat.T)
+    np.testing.assert_array_equal(fitted.predict(eval_phi), learner.predict(fitted, eval_phi))
     np.testing.assert_allclose(learner.smoother(Phi, eval_phi) @ U, eval_phi @ theta_hat.T, atol=1e-12)
 
 
@@ -216,7 +219,7 @@ def test_a_singular_fit_says_so_instead_of_returning_nan():
     with pytest.raises(SingularFitError, match="repeated"):
         learner.smoother(X, X)
     # The same states with an ordinary lam fit fine and finite.
-    assert np.all(np.isfinite(KernelRidgeLearner(1.0, lam=1e-3, inputs="state").fit(X, np.ones((3, 2)))[1]))
+    assert np.all(np.isfinite(KernelRidgeLearner(1.0, lam=1e-3, inputs="state").fit(X, np.ones((3, 2))).weights))
 
 
 def test_an_unknown_learner_name_lists_the_available_ones():
@@ -225,7 +228,7 @@ def test_an_unknown_learner_name_lists_the_available_ones():
         make_learner("svm")
     with pytest.raises(ValueError, match="length_scale"):
         make_learner("kernel-ridge")
-    with pytest.raises(ValueError, match="inputs: expected one of features, state, task"):
+    with pytest.raises(ValueError, match="inputs: expected one of 'features', 'state', 'task'"):
         make_learner("kernel-ridge", length_scale=1.0, inputs="joint")
 
 

@@ -33,7 +33,7 @@ def teaching_problems(draw, below_teaching_dimension=False):
 @given(teaching_problems())
 def test_learning_from_the_optimal_demonstration_gives_back_theta(problem):
     Phi, theta, lam, _ = problem
-    learnt = RidgeLearner(lam).fit(Phi, optimal_actions(Phi, theta, lam))
+    learnt = RidgeLearner(lam).fit(Phi, optimal_actions(Phi, theta, lam)).theta
     assert np.linalg.norm(learnt - theta) / np.linalg.norm(theta) < 1e-8
 
 
@@ -45,7 +45,7 @@ def test_the_risk_bound_holds_and_contributions_add_up(problem):
     analysis = analyse_demonstrations(Phi, U, theta, lam)
     assert analysis.exact
     assert analysis.risk <= analysis.rho1 * analysis.rho2 * (1 + 1e-9) + 1e-12
-    np.testing.assert_allclose(analysis.risk, teaching_risk(RidgeLearner(lam).fit(Phi, U), theta), rtol=1e-9)
+    np.testing.assert_allclose(analysis.risk, teaching_risk(RidgeLearner(lam).fit(Phi, U).theta, theta), rtol=1e-9)
     # Each demonstration's share: the triangle inequality over the exact decomposition.
     assert analysis.risk <= analysis.contributions.sum() * (1 + 1e-9) + 1e-12
     singular = np.linalg.svd(Phi, compute_uv=False)
@@ -59,11 +59,11 @@ def test_below_the_teaching_dimension_no_demonstration_does_better(problem):
     with pytest.warns(UnderdeterminedTeachingWarning, match="rank"):
         best = optimal_actions(Phi, theta, lam)
     learner = RidgeLearner(lam)
-    best_risk = teaching_risk(learner.fit(Phi, best), theta)
+    best_risk = teaching_risk(learner.fit(Phi, best).theta, theta)
     assert best_risk > 0
     for scale in (1e-3, 1e-1, 10.0):
         other = best + rng.normal(scale=scale, size=best.shape)
-        assert teaching_risk(learner.fit(Phi, other), theta) >= best_risk * (1 - 1e-9)
+        assert teaching_risk(learner.fit(Phi, other).theta, theta) >= best_risk * (1 - 1e-9)
     # First-order optimality of min ||A U - Theta^T||, with A built independently: ridge as the
     # least-squares problem on Phi stacked over sqrt(lam) I (stable where Phi^T Phi + lam I is not).
     N, S = Phi.shape
@@ -100,7 +100,7 @@ def test_repeated_states_with_no_ridge_fit_without_failing():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UnderdeterminedTeachingWarning)
         U = optimal_actions(Phi, np.ones((2, 3)), 0.0)
-    assert np.all(np.isfinite(RidgeLearner(0.0).fit(Phi, U)))
+    assert np.all(np.isfinite(RidgeLearner(0.0).fit(Phi, U).theta))
 
 
 def test_action_difference_speaks_in_angle_and_magnitude():
@@ -111,10 +111,10 @@ def test_action_difference_speaks_in_angle_and_magnitude():
 
 
 @pytest.mark.parametrize("call, name", [
-    (lambda: RidgeLearner(-1.0).fit(np.ones((3, 2)), np.ones((3, 2))), "lam: expected a non-negative"),
-    (lambda: RidgeLearner(0.1).fit(np.ones((3, 2)), np.ones((4, 2))), "U: expected one action per row"),
-    (lambda: RidgeLearner(0.1).fit(np.ones(3), np.ones((3, 2))), "Phi"),
-    (lambda: RidgeLearner(0.1).fit(np.ones((3, 2)), np.full((3, 2), np.inf)), "U: expected finite"),
+    (lambda: RidgeLearner(-1.0).fit(np.ones((3, 2)), np.ones((3, 2))).theta, "lam: expected a non-negative"),
+    (lambda: RidgeLearner(0.1).fit(np.ones((3, 2)), np.ones((4, 2))).theta, "U: expected one action per row"),
+    (lambda: RidgeLearner(0.1).fit(np.ones(3), np.ones((3, 2))).theta, "Phi"),
+    (lambda: RidgeLearner(0.1).fit(np.ones((3, 2)), np.full((3, 2), np.inf)).theta, "U: expected finite"),
     (lambda: optimal_actions(np.ones((5, 5)), np.ones((2, 3)), 0.1), r"theta: expected shape \(R, 5\)"),
     (lambda: optimal_actions(np.ones((5, 5)), np.ones((2, 5)), -0.1), "lam"),
     (lambda: optimal_actions(np.ones((5, 5)), np.ones((2, 5)), "big"), "lam: expected a real number"),
@@ -129,7 +129,7 @@ def test_bad_input_names_the_argument(call, name):
 
 def test_features_with_no_columns_are_refused_by_name():
     with pytest.raises(ValueError, match=r"Phi: expected at least one feature"):
-        RidgeLearner(0.1).fit(np.ones((3, 0)), np.ones((3, 2)))
+        RidgeLearner(0.1).fit(np.ones((3, 0)), np.ones((3, 2))).theta
 
 
 def test_analysis_and_optimal_actions_agree_on_rank():
@@ -150,5 +150,5 @@ def test_optimal_actions_defaults_to_the_learners_lambda():
     U_bar = optimal_actions(Phi, skill.theta)
     np.testing.assert_array_equal(U_bar, optimal_actions(Phi, skill.theta, DEFAULT_LAMBDA))
     # The README's and docs/user/core.md's promise: with the defaults on both sides, the optimal arrows teach theta.
-    assert teaching_risk(RidgeLearner().fit(Phi, U_bar), skill.theta) < 1e-10
+    assert teaching_risk(RidgeLearner().fit(Phi, U_bar).theta, skill.theta) < 1e-10
     assert not np.allclose(U_bar, optimal_actions(Phi, skill.theta, 0.0), atol=1e-6), "lam must matter here"

@@ -7,7 +7,7 @@ from mt_widgets.core import SKILLS
 from mt_widgets.core.kernel_learners import SingularFitError
 from mt_widgets.core.learner_teaching import compare_with_baselines, evaluation_states, make_learner, teach
 from mt_widgets.core.nonlinear_skills import NONLINEAR_SKILLS
-from mt_widgets.core.reward_learner import RewardLearner
+from mt_widgets.core.reward_learner import RewardLearner, RewardPolicy
 
 
 def test_the_policy_is_the_maximiser_of_the_learnt_reward():
@@ -18,9 +18,9 @@ def test_the_policy_is_the_maximiser_of_the_learnt_reward():
     best = learner.predict(fitted, X)
     for _ in range(50):   # no other action earns more reward at any state
         other = best + rng.normal(scale=0.5, size=best.shape)
-        assert np.all(learner.reward(fitted, X, other) < learner.reward(fitted, X, best))
+        assert np.all(fitted.reward(X, other) < fitted.reward(X, best))
     # A reward concave in the action (one maximiser): W + I at least I / 2.
-    assert np.all(np.linalg.eigvalsh(fitted[0] + np.eye(2)) >= 0.5 - 1e-12)
+    assert np.all(np.linalg.eigvalsh(fitted.W + np.eye(2)) >= 0.5 - 1e-12)
 
 
 @pytest.mark.parametrize("key, W", [("uarm-point", 0.25 * np.eye(2)),
@@ -28,7 +28,8 @@ def test_the_policy_is_the_maximiser_of_the_learnt_reward():
 def test_the_papers_uarm_skills_are_rewards_it_recovers_from_their_own_actions(key, W):
     skill = SKILLS[key]
     states = skill.query_states(seed=0, n=8)
-    W_hat, b_hat = RewardLearner(lam=1e-9).fit(states, skill.target_actions(states))
+    fitted = RewardLearner(lam=1e-9).fit(states, skill.target_actions(states))
+    W_hat, b_hat = fitted.W, fitted.b
     np.testing.assert_allclose(W_hat, W, atol=1e-6)
     goal = np.array([23.0, 11.0]) if key == "uarm-point" else np.zeros(2)
     np.testing.assert_allclose(b_hat, W @ goal, atol=1e-5)
@@ -65,4 +66,8 @@ def test_bad_input_is_named():
         RewardLearner().fit(np.ones((8, 3)), np.ones((8, 3)))
     learner = RewardLearner()
     with pytest.raises(SingularFitError, match="no unique best action"):
+        learner.predict(RewardPolicy(-np.eye(2), np.zeros(2)), np.ones((1, 2)))
+    with pytest.raises(TypeError, match="fitted: expected a RewardPolicy"):
         learner.predict((-np.eye(2), np.zeros(2)), np.ones((1, 2)))
+    with pytest.raises(ValueError, match="inputs: expected one of 'state'"):
+        RewardLearner(inputs="task").fit(np.ones((8, 2)), np.ones((8, 2)))

@@ -29,7 +29,7 @@ def ridge_fit(Phi, U, lam):
         ("solver", "RidgeLearner inside ridge_fit", {"ridge_fit": """
 from mt_widgets import RidgeLearner
 def ridge_fit(Phi, U, lam):
-    return RidgeLearner(lam).fit(Phi, U)
+    return RidgeLearner(lam).fit(Phi, U).theta
 """}, 4.0),
         ("transposed", "ridge_fit returns (S, R)", {"ridge_fit": """
 def ridge_fit(Phi, U, lam):
@@ -143,12 +143,12 @@ which_amplifies = "bad"
 """}, 7.0),
         ("spectral", "spectral norm for E", {"slip_error": """
 def slip_error(Phi, theta, lam, slip):
-    theta_hat = RidgeLearner(lam).fit(Phi, optimal_actions(Phi, theta, lam) + slip)
+    theta_hat = RidgeLearner(lam).fit(Phi, optimal_actions(Phi, theta, lam) + slip).theta
     return float(np.linalg.norm(theta_hat - theta, 2))
 """}, 7.0),
         ("globals", "slip_error uses the notebook's theta and slip", {"slip_error": """
 def slip_error(Phi, theta_, lam_, slip_):
-    return teaching_risk(RidgeLearner(lam).fit(Phi, optimal_actions(Phi, skill.theta, lam) + slip), skill.theta)
+    return teaching_risk(RidgeLearner(lam).fit(Phi, optimal_actions(Phi, skill.theta, lam) + slip).theta, skill.theta)
 """}, 8.0),
         ("zero", "slip_error returns 0.0", {"slip_error": """
 def slip_error(Phi, theta, lam, slip):
@@ -220,7 +220,7 @@ def p_value(target, control):
         ("sign", "retention as before minus after", {"retention": """
 def retention(episodes):
     first = episodes[episodes["episode"] == 1].pivot_table(index="participant", columns="phase",
-                                                         values="teaching_error")
+                                                         values="theta_error")
     return first["P1"] - first["P4"]
 """}, 7.0),
         ("student", "Student's t, one-sided", {"p_value": """

@@ -37,7 +37,7 @@ def industrial_study():
 def test_the_drawn_arrows_have_three_components_and_the_optimal_teacher_teaches_every_ur5_skill_exactly():
     for point, other in (("ur5-reach", "ur5-conveyor"), ("ur5-place", "ur5-reach")):
         study = run_in_silico(2, industrial_protocol(point, other), parameters=OPTIMAL_TEACHER, reproduce=False)
-        assert study.episodes.teaching_error.max() < 1e-9
+        assert study.episodes.theta_error.max() < 1e-9
         demos = study.demonstrations
         drawn = demos[["action_1", "action_2", "action_3"]].to_numpy()
         assert np.allclose(drawn, demos[["optimal_1", "optimal_2", "optimal_3"]].to_numpy())
@@ -46,10 +46,10 @@ def test_the_drawn_arrows_have_three_components_and_the_optimal_teacher_teaches_
 
 def test_guidance_helps_in_space_the_target_group_learns_and_keeps_it_the_control_group_does_not(industrial_study):
     rows = industrial_study.episodes
-    p3 = rows[rows.phase == "P3"].groupby(["group", "episode"]).teaching_error.mean()
+    p3 = rows[rows.phase == "P3"].groupby(["group", "episode"]).theta_error.mean()
     assert p3["target"][8] < 0.6 * p3["target"][1]
     assert p3["control"][8] > 0.8 * p3["control"][1]
-    first = rows[rows.episode == 1].groupby(["group", "phase"]).teaching_error.mean()
+    first = rows[rows.episode == 1].groupby(["group", "phase"]).theta_error.mean()
     for before, after in (("P1", "P4"), ("P2", "P5")):   # retention on skill 1, transfer to skill 2
         change = {g: first[g][after] - first[g][before] for g in ("target", "control")}
         assert change["target"] < -0.3 * first["target"][before]
@@ -127,5 +127,5 @@ def test_in_space_the_session_engine_and_the_batched_engine_give_the_same_study(
     groups = logged.groupby("participant").group.first().tolist()
     batched = run_in_silico(2, protocol, seed=4, groups=groups, reproduce=False).episodes
     key = ["participant", "phase_index", "episode"]
-    assert logged.sort_values(key).teaching_error.to_numpy() == pytest.approx(
-        batched.sort_values(key).teaching_error.to_numpy(), abs=1e-9)
+    assert logged.sort_values(key).theta_error.to_numpy() == pytest.approx(
+        batched.sort_values(key).theta_error.to_numpy(), abs=1e-9)

@@ -44,12 +44,12 @@ def test_an_in_silico_study_is_reproducible_from_its_seed():
     c = run_in_silico(8, seed=12, reproduce=False)
     pd.testing.assert_frame_equal(a.episodes, b.episodes)
     pd.testing.assert_frame_equal(a.demonstrations, b.demonstrations)
-    assert not np.allclose(a.episodes.teaching_error, c.episodes.teaching_error)
+    assert not np.allclose(a.episodes.theta_error, c.episodes.theta_error)
 
 
 def test_the_optimal_teacher_teaches_every_skill_exactly():
     study = run_in_silico(4, parameters=OPTIMAL_TEACHER, reproduce=False)
-    assert study.episodes.teaching_error.max() < 1e-9
+    assert study.episodes.theta_error.max() < 1e-9
     demos = study.demonstrations
     assert np.allclose(demos[["action_1", "action_2"]].to_numpy(), demos[["optimal_1", "optimal_2"]].to_numpy())
 
@@ -93,7 +93,7 @@ def test_without_guidance_teachers_explore_direction_but_not_magnitude():
 def test_guided_teachers_move_toward_the_optimal_arrows_and_control_does_not():
     study = run_in_silico(40, reproduce=False)
     rows = study.episodes
-    p3 = rows[rows.phase == "P3"].groupby(["group", "episode"]).teaching_error.mean()
+    p3 = rows[rows.phase == "P3"].groupby(["group", "episode"]).theta_error.mean()
     assert p3["target"][8] < 0.6 * p3["target"][1]
     assert p3["control"][8] > 0.8 * p3["control"][1]
 
@@ -108,7 +108,7 @@ def test_batched_engine_and_session_engine_give_the_same_study(tmp_path):
     fast = run_in_silico(2, seed=4, groups=groups, reproduce=True)
     key = ["participant", "phase_index", "episode"]
     logged, batched = logged.sort_values(key), fast.episodes.sort_values(key)
-    assert logged.teaching_error.to_numpy() == pytest.approx(batched.teaching_error.to_numpy(), abs=1e-9)
+    assert logged.theta_error.to_numpy() == pytest.approx(batched.theta_error.to_numpy(), abs=1e-9)
     assert list(logged.reproduction_diverged.astype(bool)) == list(batched.reproduction_diverged.astype(bool))
     logged_demos = pd.DataFrame(demonstrations).sort_values(key + ["index"])
     batched_demos = fast.demonstrations.sort_values(key + ["index"])
@@ -223,7 +223,7 @@ def test_baseline_comparison_reads_the_first_episode_of_p1_and_p2():
     study = run_in_silico(8, reproduce=False)
     table = baseline_comparison(study).set_index("phase")
     rows = study.episodes
-    assert table.loc["P2", "in_silico_mean"] == pytest.approx(rows[rows.phase == "P2"].teaching_error.mean())
+    assert table.loc["P2", "in_silico_mean"] == pytest.approx(rows[rows.phase == "P2"].theta_error.mean())
     assert table.loc["P1", "paper_mean"] == pytest.approx(implied_baselines(paper_results(), "simulation")["P1"])
 
 
@@ -293,4 +293,4 @@ def test_the_shipped_synthetic_studies_are_what_the_current_model_writes(which, 
     shipped = pd.DataFrame(read_study(folder)[0]).sort_values(key)
     rewritten = pd.DataFrame(read_study(fresh)[0]).sort_values(key)
     assert set(shipped.skill) == set(rewritten.skill)
-    assert shipped.teaching_error.to_numpy() == pytest.approx(rewritten.teaching_error.to_numpy(), rel=1e-9)
+    assert shipped.theta_error.to_numpy() == pytest.approx(rewritten.theta_error.to_numpy(), rel=1e-9)

@@ -47,7 +47,7 @@ def test_an_in_silico_study_of_a_users_circle_runs_and_is_drawn(protocol):
     study = run_in_silico(2, protocol=protocol, seed=3)
     ring = study.episodes[study.episodes.phase == "P2"]
     assert list(ring.skill.unique()) == ["sim-ring"] and len(ring) == 4
-    assert np.all(np.isfinite(ring.teaching_error))
+    assert np.all(np.isfinite(ring.theta_error))
     participant = str(study.episodes.participant.iloc[0])
     figure = plot_trajectories(study.episodes, [participant], panels=(("P2",),),
                                trajectories=study.reproductions, skills=protocol.skills)

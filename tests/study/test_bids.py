@@ -79,7 +79,7 @@ def test_every_behavioural_column_is_described_with_its_units(dataset):
     assert sidecar["Learner"] == protocol.learner == "ridge" and sidecar["LearnerRidgeLambda"] == protocol.lam
     assert {r["guidance_modality"] for r in rows} == {"arrows"}
     assert {r["guidance_shown"] for r in rows if r["phase"] == "B"} == {"1"}
-    assert all(r["teaching_error"] != "n/a" for r in rows)
+    assert all(r["theta_error"] != "n/a" for r in rows)
     phenotype = _rows(out / "phenotype" / "tlx.tsv")
     by_code = {r["participant_id"]: r for r in phenotype}
     assert sorted(by_code) == sorted(f"sub-{code_of(study.folder, p)}" for p in ("P-01", "P02"))

@@ -78,12 +78,12 @@ def test_forgetting_leaves_the_main_session_alone_and_costs_skill_at_the_followu
     kept = run_in_silico(24, protocol, seed=4, reproduce=False).episodes
     forgot = run_in_silico(24, protocol, seed=4, reproduce=False, forgetting=Forgetting(14.0)).episodes
     main = kept["session"] == "main"
-    assert np.array_equal(kept.loc[main, "teaching_error"], forgot.loc[main, "teaching_error"])
+    assert np.array_equal(kept.loc[main, "theta_error"], forgot.loc[main, "theta_error"])
     target_f1 = (kept["phase"] == "F1") & (kept["group"] == "target")
-    assert forgot.loc[target_f1, "teaching_error"].mean() > kept.loc[target_f1, "teaching_error"].mean()
+    assert forgot.loc[target_f1, "theta_error"].mean() > kept.loc[target_f1, "theta_error"].mean()
     # A very long half-life forgets nothing measurable.
     same = run_in_silico(24, protocol, seed=4, reproduce=False, forgetting=Forgetting(math.inf)).episodes
-    assert np.allclose(same["teaching_error"], kept["teaching_error"])
+    assert np.allclose(same["theta_error"], kept["theta_error"])
 
 
 def test_forgetting_is_the_documented_half_life():
@@ -111,8 +111,8 @@ def test_the_batched_engine_and_the_session_engine_agree_across_sessions_with_fo
     groups = [study.enrolment(pid)["group"] for pid in study.participant_ids()]
     batched = run_in_silico(4, "paper-sim-followup", seed=2, groups=groups, reproduce=False,
                             forgetting=Forgetting(30.0)).episodes
-    logged = sorted((r["participant"], r["session"], r["phase"], r["episode"], r["teaching_error"]) for r in episodes)
+    logged = sorted((r["participant"], r["session"], r["phase"], r["episode"], r["theta_error"]) for r in episodes)
     simulated = sorted(zip(batched["participant"], batched["session"], batched["phase"], batched["episode"],
-                           batched["teaching_error"]))
+                           batched["theta_error"]))
     assert [row[:4] for row in logged] == [row[:4] for row in simulated] and len(logged) == 4 * 14
     assert np.allclose([row[4] for row in logged], [row[4] for row in simulated], rtol=0, atol=1e-9)

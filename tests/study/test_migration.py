@@ -10,6 +10,7 @@ import pytest
 from mt_widgets.study import LogError, Session, StudyFolder, export_bids, read_events, read_log, read_study
 from mt_widgets.study.pseudonyms import code_of
 from mt_widgets.study.schema import FORMAT_1_GUIDANCE_MODALITY, LOG_FORMAT, migrate_events
+from mt_widgets.study.tidy import episode_errors
 
 from .scripted import run_all, short_protocol
 
@@ -94,3 +95,18 @@ def test_new_files_carry_the_current_format(tmp_path):
     assert json.loads((study.folder / "_enrolment.jsonl").read_text())["format"] == LOG_FORMAT
     first = read_events(study.log_path("P01"))[0][0]
     assert first["format"] == LOG_FORMAT and first["session"] == "main" and "migrated_from" not in first
+
+
+def test_a_log_written_with_the_one_teaching_error_still_reads_as_theta_error(v1):
+    # Logs before issue 42 hold one teaching_error: Theta's error for ridge (it has a theta_hat).
+    logged = [e for e in read_log(v1 / "P01.jsonl") if e["type"] == "episode_finished"]
+    assert logged and all("teaching_error" in e and "policy_risk" not in e for e in logged)
+    rows = [r for r in read_study(v1)[0] if r["participant"] == "P01"]
+    assert [r["theta_error"] for r in rows] == [e["teaching_error"] for e in logged]
+    assert all(r["policy_risk"] is None for r in rows)
+
+
+def test_an_old_error_is_the_policy_risk_where_the_episode_has_no_theta():
+    assert episode_errors({"teaching_error": 0.5, "theta_hat": None}) == (None, 0.5)
+    assert episode_errors({"teaching_error": 0.5, "theta_hat": [[1.0]]}) == (0.5, None)
+    assert episode_errors({"theta_error": None, "policy_risk": 0.25, "theta_hat": None}) == (None, 0.25)

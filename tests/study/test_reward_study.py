@@ -93,7 +93,8 @@ def test_each_episode_logs_the_reward_learners_guidance_fit_and_risk(study):
             begun = started[(done["phase_index"], done["episode"])]
             skill = SKILLS[done["skill"]]
             states, actions = np.array(begun["query_states"]), np.array(done["actions"])
-            assert begun["learner"] == done["learner"] == "reward" and begun["learner_parameters"] == {"lam": 1e-3}
+            assert begun["learner"] == done["learner"] == "reward"
+            assert begun["learner_parameters"] == {"lam": 1e-3, "inputs": "state"}
             assert len(states) == 8
             # The guidance is the reward learner's machine teaching on these states.
             np.testing.assert_allclose(begun["optimal"], teach(learner, skill, states).optimal, atol=1e-9)
@@ -101,7 +102,7 @@ def test_each_episode_logs_the_reward_learners_guidance_fit_and_risk(study):
             # the inputs are the positions, the states themselves).
             np.testing.assert_allclose(done["learnt_actions"], learner.predict(learner.fit(states, actions), states),
                                        atol=1e-9)
-            assert done["teaching_error"] == pytest.approx(
+            assert done["theta_error"] is None and done["policy_risk"] == pytest.approx(
                 risk_of_actions(learner, skill, states, actions, evaluation_states(skill)), rel=1e-9)
             assert done["theta_hat"] is None and done["bound"] is None and done["residual"] is None
             checked += 1
@@ -118,7 +119,7 @@ def test_the_paper_protocols_log_stays_as_it_was(tmp_path):
     done = next(e for e in events if e["type"] == "episode_finished")
     begun = next(e for e in events if e["type"] == "episode_started")
     assert "learner" not in done and "learnt_actions" not in done and "learner" not in begun
-    assert np.array(done["theta_hat"]).shape == (2, 3) and done["bound"] >= done["teaching_error"]
+    assert np.array(done["theta_hat"]).shape == (2, 3) and done["bound"] >= done["theta_error"]
 
 
 def test_the_tidy_export_has_the_policy_risk_and_no_theta(study):
@@ -127,8 +128,8 @@ def test_the_tidy_export_has_the_policy_risk_and_no_theta(study):
     with open(episodes_csv, encoding="utf-8") as handle:
         rows = list(csv.DictReader(handle))
     assert len(rows) == 48 and {r["theta_hat"] for r in rows} == {""}
-    logged = [e["teaching_error"] for e in _events(folder, "P01") if e["type"] == "episode_finished"]
-    assert [float(r["teaching_error"]) for r in rows if r["participant"] == "P01"] == logged
+    logged = [e["policy_risk"] for e in _events(folder, "P01") if e["type"] == "episode_finished"]
+    assert [float(r["policy_risk"]) for r in rows if r["participant"] == "P01"] == logged
 
 
 def test_the_bids_sidecar_names_the_reward_learner_and_its_parameters(study):
@@ -139,8 +140,10 @@ def test_the_bids_sidecar_names_the_reward_learner_and_its_parameters(study):
     code = code_of(folder.folder, "P01")
     sidecar = json.loads((out / f"sub-{code}" / "beh" / f"sub-{code}_task-rewardsim_beh.json").read_text())
     assert sidecar["Learner"] == "reward" and "LearnerRidgeLambda" not in sidecar
-    assert sidecar["LearnerParameters"] == {"uarm-line": {"lam": 1e-3}, "uarm-point": {"lam": 1e-3}}
-    assert "policy risk" in sidecar["teaching_error"]["Description"]
+    expected = {"lam": 1e-3, "inputs": "state"}
+    assert sidecar["LearnerParameters"] == {"uarm-line": expected, "uarm-point": expected}
+    assert "policy risk" in sidecar["policy_risk"]["Description"]
+    assert "no Theta" in sidecar["theta_error"]["Description"]
 
 
 def test_the_analysis_reports_the_reward_learner_and_rolls_out_what_was_taught(study):

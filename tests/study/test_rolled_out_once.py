@@ -9,7 +9,7 @@ import pytest
 
 from mt_widgets import SKILLS
 from mt_widgets.apps import StudyApp
-from mt_widgets.core import Plant, Skill, TeachingEpisode, machine_teaching
+from mt_widgets.core import Plant, Skill, TeachingEpisode, learner
 from mt_widgets.study import Session, read_events
 from mt_widgets.widgets import EpisodeWidget
 
@@ -62,20 +62,21 @@ def plant_rollouts(monkeypatch):
 @pytest.fixture
 def built(monkeypatch):
     """Every ``TeachingEpisode`` built, as its query states, and the number of SVDs of Phi taken
-    for a learner (``ridge_operator``), whoever makes them."""
+    for a learner's operator (``ridge_operator``, what ``RidgeLearner.operator`` takes), whoever
+    makes them."""
     episodes, svds = [], [0]
-    original_init, original_svd = TeachingEpisode.__init__, machine_teaching.svd_with_rank
+    original_init, original_svd = TeachingEpisode.__init__, learner.ridge_operator
 
     def init(self, skill, query_states=None, **kwargs):
         original_init(self, skill, query_states, **kwargs)
         episodes.append(np.array(self.query_states))
 
-    def svd(Phi):
+    def svd(Phi, lam):
         svds[0] += 1
-        return original_svd(Phi)
+        return original_svd(Phi, lam)
 
     monkeypatch.setattr(TeachingEpisode, "__init__", init)
-    monkeypatch.setattr(machine_teaching, "svd_with_rank", svd)
+    monkeypatch.setattr(learner, "ridge_operator", svd)
     return episodes, svds
 
 

@@ -195,7 +195,7 @@ def test_the_export_has_one_row_per_episode_and_per_demonstration(study, tmp_pat
         Phi = skill.features(np.array([json.loads(d["state"]) for d in mine]))
         U = np.array([[d["action_1"], d["action_2"]] for d in mine])
         analysis = analyse_demonstrations(Phi, U, skill.theta, study.protocol.lam)
-        assert analysis.risk == pytest.approx(episode["teaching_error"], rel=1e-9)
+        assert analysis.risk == pytest.approx(episode["theta_error"], rel=1e-9)
         np.testing.assert_allclose(analysis.theta_hat, json.loads(episode["theta_hat"]), rtol=1e-9)
         assert episode["started_at"].endswith("Z") and episode["duration_s"] >= 0
 

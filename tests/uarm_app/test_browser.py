@@ -58,7 +58,7 @@ def test_the_uarm_view_draws_takes_a_real_drag_and_moves_the_simulated_arm(uarm_
     # The reproduction of what was learnt runs on the simulated arm; its position is read back.
     wait_for_status(page, "s.phase === 'finished'")
     demonstrations = np.array(status(page)["demonstrations"])
-    theta_hat = RidgeLearner(lam=DEFAULT_LAMBDA).fit(skill.features(states), demonstrations)
+    theta_hat = RidgeLearner(lam=DEFAULT_LAMBDA).fit(skill.features(states), demonstrations).theta
     final_mm = skill.reproduce(theta_hat).final_position * 10
     page.wait_for_function("() => document.body.innerText.includes('finished its reproduction')", timeout=30_000)
     x, y = map(float, re.findall(r"-?\d+\.\d", label.inner_text()))

@@ -57,7 +57,7 @@ def test_an_episode_runs_teaching_guidance_finished_and_reports_what_it_learnt()
     assert [r.index for r in records] == [0, 1, 2, 3, 4] and all(r.episode_index == 2 for r in records)
     assert all(r.method == "code" and r.time_to_first_input_s is None for r in records)
     (result,) = results
-    theta_hat = RidgeLearner(lam=DEFAULT_LAMBDA).fit(skill.features(episode.query_states), actions)
+    theta_hat = RidgeLearner(lam=DEFAULT_LAMBDA).fit(skill.features(episode.query_states), actions).theta
     assert np.allclose(result.theta_hat, theta_hat)
     assert result.error == pytest.approx(teaching_risk(theta_hat, skill.theta)) == episode.error
     assert len(result.trajectory.times) > 1 and result.diverged == result.trajectory.diverged
