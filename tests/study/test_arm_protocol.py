@@ -97,7 +97,7 @@ def test_a_study_of_an_arm_from_a_urdf_beside_the_protocol_runs_through_export_a
         skill = protocol.skills[event["skill"]]
         learnt = RidgeLearner(lam=protocol.lam).fit(skill.features(np.asarray(event["query_states"])),
                                                     np.asarray(event["optimal"]))
-        assert teaching_risk(learnt, skill.theta) < 1e-9
+        assert teaching_risk(learnt.theta, skill.theta) < 1e-9
 
     # Reopened elsewhere with the URDF gone, the study rebuilds the arm from the text it stored.
     (lab.parent / "arms" / "so101_copy.urdf").unlink()
@@ -129,7 +129,8 @@ def test_an_in_silico_study_of_the_urdf_arm_runs_every_episode(lab):
     assert len(episodes) == 4 * 6 and set(episodes["skill"]) == {"lab-reach", "lab-place"}
     # The synthetic teachers' slips (fitted to the paper's planar arm) leave errors near 1 here; what the
     # learnt skills do is not asked (they stop the shipped SO-101's reproductions as often).
-    assert np.all(np.isfinite(episodes["teaching_error"])) and np.all(episodes["teaching_error"] > 0)
+    assert np.all(np.isfinite(episodes["theta_error"])) and np.all(episodes["theta_error"] > 0)
+    assert np.all(np.isfinite(episodes["policy_risk"])) and np.all(episodes["policy_risk"] > 0)
     assert list(episodes["phase"][:6]) == ["P1", "P2", "P3", "P3", "P4", "P5"]
 
 
