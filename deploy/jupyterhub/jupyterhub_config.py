@@ -53,6 +53,7 @@ Settings (environment variables, so one file serves a course and the tests, test
 """
 
 import asyncio
+import logging
 import os
 import random
 import shutil
@@ -142,6 +143,9 @@ c.JupyterHub.concurrent_spawn_limit = SPAWN_LIMIT
 # is full, in words (templates/429.html), instead of a server that never comes up.
 c.JupyterHub.active_server_limit = _count_setting("MT_HUB_SERVER_LIMIT", "100", zero_means="no limit")
 c.JupyterHub.template_paths = [str(HERE / "templates")]
+# The disk holding the hub's state full (its database, the password hashes): the request is
+# refused with a page in words (templates/500.html) and the log says which folder to free.
+logging.getLogger("tornado.application").addFilter(class_hub.DiskFullLog(STATE))
 # A hub stopped (an upgrade, a restart) or killed during a lesson leaves students' servers and kernels
 # running: the restarted hub finds each by the pid in its database and routes to it again
 # (docs/guide/faults.md). JupyterHub's default stops every server with the hub. To end a class's
@@ -165,10 +169,11 @@ if os.environ.get("MT_HUB_API_TOKEN"):
     })
 CULL_IDLE_S = int(os.environ.get("MT_HUB_CULL_IDLE_SECONDS", str(class_hub.DEFAULT_CULL_IDLE_S)))
 if CULL_IDLE_S > 0:
-    # Stops servers idle that long; a student's saved notebooks and progress stay in their home.
+    # Stops servers idle that long; a student's saved notebooks and progress stay in their home. Run
+    # through idle_culler.py, which ends it with the hub (a killed hub would leave it running).
     c.JupyterHub.services.append({
         "name": "idle-culler",
-        "command": [sys.executable, "-m", "jupyterhub_idle_culler", f"--timeout={CULL_IDLE_S}",
+        "command": [sys.executable, str(HERE / "idle_culler.py"), f"--timeout={CULL_IDLE_S}",
                     f"--cull-every={max(60, CULL_IDLE_S // 10)}"],
     })
     c.JupyterHub.load_roles.append({

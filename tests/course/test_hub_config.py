@@ -106,6 +106,7 @@ def test_the_hub_listens_on_loopback_with_the_roster_authenticator_and_each_stud
     assert config.Spawner.cmd[1:] == ["-m", "jupyterhub.singleuser"]
     culler = next(s for s in config.JupyterHub.services if s["name"] == "idle-culler")
     assert f"--timeout={class_hub.DEFAULT_CULL_IDLE_S}" in culler["command"]
+    assert culler["command"][1].endswith("idle_culler.py")  # ended with its hub, even a killed one
 
 
 def test_loading_the_config_makes_each_roster_login_a_private_system_user(setting):
