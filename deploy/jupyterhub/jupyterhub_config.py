@@ -415,10 +415,11 @@ async def _before_spawn(spawner) -> None:
     """Before a server starts: ``_prepare_spawn`` in a thread, then the server's port.
 
     JupyterHub awaits this hook on its event loop, which serves every other login, spawn and
-    progress page meanwhile. A class spawning at once starts every hook in the same turn of the
-    loop: the preparation's 0.1 s each (a loaded machine), made on the loop, held it for 3.6 s with
-    thirty spawns and 8.8 s with sixty (benchmarks/bench_spawn_hook.py); the warm cache's copy
-    (every compiled version of the package's kernels) was the first part moved off it."""
+    progress page meanwhile: nothing of the hook's that blocks (files, the roster, useradd for a
+    new login, the warm cache's copy: every compiled version of the package's kernels) runs on it.
+    (The loop still stands still for seconds when a class spawns at once: JupyterHub's own start
+    of each spawn, before this hook, takes about 0.1 s of the loop on a loaded machine, and a
+    class's spawns start in the same turn of it; benchmarks/bench_spawn_hook.py.)"""
     login = spawner.user.name
     await asyncio.get_running_loop().run_in_executor(None, _prepare_spawn, login, spawner.log)
     spawner.port = _reserve_port(login)
