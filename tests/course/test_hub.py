@@ -13,7 +13,11 @@ One hub for the module, with a roster of an instructor and thirty-odd students, 
 - thirty students log in within the same moment, every server and kernel starts and every
   episode completes, with no retry; two of them draw in Chromium, and the instructor's class
   view shows them all;
-- nbgrader's exchange works through the hub, and a student cannot list others' submissions.
+- nbgrader's exchange works through the hub, and a student cannot list others' submissions;
+- the thirty, each mid-episode, keep their servers and kernels through a hub stopped, a hub killed
+  and a proxy killed, and nothing of theirs is left after the class ends (issue 46);
+- on a small hub of its own: a full class server and a full disk under the hub's database are
+  refused in words, the database whole (issue 46).
 
 Slow (a few minutes on two cores): a class is thirty Jupyter servers.
 """
