@@ -40,6 +40,12 @@ students.
 
     python benchmarks/bench_hub.py --students 30        # as root
     python benchmarks/bench_hub.py --students 60 --skip-human-pace
+    python benchmarks/bench_hub.py --students 100 --lecture-hall   # issue 46: a lecture's start only
+
+``--lecture-hall`` runs step 1 alone on a hub whose capacity (``MT_HUB_SERVER_LIMIT``) is the class,
+counting lost spawns instead of stopping at the first: every spawn kept, all ready and every first
+episode done from the start (target 30 s), PSS per student (target 100 MiB), and the page the next
+student, one beyond the capacity, gets.
 
 Numba's cache is warmed once and copied to every student at spawn (as a deployment does).
 """
