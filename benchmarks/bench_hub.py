@@ -40,6 +40,12 @@ students.
 
     python benchmarks/bench_hub.py --students 30        # as root
     python benchmarks/bench_hub.py --students 60 --skip-human-pace
+    python benchmarks/bench_hub.py --students 100 --lecture-hall   # issue 46: a lecture's start only
+
+``--lecture-hall`` runs step 1 alone on a hub whose capacity (``MT_HUB_SERVER_LIMIT``) is the class,
+counting lost spawns instead of stopping at the first: every spawn kept, all ready and every first
+episode done from the start (target 30 s), PSS per student (target 100 MiB), and the page the next
+student, one beyond the capacity, gets.
 
 Numba's cache is warmed once and copied to every student at spawn (as a deployment does).
 """
@@ -168,12 +174,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--students", type=int, default=30)
     parser.add_argument("--skip-human-pace", action="store_true", help="leave out steps 3 and 6 (about 90 s)")
+    parser.add_argument("--lecture-hall", action="store_true",
+                        help="only a lecture's start, the class server's capacity being the class: every spawn "
+                             "kept, ready and first episode done from the start, PSS, the next student's page")
     args = parser.parse_args()
     if args.students < 1:
         parser.error(f"--students: expected at least 1, got {args.students}")
     if os.geteuid() != 0:
         parser.error("the class hub makes a system user per student: run as root")
     sys.path[:0] = [str(ROOT / "tests"), str(ROOT)]
+    if args.lecture_hall:
+        lecture_hall(args.students)
+        return
     from tests.course.hub_support import EPISODE_CODE, ClassHub, remove_leftovers, warm_numba_template
 
     if remove_leftovers():  # an earlier run that was killed left its accounts
@@ -331,6 +343,80 @@ def main() -> None:
               f"{hub_cpu:.2f} s / {len(students)}))")
     print(BEFORE)
     print(f"benchmark took {time.perf_counter() - bench_started:.0f} s")
+
+
+def _pss_per_student(hub, students) -> tuple[float, float]:
+    """The median PSS (MiB) of a student's server, kernel template and kernels, and the server
+    template's PSS shared out among the class."""
+    per_student = [sum(p.memory_full_info().pss for p in hub.processes(name)) / 2**20 for name in students]
+    template_pss = sum(p.memory_full_info().pss for p in psutil.process_iter(["cmdline"])
+                       if "mt_widgets.kernels.server_template" in " ".join(p.info["cmdline"] or ())) / 2**20
+    return statistics.median(per_student), template_pss / len(students)
+
+
+def lecture_hall(count: int) -> None:
+    """Issue 46's lecture hall: ``count`` students log in and start at once on a hub whose capacity
+    (``MT_HUB_SERVER_LIMIT``) is the class; each runs a first episode as soon as their server is
+    ready. Every spawn must be kept (none lost, no retry); the figure is the time from the start to
+    the last student's first episode done (target 30 s). Then the PSS per student (target 100 MiB)
+    and what the next student, one beyond the capacity, sees."""
+    import requests
+
+    from tests.course.hub_support import ClassHub, remove_leftovers, warm_numba_template
+
+    if remove_leftovers():
+        print("removed the accounts a killed earlier run left", flush=True)
+    students = [f"mtt-bench-{n:03d}" for n in range(count)]
+    beyond = f"mtt-bench-{count:03d}"
+    load_before = os.getloadavg()
+    with tempfile.TemporaryDirectory(prefix="mtt-bench-") as folder:
+        template = warm_numba_template(Path(folder) / "numba-template")
+        hub = ClassHub([*students, beyond], numba_template=template,
+                       env={"MT_HUB_SERVER_LIMIT": str(count), "MT_HUB_CULL_IDLE_SECONDS": "0"})
+        try:
+            with ThreadPoolExecutor(count) as pool:
+                list(pool.map(lambda name: hub.login(name, f"{name} password"), students))
+            start = time.perf_counter()
+
+            def lecture_start(item):
+                number, name = item
+                try:
+                    ready = hub.spawn(name)
+                    ready_at = time.perf_counter() - start
+                    result = hub.run_in_kernel(name, FIRST_EPISODE.format(number=number % 12), timeout=900)
+                    if result["error"] or result["died"]:
+                        return {"error": f"first episode: {result}"}
+                    return {"ready_s": ready, "ready_at_s": ready_at, "done_at_s": time.perf_counter() - start}
+                except Exception as error:  # a lost spawn is counted, not retried
+                    return {"error": f"{type(error).__name__}: {str(error)[:300]}"}
+
+            with ThreadPoolExecutor(count) as pool:
+                outcomes = dict(zip(students, pool.map(lecture_start, enumerate(students))))
+            load_after = os.getloadavg()
+            lost = {name: outcome["error"] for name, outcome in outcomes.items() if "error" in outcome}
+            kept = [outcome for outcome in outcomes.values() if "error" not in outcome]
+            pss, template_share = _pss_per_student(hub, [n for n in students if n not in lost])
+            browser = hub.login(beyond, f"{beyond} password")
+            page = browser.get(f"{hub.url}/hub/spawn", timeout=120)
+            heading = page.text.split('id="mt-hub-refusal"', 1)[-1].split(">", 1)[-1].split("<", 1)[0].strip()
+            beyond_processes = len(hub.processes(beyond))
+        except requests.RequestException as error:
+            raise SystemExit(f"the hub stopped answering: {error}\n{hub.tail()}") from error
+        finally:
+            hub.stop()
+            hub.kept_log.unlink()
+    ready = [outcome["ready_at_s"] for outcome in kept]
+    done = [outcome["done_at_s"] for outcome in kept]
+    print(f"\nlecture hall: {count} students started at once ({os.cpu_count()} cores; load average (1 min) "
+          f"{load_before[0]:.1f} before, {load_after[0]:.1f} after)")
+    print(f"spawns kept {len(kept)} of {count}" + (f"; lost: {list(lost.items())[:3]}" if lost else ""))
+    if kept:
+        print(f"from the start: all ready {max(ready):.1f} s (p50 {percentile(ready, 0.5):.1f} s); every first "
+              f"episode done {max(done):.1f} s (p50 {percentile(done, 0.5):.1f} s, p95 {percentile(done, 0.95):.1f} s;"
+              f" target 30 s)")
+        print(f"PSS per student (server, kernel template, kernel) p50 {pss:.0f} MiB, with the server template's "
+              f"share {pss + template_share:.0f} MiB (target 100 MiB)")
+    print(f"student {count + 1}: HTTP {page.status_code}, page heading {heading!r}, {beyond_processes} processes")
 
 
 if __name__ == "__main__":

@@ -29,7 +29,9 @@ instructor's command); one place for each mechanism:
 
 from __future__ import annotations
 
+import errno
 import grp
+import logging
 import os
 import pwd
 import re
@@ -185,6 +187,34 @@ def secure_course_folder(folder: Path, instructors_gid: int) -> None:
             continue
         mode = stat.S_IMODE(path.lstat().st_mode)
         os.chmod(path, mode & ~0o007)
+
+
+def is_disk_full(error: BaseException | None) -> bool:
+    """Whether ``error`` is a write refused for want of space: an OSError of a full disk or quota, or
+    SQLite's "database or disk is full" (SQLAlchemy's OperationalError carries it in its text)."""
+    if error is None:
+        return False
+    if isinstance(error, OSError) and error.errno in (errno.ENOSPC, errno.EDQUOT):
+        return True
+    return "database or disk is full" in str(error)
+
+
+class DiskFullLog(logging.Filter):
+    """Puts one line in words before the traceback of a request that failed for a full disk: which
+    folder is full and what to do (a log filter on tornado's ``tornado.application``, where an
+    uncaught error in a request is logged). Every record passes."""
+
+    def __init__(self, state: Path):
+        super().__init__()
+        self.state = Path(state)
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.exc_info and is_disk_full(record.exc_info[1]):
+            folder = str(self.state).replace("%", "%%")  # the message is a format string
+            record.msg = (f"Disk full: the hub's state folder {folder} (its database, the password hashes) "
+                          "has no space left: the request was refused and nothing of it was stored; free space "
+                          "there, and the hub goes on without a restart (docs/guide/faults.md). " + str(record.msg))
+        return True
 
 
 def installation_problems(paths) -> list[str]:

@@ -53,6 +53,7 @@ Settings (environment variables, so one file serves a course and the tests, test
 """
 
 import asyncio
+import logging
 import os
 import random
 import shutil
@@ -142,6 +143,9 @@ c.JupyterHub.concurrent_spawn_limit = SPAWN_LIMIT
 # is full, in words (templates/429.html), instead of a server that never comes up.
 c.JupyterHub.active_server_limit = _count_setting("MT_HUB_SERVER_LIMIT", "100", zero_means="no limit")
 c.JupyterHub.template_paths = [str(HERE / "templates")]
+# The disk holding the hub's state full (its database, the password hashes): the request is
+# refused with a page in words (templates/500.html) and the log says which folder to free.
+logging.getLogger("tornado.application").addFilter(class_hub.DiskFullLog(STATE))
 # A hub stopped (an upgrade, a restart) or killed during a lesson leaves students' servers and kernels
 # running: the restarted hub finds each by the pid in its database and routes to it again
 # (docs/guide/faults.md). JupyterHub's default stops every server with the hub. To end a class's
@@ -165,10 +169,11 @@ if os.environ.get("MT_HUB_API_TOKEN"):
     })
 CULL_IDLE_S = int(os.environ.get("MT_HUB_CULL_IDLE_SECONDS", str(class_hub.DEFAULT_CULL_IDLE_S)))
 if CULL_IDLE_S > 0:
-    # Stops servers idle that long; a student's saved notebooks and progress stay in their home.
+    # Stops servers idle that long; a student's saved notebooks and progress stay in their home. Run
+    # through idle_culler.py, which ends it with the hub (a killed hub would leave it running).
     c.JupyterHub.services.append({
         "name": "idle-culler",
-        "command": [sys.executable, "-m", "jupyterhub_idle_culler", f"--timeout={CULL_IDLE_S}",
+        "command": [sys.executable, str(HERE / "idle_culler.py"), f"--timeout={CULL_IDLE_S}",
                     f"--cull-every={max(60, CULL_IDLE_S // 10)}"],
     })
     c.JupyterHub.load_roles.append({
@@ -370,7 +375,7 @@ def _reserve_port(login: str) -> int:
     server then cannot bind it and ends, but the hub, which takes any HTTP answer as "up", finds
     the first student's server there and routes the second student to it. The hub runs its spawn
     hooks on its event loop, and this record is read and written with no await between (the hook's
-    only await, the cache's copy, comes before), so it has no race of its own."""
+    only await, the preparation in a thread, comes before), so it has no race of its own."""
     taken = {port for other, port in _SERVER_PORTS.items() if other != login}
     _SERVER_PORTS[login] = _port_outside_ephemeral_range(taken)
     return _SERVER_PORTS[login]
@@ -380,17 +385,14 @@ def _release_port(login: str) -> None:
     _SERVER_PORTS.pop(login, None)
 
 
-async def _before_spawn(spawner) -> None:
-    """Before a server starts: the account (the roster may have changed), a warm numba cache, the cgroups.
-
-    JupyterHub awaits this hook on its event loop, which serves every other login, spawn and
-    progress page meanwhile: the warm cache (every compiled version of the package's kernels) is
-    copied in a thread, so that a class spawning at once is not served one copy at a time."""
+def _prepare_spawn(login: str, log) -> None:
+    """What a spawn needs on disk: the account (the roster may have changed), the runtime folder, a
+    warm numba cache, the cgroups. Blocking work (files, the roster, useradd for a new login, the
+    cache's copy): ``_before_spawn`` runs it in a thread."""
     import pwd
 
-    login = spawner.user.name
     try:
-        _prepare_account(login, spawner.log)
+        _prepare_account(login, log)
     except KeyError:
         raise ClassHubError(f"{login} is no longer on the roster {ROSTER}") from None
     user = pwd.getpwnam(login)
@@ -404,10 +406,22 @@ async def _before_spawn(spawner) -> None:
         for folder in (HOMES / login / ".cache",):
             folder.mkdir(exist_ok=True)
             os.chown(folder, user.pw_uid, user.pw_gid)
-        await asyncio.get_running_loop().run_in_executor(None, _copy_owned, Path(template), cache,
-                                                         user.pw_uid, user.pw_gid)
+        _copy_owned(Path(template), cache, user.pw_uid, user.pw_gid)
     if LIMITS is not None:
         LIMITS.create(login)
+
+
+async def _before_spawn(spawner) -> None:
+    """Before a server starts: ``_prepare_spawn`` in a thread, then the server's port.
+
+    JupyterHub awaits this hook on its event loop, which serves every other login, spawn and
+    progress page meanwhile: nothing of the hook's that blocks (files, the roster, useradd for a
+    new login, the warm cache's copy: every compiled version of the package's kernels) runs on it.
+    (The loop still stands still for seconds when a class spawns at once: JupyterHub's own start
+    of each spawn, before this hook, takes about 0.1 s of the loop on a loaded machine, and a
+    class's spawns start in the same turn of it; benchmarks/bench_spawn_hook.py.)"""
+    login = spawner.user.name
+    await asyncio.get_running_loop().run_in_executor(None, _prepare_spawn, login, spawner.log)
     spawner.port = _reserve_port(login)
 
 

@@ -106,7 +106,8 @@ class ClassHub:
     """
 
     def __init__(self, students, admins=(), numba_template: Path | None = None, spawn_limit: int = 100,
-                 mem_limit: str = "1G", cpu_limit: str = "1.0", extra_roster: str = "", env: dict | None = None):
+                 mem_limit: str = "1G", cpu_limit: str = "1.0", extra_roster: str = "", env: dict | None = None,
+                 state_size: str | None = None, config: Path = CONFIG):
         for login in (*students, *admins):
             if not login.startswith(TEST_PREFIX):
                 raise ValueError(f"test logins start with {TEST_PREFIX!r} (so cleanup finds them), got {login!r}")
@@ -132,6 +133,15 @@ class ClassHub:
         self.exchange.mkdir()
         os.chmod(self.exchange, 0o777)  # nbgrader's exchange root: nbgrader sets the permissions below it
         self.roster = self.root / "roster.csv"
+        # The hub's state (its database, cookie secret, password hashes) on a filesystem of its own of
+        # ``state_size`` (a tmpfs, "2m"), to fill up as a full disk does; unmounted at stop.
+        self.state = self.root / "state"
+        self.state_mounted = False
+        if state_size is not None:
+            self.state.mkdir()
+            subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={state_size},mode=0700", "tmpfs", str(self.state)],
+                           check=True, capture_output=True, text=True, timeout=30)
+            self.state_mounted = True
         self.roster.write_text("login,name,email,role\n"
                                + "".join(f"{login},Test Admin,,instructor\n" for login in self.admins)
                                + "".join(f"{login},Student {login},,student\n" for login in self.students)
@@ -142,7 +152,7 @@ class ClassHub:
             "PYTHONPATH": str(REPO),
             "MT_HUB_PORT": str(self.port), "MT_HUB_PROXY_API_PORT": str(self.proxy_api_port),
             "MT_HUB_INTERNAL_PORT": str(self.hub_port), "MT_HUB_ROSTER": str(self.roster),
-            "MT_HUB_STATE": str(self.root / "state"), "MT_HUB_HOMES": str(self.homes),
+            "MT_HUB_STATE": str(self.state), "MT_HUB_HOMES": str(self.homes),
             "MT_HUB_RUNTIME": str(self.runtime),
             "MT_HUB_INSTRUCTORS_GROUP": TEST_INSTRUCTORS, "MT_HUB_COURSE": str(self.course),
             "MT_HUB_CGROUP": self.cgroup, "MT_HUB_MEM_LIMIT": mem_limit, "MT_HUB_CPU_LIMIT": cpu_limit,
@@ -155,6 +165,7 @@ class ClassHub:
             env["MT_HUB_NUMBA_TEMPLATE"] = str(numba_template)
         env.update(extra_env or {})  # the test's own settings (an LTI hub's, a server limit)
         self.env = env
+        self.config = config  # the class hub's, or one that loads it (benchmarks/bench_spawn_hook.py)
         self.log = self.root / "jupyterhub.log"
         self._log_file = open(self.log, "w")
         self.session = requests.Session()
@@ -178,7 +189,7 @@ class ClassHub:
     def _start(self) -> float:
         """Starts the hub and waits until its API answers; the seconds that took."""
         started = time.monotonic()
-        self.process = subprocess.Popen([str(BIN / "jupyterhub"), "-f", str(CONFIG)], cwd=self.root, env=self.env,
+        self.process = subprocess.Popen([str(BIN / "jupyterhub"), "-f", str(self.config)], cwd=self.root, env=self.env,
                                         stdout=self._log_file, stderr=subprocess.STDOUT, start_new_session=True)
         return self.wait_until_answering(started)
 
@@ -202,9 +213,20 @@ class ClassHub:
         """Ends the hub process alone with ``signum`` (SIGTERM: the documented stop; SIGKILL: a crash),
         leaving its proxy and the students' servers as they are, and starts it again; the seconds
         until the new hub answers."""
-        os.kill(self.process.pid, signum)
-        self.process.wait(60)
+        self.end(signum)
         self._log_file.write(f"\n=== hub ended by signal {signum}, started again ===\n")
+        self._log_file.flush()
+        return self._start()
+
+    def end(self, signum: int) -> int:
+        """Ends the hub process alone with ``signum`` and waits for it; its exit code."""
+        os.kill(self.process.pid, signum)
+        return self.process.wait(60)
+
+    def start_again(self) -> float:
+        """Starts the hub again after ``end``; the seconds until it answers (RuntimeError, with its
+        log's end, when it exits instead)."""
+        self._log_file.write("\n=== hub started again ===\n")
         self._log_file.flush()
         return self._start()
 
@@ -434,6 +456,8 @@ class ClassHub:
             self._log_file.close()
             self.kept_log = Path(tempfile.gettempdir()) / f"{self.root.name}-jupyterhub.log"
             shutil.copy(self.log, self.kept_log)
+            if self.state_mounted:
+                subprocess.run(["umount", "--lazy", str(self.state)], capture_output=True, timeout=30)
             shutil.rmtree(self.root, ignore_errors=True)
             shutil.rmtree(self.runtime, ignore_errors=True)
             self._lock.close()

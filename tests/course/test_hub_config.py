@@ -106,6 +106,7 @@ def test_the_hub_listens_on_loopback_with_the_roster_authenticator_and_each_stud
     assert config.Spawner.cmd[1:] == ["-m", "jupyterhub.singleuser"]
     culler = next(s for s in config.JupyterHub.services if s["name"] == "idle-culler")
     assert f"--timeout={class_hub.DEFAULT_CULL_IDLE_S}" in culler["command"]
+    assert culler["command"][1].endswith("idle_culler.py")  # ended with its hub, even a killed one
 
 
 def test_loading_the_config_makes_each_roster_login_a_private_system_user(setting):
@@ -448,3 +449,29 @@ def test_one_setting_chooses_the_learning_platforms_launches_as_the_login(settin
     with pytest.raises(SystemExit, match="MT_HUB_LOGIN: expected 'roster' or 'lti', got 'ldap'"):
         setting(MT_HUB_LOGIN="ldap")
     assert setting(MT_HUB_LOGIN="roster").JupyterHub.authenticator_class is RosterAuthenticator
+
+
+def test_a_request_refused_for_a_full_disk_is_logged_naming_the_hubs_state_folder():
+    import logging
+
+    from sqlalchemy.exc import OperationalError
+
+    state = Path("/srv/mt-hub 100%")  # a % in the folder must not break the log's format string
+    log_filter = class_hub.DiskFullLog(state)
+
+    def record(error):
+        try:
+            raise error
+        except BaseException:
+            return logging.LogRecord("tornado.application", logging.ERROR, __file__, 1,
+                                     "Uncaught exception %s", ("POST /hub/login",), sys.exc_info())
+
+    full = [record(OSError(28, "No space left on device")), record(OSError(122, "Disk quota exceeded")),
+            record(OperationalError("INSERT", {}, Exception("database or disk is full")))]
+    other = record(ValueError("no"))
+    assert all(log_filter.filter(r) for r in (*full, other))  # every record is still logged
+    for refused in full:
+        assert refused.getMessage().startswith(f"Disk full: the hub's state folder {state} "), refused.getMessage()
+        assert refused.getMessage().endswith("Uncaught exception POST /hub/login")
+    assert other.getMessage() == "Uncaught exception POST /hub/login"
+    assert not class_hub.is_disk_full(None) and not class_hub.is_disk_full(OSError(13, "Permission denied"))
