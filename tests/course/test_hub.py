@@ -44,9 +44,9 @@ import pytest
 import requests
 
 from browser_support import REPO, artifact_path, local_page
+from disk_support import fill_filesystem
 from mt_widgets.classroom import read_class, summarise
 from tests.browser.helpers import drag, ee_pixel, reference_episode
-from tests.study.test_full_disk import _fill
 
 from .course_support import source_notebook
 from .hub_support import (
@@ -236,7 +236,7 @@ def test_a_full_class_server_and_a_full_disk_under_the_hubs_database_are_refused
         assert begun["error"] is None, begun
         users_before = {user["name"] for user in small.api("GET", "/users")}
 
-        filler = _fill(small.state)
+        filler = fill_filesystem(small.state)
         database = small.state / "jupyterhub.sqlite"
         # A newcomer's first login (their password hash and their user to write) and a student's
         # login (a token for their server to record): each refused with the page in words.

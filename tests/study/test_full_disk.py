@@ -20,6 +20,7 @@ import subprocess
 
 import pytest
 
+from disk_support import fill_filesystem
 from mt_widgets.apps import StudyApp
 from mt_widgets.classroom.progress import ClassFolderError, ProgressRecorder
 from mt_widgets.study import NotSavedError, ParticipantLog, StudyFolder, jsonl, read_events
@@ -47,29 +48,6 @@ def small_disk(tmp_path, monkeypatch):
     yield folder
     # Lazily: a page's log still open (its kernel would close it at exit) must not keep it mounted.
     subprocess.run(["umount", "--lazy", str(folder)], capture_output=True, timeout=30, check=True)
-
-
-def _fill(folder) -> os.PathLike:
-    """Fills the filesystem holding ``folder`` to its last byte; the filler, to remove when space returns."""
-    filler = folder / "filler"
-    fd = os.open(filler, os.O_WRONLY | os.O_CREAT)
-    try:
-        block = b"\0" * 4096
-        while True:
-            try:
-                os.write(fd, block)
-            except OSError as error:
-                assert error.errno == errno.ENOSPC
-                break
-        for size in (512, 64, 8, 1):  # the last page's remainder too
-            try:
-                while True:
-                    os.write(fd, b"\0" * size)
-            except OSError:
-                pass
-    finally:
-        os.close(fd)
-    return filler
 
 
 def _act_until_held(app, most: int = 200) -> int:
@@ -106,7 +84,7 @@ def test_a_full_disk_holds_twelve_participants_loses_nothing_acknowledged_and_th
         apps[participant] = app
     assert StudyFolder(folder).storage_problem() is None
 
-    filler = _fill(small_disk)
+    filler = fill_filesystem(small_disk)
     held = {}
     for participant, app in apps.items():
         _act_until_held(app)
