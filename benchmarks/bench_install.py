@@ -2,7 +2,7 @@
 
 Run: ``python benchmarks/bench_install.py`` (``--shapes core widgets`` for some; ``--wheel PATH`` to
 use a wheel already built). Each shape is installed into a fresh venv from the wheel, exactly as the
-install tier does (tests/install/test_shapes.py, whose helpers this uses), and measured:
+install tier does (tests/install/test_shapes.py; its helpers, tests/install/shapes.py, are used here), and measured:
 
 - size: the venv's site-packages, without pip and setuptools (what the shape itself brings);
 - install: the seconds ``pip install`` took (with pip's cache as it is: warm on a second run);
@@ -27,7 +27,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
-from tests.install.test_shapes import CLEAN_ENV, SHAPES, build_distributions, make_shape  # noqa: E402
+from tests.install.shapes import CLEAN_ENV, SHAPES, build_distributions, make_shape  # noqa: E402
 
 #: What a user of each shape imports first.
 IMPORTS = {

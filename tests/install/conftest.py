@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from .test_shapes import build_distributions, make_shape
+from .shapes import build_distributions, make_shape
 
 
 @pytest.fixture(scope="session")

@@ -10,7 +10,7 @@ import pytest
 
 from tests.docs.getting_started_pages import PAGES, run_page, runnable
 
-from .test_shapes import CLEAN_ENV
+from .shapes import CLEAN_ENV
 
 pytestmark = pytest.mark.install
 

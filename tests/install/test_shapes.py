@@ -10,7 +10,6 @@ the shapes are measured by benchmarks/bench_install.py (docs/guide/install.md).
 
 from __future__ import annotations
 
-import os
 import subprocess
 import sys
 import tarfile
@@ -24,36 +23,9 @@ except ModuleNotFoundError:   # Python 3.10
 
 import pytest
 
+from .shapes import CLEAN_ENV, HERE, ROOT, SHAPES, make_shape
+
 pytestmark = pytest.mark.install
-
-ROOT = Path(__file__).resolve().parents[2]
-HERE = Path(__file__).resolve().parent
-#: shape -> the extras installed (the core is no extra).
-SHAPES = {"core": "", "widgets": "widgets", "analysis": "analysis", "uarm": "uarm", "lab": "lab"}
-#: The environment of the shapes' Pythons: no PYTHONPATH, which would bring the checkout's package in.
-CLEAN_ENV = {name: value for name, value in os.environ.items() if name not in ("PYTHONPATH", "VIRTUAL_ENV")}
-
-
-def build_distributions(out: Path) -> tuple[Path, Path]:
-    """(sdist, wheel) of the repository, built into ``out``."""
-    subprocess.run([sys.executable, "-m", "build", "--outdir", str(out), str(ROOT)], check=True,
-                   capture_output=True, timeout=900)
-    (sdist,) = out.glob("mt_widgets-*.tar.gz")
-    (wheel,) = out.glob("mt_widgets-*.whl")
-    return sdist, wheel
-
-
-def make_shape(wheel: Path, shape: str, venv: Path) -> Path:
-    """A fresh venv at ``venv`` with the wheel installed in the shape ``shape``; its Python."""
-    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, capture_output=True, timeout=300)
-    python = venv / "bin" / "python"
-    requirement = f"{wheel}[{SHAPES[shape]}]" if SHAPES[shape] else str(wheel)
-    # --no-compile: no byte-compiling of every installed module (a third of the lab's install time);
-    # Python compiles what a shape imports the first time it is imported, as for any user.
-    subprocess.run([python, "-m", "pip", "install", "--quiet", "--disable-pip-version-check", "--no-compile",
-                    requirement],
-                   check=True, capture_output=True, text=True, timeout=1800, env=CLEAN_ENV)
-    return python
 
 
 def test_the_sdist_and_the_wheel_hold_the_package_and_its_data(distributions):
