@@ -41,6 +41,11 @@ from .validation import as_bool, as_count, as_finite, as_float_array, as_positiv
 from .workspace import Cuboid, belt_line
 
 
+#: The task space of an arm taught in space: the base frame's three axes.
+_SPACE = np.eye(3)
+_SPACE.flags.writeable = False
+
+
 @dataclass(frozen=True)
 class Conveyor:
     """A belt running past the arm: a part on it is at ``origin + s * direction``, s growing at ``speed``.
@@ -165,7 +170,8 @@ class ChainPlant(ContinuousPlant):
     def control(self) -> chain_rollout.ChainControl:
         """The controller's settings as the compiled engine takes them."""
         return chain_rollout.ChainControl(float(self.velocity_gain), float(self.damping), float(self.speed_tolerance),
-                                          float(self.null_gain), self.home, self.kinematic)
+                                          float(self.null_gain), self.home, self.kinematic, _SPACE, False, True,
+                                          False)
 
     @property
     def n_joints(self) -> int:
