@@ -19,7 +19,6 @@ from .trajectory import TrajectoryBatch
 from .validation import as_count, as_float_array, as_positive
 from .workspace import Box
 
-
 #: The arm's plane in its chain's base frame: x and z (gravity along -z, as for every chain).
 _PLANE = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 _PLANE.flags.writeable = False

@@ -266,6 +266,14 @@ def force_torque(J, force, gravity_torque, compensate, effort_limit, out_tau):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _in_task(task, in_space, r, vector):
+    """Coordinate r of a base-frame vector (3,) in the task space (the vector's own when the task is the base frame)."""
+    if in_space:
+        return vector[r]
+    return task[r, 0] * vector[0] + task[r, 1] * vector[1] + task[r, 2] * vector[2]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def tool_velocity(J, qd, out):
     """J qd: the tool point's velocity (3,) in the base frame."""
     for r in range(3):
@@ -303,7 +311,9 @@ def _rollout_one(b, model, scene, control, thetas, start, dt, n_steps, record_ev
     n = model.axis.shape[0]
     dim = out_states.shape[2]
     n_samples = out_states.shape[1]
-    local_R, local_p, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    # local_p starts as the joints' placements: local_frames writes only sliding joints' rows
+    local_R, local_p = np.empty((n, 3, 3)), model.placement_p.copy()
+    world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3))
     w, v, aw, al, fn, fl = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)),
                             np.empty((n, 3)), np.empty((n, 3)))
     cm, ch, cJ, M, L = np.empty(n), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, n)), np.zeros((n, n))
@@ -311,6 +321,11 @@ def _rollout_one(b, model, scene, control, thetas, start, dt, n_steps, record_ev
     tool, J, points = np.empty(3), np.empty((3, n)), np.empty((n + 2, 3))
     task, force_control, velocity_features = control.task, control.force_control, control.velocity_features
     n_task, n_features = task.shape[0], thetas.shape[2]
+    # The task space is the base frame (every arm taught in space): its coordinates are the base's own.
+    in_space = n_task == 3
+    for r in range(n_task):
+        for c in range(3):
+            in_space = in_space and task[r, c] == (1.0 if r == c else 0.0)
     tau, u, reference = np.empty(n), np.empty(n_task), np.empty(n)
     phi, command, tool_v = np.empty(n_features), np.empty(3), np.empty(3)
     x, stage, k1, k2, k3, k4 = (np.empty(dim), np.empty(dim), np.empty(dim), np.empty(dim), np.empty(dim),
@@ -331,9 +346,9 @@ def _rollout_one(b, model, scene, control, thetas, start, dt, n_steps, record_ev
             tool_velocity(J, x[n:2 * n], tool_v)
         # phi(x) = (P r, [P rdot], [s], 1) and u = Theta phi, the command P^T u in the base frame
         for r in range(n_task):
-            phi[r] = task[r, 0] * tool[0] + task[r, 1] * tool[1] + task[r, 2] * tool[2]
+            phi[r] = _in_task(task, in_space, r, tool)
             if velocity_features:
-                phi[n_task + r] = task[r, 0] * tool_v[0] + task[r, 1] * tool_v[1] + task[r, 2] * tool_v[2]
+                phi[n_task + r] = _in_task(task, in_space, r, tool_v)
         if with_phase:
             phi[n_features - 2] = x[dim - 1]
         phi[n_features - 1] = 1.0
@@ -343,10 +358,13 @@ def _rollout_one(b, model, scene, control, thetas, start, dt, n_steps, record_ev
                 acc_u += theta[r, j] * phi[j]
             u[r] = acc_u
         for c in range(3):
-            acc_u = 0.0
-            for r in range(n_task):
-                acc_u += task[r, c] * u[r]
-            command[c] = acc_u
+            if in_space:
+                command[c] = u[c]
+            else:
+                acc_u = 0.0
+                for r in range(n_task):
+                    acc_u += task[r, c] * u[r]
+                command[c] = acc_u
         if not force_control:
             joint_velocity_reference(J, command, x[:n], model.velocity_limit, control.damping, control.null_gain,
                                      control.home, reference)
@@ -357,7 +375,7 @@ def _rollout_one(b, model, scene, control, thetas, start, dt, n_steps, record_ev
                 out_states[b, sample, i] = x[i]
             for r in range(n_task):
                 out_positions[b, sample, r] = phi[r]
-                out_velocities[b, sample, r] = task[r, 0] * tool_v[0] + task[r, 1] * tool_v[1] + task[r, 2] * tool_v[2]
+                out_velocities[b, sample, r] = _in_task(task, in_space, r, tool_v)
                 out_actions[b, sample, r] = u[r]
             sample += 1
         if k == n_steps:
