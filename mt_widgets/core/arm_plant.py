@@ -35,6 +35,9 @@ class ArmPlant(ContinuousPlant):
         max_joint_speed: a rollout whose joint speed exceeds this (rad/s) is stopped and
             flagged diverged. 100 rad/s (16 turns a second) is far beyond any motion a sensible
             skill produces and well before the numbers overflow.
+
+    ``chain`` is the arm as a two-joint ``SerialChain`` (its plane (x, y) the chain's (x, z)),
+    which the chain engine rolls out with ``scene()`` and ``control()``.
     """
 
     robot = "sim"
