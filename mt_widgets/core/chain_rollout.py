@@ -81,7 +81,8 @@ class ChainControl(NamedTuple):
     plane's two axes for a planar one); force_control: the action is the tool's force, held as
     ``tau = J^T P^T u`` (the paper's controller) instead of a velocity through the velocity loop;
     gravity_compensation: a force-controlled arm adds g(q_k) to its held torque (a velocity loop
-    always does); velocity_features: the features carry the tool's velocity, (P r, P rdot, 1).
+    always does); velocity_features: the features carry the tool's velocity, (P r, P rdot, 1)
+    (a dynamic arm's: a kinematic arm's velocity follows from its action).
     """
 
     gain: float
