@@ -22,8 +22,8 @@ from .workspace import Box
 #: The arm's plane in its chain's base frame: x and z (gravity along -z, as for every chain).
 _PLANE = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 _PLANE.flags.writeable = False
+# Writable like a ChainPlant's pairs: numba compiles one version per array flag, and one serves both.
 _NO_PAIRS = np.empty((0, 2), dtype=np.int64)
-_NO_PAIRS.flags.writeable = False
 
 
 class ArmPlant(ContinuousPlant):

@@ -251,6 +251,7 @@ def test_a_planar_pair_in_any_pose_takes_the_fast_path_with_the_general_algorith
     chain = SerialChain.from_description(tilted_pair())
     scene = chain_rollout.ChainScene(-np.inf, 4, np.empty((0, 2), dtype=np.int64), 0.0, 0.0, False)
     task = np.array([[1.0, 0.0, 0.0], [0.0, 0.6, 0.8]])
+    task.flags.writeable = False   # as the plants' tasks: the engine's kernels compiled for them serve
     control = chain_rollout.ChainControl(0.0, 0.0, 0.05, 0.0, np.zeros(2), False, task, True, compensate, True)
     p = chain_rollout.planar_pair(chain.model, scene, control, 5)
     assert p.shape == (chain_rollout._PLANAR_SIZE,)
@@ -280,7 +281,9 @@ def test_a_chain_that_is_not_a_planar_pair_takes_the_general_path():
 
     description = tilted_pair()
     scene = chain_rollout.ChainScene(-np.inf, 4, np.empty((0, 2), dtype=np.int64), 0.0, 0.0, False)
-    control = chain_rollout.ChainControl(0.0, 0.0, 0.0, 0.0, np.zeros(2), False, np.eye(3)[[0, 2]], True, True, True)
+    task = np.eye(3)[[0, 2]]
+    task.flags.writeable = False
+    control = chain_rollout.ChainControl(0.0, 0.0, 0.0, 0.0, np.zeros(2), False, task, True, True, True)
     description["joints"][1]["axis"] = (0.0, -0.8, 0.6)   # the second axis no longer parallel to the first
     assert chain_rollout.planar_pair(SerialChain.from_description(description).model, scene, control, 5).size == 0
     chain = SerialChain.from_description(tilted_pair())
