@@ -29,7 +29,7 @@ def _pair(name: str, value, *, allow_zero: bool = False) -> tuple[float, float]:
 
 @dataclass(frozen=True)
 class ArmParameters:
-    """The numbers the dynamics need, in SI units, flattened for the compiled rollout kernel."""
+    """The numbers the closed-form dynamics need, in SI units."""
 
     l1: float
     l2: float
@@ -40,9 +40,6 @@ class ArmParameters:
     i1: float
     i2: float
     gravity: float
-
-    def as_array(self) -> np.ndarray:
-        return np.array([self.l1, self.l2, self.m1, self.m2, self.lc1, self.lc2, self.i1, self.i2, self.gravity])
 
 
 class TwoLinkArm:

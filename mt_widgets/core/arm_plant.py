@@ -1,17 +1,29 @@
-"""The simulated two-link arm as a plant: query-state region, end-effector readout, fast rollouts."""
+"""The simulated two-link arm as a plant: query-state region, end-effector readout, fast rollouts.
+
+Its rollouts run on the chain engine (``chain_rollout``), the arm as a two-joint chain
+(``TwoLinkArm.chain_description``) force-controlled in its plane; the closed forms of
+``TwoLinkArm`` give the readouts and are the engine's test oracle.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
-from . import arm_rollout
+from . import chain_rollout
 from .arm import TwoLinkArm
 from .drawing import PlantDrawing, PoseSketch
 from .features import EndEffectorFeatures
 from .plants import ContinuousPlant, _check_rollout
+from .serial_chain import SerialChain
 from .trajectory import TrajectoryBatch
 from .validation import as_count, as_float_array, as_positive
 from .workspace import Box
+
+#: The arm's plane in its chain's base frame: x and z (gravity along -z, as for every chain).
+_PLANE = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+_PLANE.flags.writeable = False
+# Writable like a ChainPlant's pairs: numba compiles one version per array flag, and one serves both.
+_NO_PAIRS = np.empty((0, 2), dtype=np.int64)
 
 
 class ArmPlant(ContinuousPlant):
@@ -23,6 +35,9 @@ class ArmPlant(ContinuousPlant):
         max_joint_speed: a rollout whose joint speed exceeds this (rad/s) is stopped and
             flagged diverged. 100 rad/s (16 turns a second) is far beyond any motion a sensible
             skill produces and well before the numbers overflow.
+
+    ``chain`` is the arm as a two-joint ``SerialChain`` (its plane (x, y) the chain's (x, z)),
+    which the chain engine rolls out with ``scene()`` and ``control()``.
     """
 
     robot = "sim"
@@ -39,6 +54,18 @@ class ArmPlant(ContinuousPlant):
         self.max_joint_speed = as_positive("max_joint_speed", max_joint_speed)
         reach = 1.1 * self.arm.reach
         self.view = Box((-reach, reach), (-reach, reach))
+        # The arm's plane (x, y) is its chain's (x, z); a joint speed beyond max_joint_speed stops a rollout.
+        self.chain = SerialChain.from_description(self.arm.chain_description(), gravity=self.arm.gravity)
+        self.chain.velocity_limit = np.full(2, self.max_joint_speed)
+
+    def scene(self) -> chain_rollout.ChainScene:
+        """Nothing around the arm: no table, no collision pair (the engine checks joints only)."""
+        return chain_rollout.ChainScene(-np.inf, self.chain.n_joints + 2, _NO_PAIRS, 0.0, 0.0, False)
+
+    def control(self) -> chain_rollout.ChainControl:
+        """The paper's controller: the end-effector force in the plane, held as J^T u (+ g(q) when compensated)."""
+        return chain_rollout.ChainControl(0.0, 0.0, 0.0, 0.0, np.zeros(2), False, _PLANE, True,
+                                          self.arm.gravity_compensation, True)
 
     def __repr__(self) -> str:
         return f"ArmPlant({self.arm!r})"
@@ -92,11 +119,17 @@ class ArmPlant(ContinuousPlant):
             return super().rollout(thetas, feature_map, start, duration, record_every)
         thetas, start, n_steps = _check_rollout(self, thetas, feature_map, start, duration, self.control_rate)
         record_every = as_count("record_every", record_every if record_every is not None else 1)
+        # Writable copies: numba compiles one version per array flag (a skill's Theta is read-only).
+        thetas, start = np.array(thetas, order="C"), np.array(start, order="C")
         dt = 1.0 / self.control_rate
-        states, positions, velocities, actions, lengths, diverged_step = arm_rollout.rollout(
-            np.ascontiguousarray(thetas), start, self.arm.parameters.as_array(), self.arm.gravity_compensation,
-            dt, n_steps, record_every, self.max_joint_speed)
-        diverged_at = np.where(diverged_step >= 0, diverged_step * dt, np.nan)
-        times = np.arange(states.shape[1]) * record_every * dt
-        return TrajectoryBatch(times, states, positions, velocities, actions, diverged_step >= 0, diverged_at,
+        batch, n_samples = thetas.shape[0], n_steps // record_every + 1
+        states = np.empty((batch, n_samples, 4))
+        positions, velocities, actions = (np.empty((batch, n_samples, 2)) for _ in range(3))
+        lengths, stop_step, stop_code = (np.empty(batch, dtype=np.int64) for _ in range(3))
+        chain_rollout.rollout(self.chain.model, self.scene(), self.control(), thetas, start, dt, n_steps, record_every,
+                              (states, positions, velocities, actions, lengths, stop_step, stop_code))
+        # Every stop of this arm (a joint speed beyond max_joint_speed, a state not finite) is a divergence.
+        diverged_at = np.where(stop_step >= 0, stop_step * dt, np.nan)
+        times = np.arange(n_samples) * record_every * dt
+        return TrajectoryBatch(times, states, positions, velocities, actions, stop_step >= 0, diverged_at,
                                lengths, self.units)

@@ -40,6 +40,10 @@ from .trajectory import TrajectoryBatch
 from .validation import as_bool, as_count, as_finite, as_float_array, as_positive
 from .workspace import Cuboid, belt_line
 
+#: The task space of an arm taught in space: the base frame's three axes.
+_SPACE = np.eye(3)
+_SPACE.flags.writeable = False
+
 
 @dataclass(frozen=True)
 class Conveyor:
@@ -165,7 +169,8 @@ class ChainPlant(ContinuousPlant):
     def control(self) -> chain_rollout.ChainControl:
         """The controller's settings as the compiled engine takes them."""
         return chain_rollout.ChainControl(float(self.velocity_gain), float(self.damping), float(self.speed_tolerance),
-                                          float(self.null_gain), self.home, self.kinematic)
+                                          float(self.null_gain), self.home, self.kinematic, _SPACE, False, True,
+                                          False)
 
     @property
     def n_joints(self) -> int:
@@ -401,7 +406,9 @@ def _safety_batch(model, scene, speed_tolerance, Q, QD, points):
 @njit(cache=True)
 def _reference_batch(model, control, Q, U, out):
     n = Q.shape[1]
-    local_R, local_p, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    # local_p starts as the joints' placements: local_frames writes only sliding joints' rows
+    local_R, local_p = np.empty((n, 3, 3)), model.placement_p.copy()
+    world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3))
     tool, J = np.empty(3), np.empty((3, n))
     for b in range(Q.shape[0]):
         dyn.local_frames(model, Q[b], local_R, local_p)
@@ -416,7 +423,9 @@ def _reference_batch(model, control, Q, U, out):
 def _position_ik(model, targets, Q, iterations, out_error):
     """Damped Newton steps dq = J^T (J J^T + mu^2 I)^-1 (target - tool) from each row of Q (in place)."""
     n = Q.shape[1]
-    local_R, local_p, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    # local_p starts as the joints' placements: local_frames writes only sliding joints' rows
+    local_R, local_p = np.empty((n, 3, 3)), model.placement_p.copy()
+    world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3))
     tool, J, step = np.empty(3), np.empty((3, n)), np.empty(n)
     limits = np.full(n, np.inf)
     for b in range(Q.shape[0]):

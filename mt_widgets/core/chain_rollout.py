@@ -1,10 +1,10 @@
-"""Compiled rollouts of a serial-chain arm under a linear tool-velocity policy: the chain engine.
+"""Compiled rollouts of a serial-chain arm under a linear tool policy: the chain engine.
 
 A rollout takes three structures: the chain (``chain_dynamics.ChainModel``: kinematics,
 inertias, limits), the scene (``ChainScene``: the table, the conveyor, which capsules may
 collide) and the controller (``ChainControl``). Nothing in here knows which arm it moves.
 
-The controller runs at 1 kHz. At each sample k the policy gives the tool's velocity
+The controller runs at 1 kHz. At each sample k the policy gives (by default) the tool's velocity
 ``u_k = Theta phi(x_k)`` (m/s, base frame), held over the step:
 
 1. resolved rate: ``qd_ref = J^T (J J^T + mu^2 I)^-1 u_k`` (damped least squares, so a pose near
@@ -21,6 +21,14 @@ The controller runs at 1 kHz. At each sample k the policy gives the tool's veloc
    a drive does), integrated with classical RK4 through the chain's forward dynamics;
    a kinematic arm (position-controlled servos, state q): ``qd = qd_ref(q, u_k)``, integrated
    with RK4 (the servos' own position loops track far faster than the taught motion).
+
+Or, with ``ChainControl.force_control`` (the paper's simulated arm), the policy gives the tool's
+force and the torque ``tau_k = J(q_k)^T u_k`` (plus ``g(q_k)`` under gravity compensation) is held
+over the step, integrated with RK4 through the forward dynamics; the features may then carry the
+tool's velocity, ``phi = (r, rdot, 1)``. Positions, velocities and actions are in the task space
+(``ChainControl.task``: the base frame's axes, or a plane's two). A chain of two parallel
+turning joints so controlled, with no table or collision pair to check, takes a fast path with
+the same arithmetic in scalars (``planar_pair``, below).
 
 A reproduction stops cleanly (a code, the arrays frozen at the last valid sample, never NaN)
 at the first state that is not finite, leaves a joint's position range, exceeds a joint's speed
@@ -68,6 +76,13 @@ class ChainControl(NamedTuple):
     gain: k_v (1/s); damping: mu (m); speed_tolerance: the fraction a joint may exceed its speed
     limit by before a rollout stops; null_gain: k_n (1/s); home: (n,) the pose the null space
     pulls towards; kinematic: the arm's joints follow qd_ref exactly (the state carries no qd).
+    task: (R, 3) the task space's axes in the base frame (rows): the policy's positions,
+    velocities and actions are in these coordinates (the identity for an arm taught in space, the
+    plane's two axes for a planar one); force_control: the action is the tool's force, held as
+    ``tau = J^T P^T u`` (the paper's controller) instead of a velocity through the velocity loop;
+    gravity_compensation: a force-controlled arm adds g(q_k) to its held torque (a velocity loop
+    always does); velocity_features: the features carry the tool's velocity, (P r, P rdot, 1)
+    (a dynamic arm's: a kinematic arm's velocity follows from its action).
     """
 
     gain: float
@@ -76,6 +91,10 @@ class ChainControl(NamedTuple):
     null_gain: float
     home: np.ndarray
     kinematic: bool
+    task: np.ndarray
+    force_control: bool
+    gravity_compensation: bool
+    velocity_features: bool
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -224,6 +243,48 @@ def held_torque(reference, q_dot, mass_matrix, gravity_torque, effort_limit, gai
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def _freeze(b, sample, out):
+    """Rollout b ends after ``sample`` samples: freeze it at its last valid one so the batch arrays stay finite."""
+    out_states, out_positions, out_velocities, out_actions, lengths = out[0], out[1], out[2], out[3], out[4]
+    lengths[b] = sample
+    for s in range(sample, out_states.shape[1]):
+        for i in range(out_states.shape[2]):
+            out_states[b, s, i] = out_states[b, sample - 1, i]
+        for r in range(out_positions.shape[2]):
+            out_positions[b, s, r] = out_positions[b, sample - 1, r]
+            out_velocities[b, s, r] = 0.0
+            out_actions[b, s, r] = 0.0
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def force_torque(J, force, gravity_torque, compensate, effort_limit, out_tau):
+    """tau = J^T F (+ g(q) under gravity compensation), each joint's clipped to its effort limit."""
+    for i in range(J.shape[1]):
+        acc = J[0, i] * force[0] + J[1, i] * force[1] + J[2, i] * force[2]
+        if compensate:
+            acc += gravity_torque[i]
+        out_tau[i] = min(max(acc, -effort_limit[i]), effort_limit[i])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _in_task(task, in_space, r, vector):
+    """Coordinate r of a base-frame vector (3,) in the task space (the vector's own when the task is the base frame)."""
+    if in_space:
+        return vector[r]
+    return task[r, 0] * vector[0] + task[r, 1] * vector[1] + task[r, 2] * vector[2]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def tool_velocity(J, qd, out):
+    """J qd: the tool point's velocity (3,) in the base frame."""
+    for r in range(3):
+        acc = 0.0
+        for i in range(J.shape[1]):
+            acc += J[r, i] * qd[i]
+        out[r] = acc
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _acceleration(model, q, qd, tau, local_R, local_p, w, v, aw, al, fn, fl, cm, ch, cJ, M, L, zeros, bias, rhs, out):
     dyn.local_frames(model, q, local_R, local_p)
     dyn.rnea(model, local_R, local_p, qd, zeros, True, w, v, aw, al, fn, fl, bias)
@@ -251,13 +312,23 @@ def _rollout_one(b, model, scene, control, thetas, start, dt, n_steps, record_ev
     n = model.axis.shape[0]
     dim = out_states.shape[2]
     n_samples = out_states.shape[1]
-    local_R, local_p, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    # local_p starts as the joints' placements: local_frames writes only sliding joints' rows
+    local_R, local_p = np.empty((n, 3, 3)), model.placement_p.copy()
+    world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3))
     w, v, aw, al, fn, fl = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)),
                             np.empty((n, 3)), np.empty((n, 3)))
     cm, ch, cJ, M, L = np.empty(n), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, n)), np.zeros((n, n))
     zeros, bias, rhs, g_torque = np.zeros(n), np.empty(n), np.empty(n), np.empty(n)
     tool, J, points = np.empty(3), np.empty((3, n)), np.empty((n + 2, 3))
-    tau, u, reference = np.empty(n), np.empty(3), np.empty(n)
+    task, force_control, velocity_features = control.task, control.force_control, control.velocity_features
+    n_task, n_features = task.shape[0], thetas.shape[2]
+    # The task space is the base frame (every arm taught in space): its coordinates are the base's own.
+    in_space = n_task == 3
+    for r in range(n_task):
+        for c in range(3):
+            in_space = in_space and task[r, c] == (1.0 if r == c else 0.0)
+    tau, u, reference = np.empty(n), np.empty(n_task), np.empty(n)
+    phi, command, tool_v = np.empty(n_features), np.empty(3), np.empty(3)
     x, stage, k1, k2, k3, k4 = (np.empty(dim), np.empty(dim), np.empty(dim), np.empty(dim), np.empty(dim),
                                 np.empty(dim))
     acc, stage_tool, stage_J, q_dot = np.empty(n), np.empty(3), np.empty((3, n)), np.empty(n)
@@ -272,24 +343,40 @@ def _rollout_one(b, model, scene, control, thetas, start, dt, n_steps, record_ev
     dyn.tool_point(world_R, world_p, model.tool_p, tool)
     for k in range(n_steps + 1):
         dyn.tool_jacobian(model, world_R, world_p, tool, J)
-        for r in range(3):
-            s_feature = x[dim - 1] if with_phase else 0.0
-            if with_phase:
-                u[r] = theta[r, 0] * tool[0] + theta[r, 1] * tool[1] + theta[r, 2] * tool[2] \
-                    + theta[r, 3] * s_feature + theta[r, 4]
+        if not kinematic:
+            tool_velocity(J, x[n:2 * n], tool_v)
+        # phi(x) = (P r, [P rdot], [s], 1) and u = Theta phi, the command P^T u in the base frame
+        for r in range(n_task):
+            phi[r] = _in_task(task, in_space, r, tool)
+            if velocity_features:
+                phi[n_task + r] = _in_task(task, in_space, r, tool_v)
+        if with_phase:
+            phi[n_features - 2] = x[dim - 1]
+        phi[n_features - 1] = 1.0
+        for r in range(n_task):
+            acc_u = 0.0
+            for j in range(n_features):
+                acc_u += theta[r, j] * phi[j]
+            u[r] = acc_u
+        for c in range(3):
+            if in_space:
+                command[c] = u[c]
             else:
-                u[r] = theta[r, 0] * tool[0] + theta[r, 1] * tool[1] + theta[r, 2] * tool[2] + theta[r, 3]
-        joint_velocity_reference(J, u, x[:n], model.velocity_limit, control.damping, control.null_gain, control.home,
-                                 reference)
+                acc_u = 0.0
+                for r in range(n_task):
+                    acc_u += task[r, c] * u[r]
+                command[c] = acc_u
+        if not force_control:
+            joint_velocity_reference(J, command, x[:n], model.velocity_limit, control.damping, control.null_gain,
+                                     control.home, reference)
+            if kinematic:
+                tool_velocity(J, reference, tool_v)
         if k % record_every == 0 and sample < n_samples:
             for i in range(dim):
                 out_states[b, sample, i] = x[i]
-            for r in range(3):
-                out_positions[b, sample, r] = tool[r]
-                speed = 0.0
-                for i in range(n):
-                    speed += J[r, i] * (reference[i] if kinematic else x[n + i])
-                out_velocities[b, sample, r] = speed
+            for r in range(n_task):
+                out_positions[b, sample, r] = phi[r]
+                out_velocities[b, sample, r] = _in_task(task, in_space, r, tool_v)
                 out_actions[b, sample, r] = u[r]
             sample += 1
         if k == n_steps:
@@ -319,7 +406,10 @@ def _rollout_one(b, model, scene, control, thetas, start, dt, n_steps, record_ev
             # reused, and g(q) comes from the composites the mass matrix leaves.
             dyn.crba(model, local_R, local_p, cm, ch, cJ, M)
             dyn.gravity_from_composites(model, world_R, cm, ch, g_torque)
-            held_torque(reference, x[n:2 * n], M, g_torque, model.effort_limit, control.gain, tau)
+            if force_control:
+                force_torque(J, command, g_torque, control.gravity_compensation, model.effort_limit, tau)
+            else:
+                held_torque(reference, x[n:2 * n], M, g_torque, model.effort_limit, control.gain, tau)
             dyn.rnea(model, local_R, local_p, x[n:2 * n], zeros, True, w, v, aw, al, fn, fl, bias)
             for i in range(n):
                 rhs[i] = tau[i] - bias[i]
@@ -360,15 +450,7 @@ def _rollout_one(b, model, scene, control, thetas, start, dt, n_steps, record_ev
             break
         for i in range(dim):
             x[i] = stage[i]
-    lengths[b] = sample
-    # Freeze a stopped rollout at its last valid sample so the batch arrays stay finite.
-    for s in range(sample, n_samples):
-        for i in range(dim):
-            out_states[b, s, i] = out_states[b, sample - 1, i]
-        for r in range(3):
-            out_positions[b, s, r] = out_positions[b, sample - 1, r]
-            out_velocities[b, s, r] = 0.0
-            out_actions[b, s, r] = 0.0
+    _freeze(b, sample, out)
 
 
 @njit(cache=True, error_model="numpy")
@@ -394,17 +476,217 @@ def rollout_parallel(model, scene, control, thetas, start, dt, n_steps, record_e
         _rollout_one(b, model, scene, control, thetas, start, dt, n_steps, record_every, out)
 
 
+# -- the fast path of a planar pair --------------------------------------------------------------------
+# A chain of two turning joints whose axes stay parallel (the second's axis, carried by the first
+# joint, is the first's), force-controlled in the plane they turn in, with no table or collision
+# pair to check: the paper's arm. Its rigid-body dynamics reduce to a dozen scalars, and the
+# rollout runs on those in registers at about a twentieth of the general algorithms' cost per step
+# (0.11 against 2.2 us), which keeps the paper's arm as fast as MuJoCo's ratio asks
+# (benchmarks/bench_core.py). It computes the same M, C qd + g and J as they do
+# (tests/core/test_arm_dynamics.py compares the two paths' rollouts to 1e-12), so it is a
+# specialisation chosen by the model's data, not another model.
+#
+# In the plane (basis e1, e2 with e1 x e2 the axis a) body 1's vectors turn with q1 and body 2's
+# with q1 + q2. With d the second joint's offset, c1, c2 the centres of mass, t the tool point and
+# w1 = m1 c1 + m2 d, w2 = m2 c2 the first moments (all at q = 0):
+#   M11 = k11 + 2 P, M12 = k22 + P, M22 = k22, P(q2) = A cos q2 - B sin q2 (A = m2 d.c2, B = m2 d x c2),
+#   C qd = P' (2 qd1 qd2 + qd2^2, -qd1^2), g2 = G2 cos(q1 + q2 - phi2), g1 = G1 cos(q1 - phi1) + g2
+# with G cos(phi) = gp x w, G sin(phi) = gp . w for the gravity gp in the plane (one cosine each:
+# a branch or a sine for the tilted case costs a quarter of the step).
+_K11, _K22, _A, _B, _G1, _PHI1, _G2, _PHI2 = range(8)
+_O, _D, _T, _TASK, _OFFSET, _LOWER, _UPPER, _SPEED, _EFFORT = 8, 10, 12, 14, 18, 20, 22, 24, 26
+_PLANAR_SIZE = 28
+
+
+@njit(cache=True, error_model="numpy")
+def planar_pair(model, scene, control, n_features):
+    """The constants of the planar fast path (above) when it applies to this rollout, else an empty array.
+
+    Compiled: the rollout's entry asks on every call, and numpy would cost more than a short rollout.
+    """
+    none = np.empty(0)
+    if model.axis.shape[0] != 2 or model.prismatic[0] or model.prismatic[1] or not control.force_control \
+            or control.kinematic or not control.velocity_features or control.task.shape[0] != 2 or n_features != 5 \
+            or scene.with_phase or scene.pairs.shape[0] or (scene.first_table_point < 4
+                                                            and scene.table_height > -np.inf):
+        return none
+    B0 = model.placement_R[0]
+    B1 = B0 @ model.placement_R[1]
+    if np.max(np.abs(model.placement_R[1] @ model.axis[1] - model.axis[0])) > 1e-15:
+        return none
+    a = B0 @ model.axis[0]
+    # e1: the base's x (else y) in the plane; e2 = a x e1, so that a turn about a is a turn from e1 to e2
+    e1 = np.array([1.0, 0.0, 0.0]) - a[0] * a
+    if np.linalg.norm(e1) < 0.5:
+        e1 = np.array([0.0, 1.0, 0.0]) - a[1] * a
+    e1 = e1 / np.linalg.norm(e1)
+    e2 = np.cross(a, e1)
+    plane = np.empty((2, 3))
+    plane[0], plane[1] = e1, e2
+    m1, m2 = model.mass[0], model.mass[1]
+    o = plane @ model.placement_p[0]
+    d, c1 = plane @ (B0 @ model.placement_p[1]), plane @ (B0 @ model.com[0])
+    c2, t = plane @ (B1 @ model.com[1]), plane @ (B1 @ model.tool_p)
+    inertia1 = model.axis[0] @ (model.inertia[0] @ model.axis[0])
+    inertia2 = model.axis[1] @ (model.inertia[1] @ model.axis[1])
+    k22 = inertia2 + m2 * (c2[0] * c2[0] + c2[1] * c2[1])
+    k11 = inertia1 + m1 * (c1[0] * c1[0] + c1[1] * c1[1]) + m2 * (d[0] * d[0] + d[1] * d[1]) + k22
+    gp = plane @ model.gravity
+    w1, w2 = m1 * c1 + m2 * d, m2 * c2
+    # The tool's height along a is fixed; the task's coordinates of the tool are offset + T (x, y).
+    height = a @ (model.placement_p[0] + B0 @ model.placement_p[1] + B1 @ model.tool_p)
+    T = control.task @ plane.T
+    offset = (control.task @ a) * height
+    p = np.empty(_PLANAR_SIZE)
+    p[_K11], p[_K22] = k11, k22
+    p[_A], p[_B] = m2 * (d[0] * c2[0] + d[1] * c2[1]), m2 * (d[0] * c2[1] - d[1] * c2[0])
+    for index, w in ((_G1, w1), (_G2, w2)):
+        across, along = gp[0] * w[1] - gp[1] * w[0], gp[0] * w[0] + gp[1] * w[1]
+        p[index], p[index + 1] = math.hypot(across, along), math.atan2(along, across)
+    for k in range(2):
+        p[_O + k], p[_D + k], p[_T + k], p[_OFFSET + k] = o[k], d[k], t[k], offset[k]
+        p[_TASK + k], p[_TASK + 2 + k] = T[0, k], T[1, k]
+        p[_LOWER + k], p[_UPPER + k] = model.lower[k], model.upper[k]
+        p[_SPEED + k] = model.velocity_limit[k] * (1.0 + control.speed_tolerance)
+        p[_EFFORT + k] = model.effort_limit[k]
+    return p
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _planar_gravity(p, q1, q2):
+    g2 = p[_G2] * math.cos(q1 + q2 - p[_PHI2])
+    return p[_G1] * math.cos(q1 - p[_PHI1]) + g2, g2
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _planar_acceleration(p, q1, q2, qd1, qd2, tau1, tau2):
+    c2, s2 = math.cos(q2), math.sin(q2)
+    k11, k22, A, B = p[_K11], p[_K22], p[_A], p[_B]
+    P = A * c2 - B * s2
+    dP = -A * s2 - B * c2
+    m11, m12 = k11 + 2.0 * P, k22 + P
+    g1, g2 = _planar_gravity(p, q1, q2)
+    b1 = tau1 - dP * (2.0 * qd1 * qd2 + qd2 * qd2) - g1
+    b2 = tau2 + dP * qd1 * qd1 - g2
+    det = m11 * k22 - m12 * m12
+    return (k22 * b1 - m12 * b2) / det, (m11 * b2 - m12 * b1) / det
+
+
+@njit(cache=True, error_model="numpy")
+def _planar_rollout_one(b, p, compensate, thetas, start, dt, n_steps, record_every, out):
+    """``_rollout_one`` for a planar pair (the fast path above), its state in scalars."""
+    out_states, out_positions, out_velocities, out_actions, lengths, stop_step, stop_code = out
+    n_samples = out_states.shape[1]
+    theta = thetas[b]
+    q1, q2, qd1, qd2 = start[0], start[1], start[2], start[3]
+    sample = 0
+    stop_step[b] = -1
+    stop_code[b] = 0
+    for k in range(n_steps + 1):
+        c1, s1, c12, s12 = math.cos(q1), math.sin(q1), math.cos(q1 + q2), math.sin(q1 + q2)
+        # the tool t turned by q1 + q2 and the elbow's offset d by q1; J's columns are their perpendiculars
+        tx, ty = c12 * p[_T] - s12 * p[_T + 1], s12 * p[_T] + c12 * p[_T + 1]
+        dx, dy = c1 * p[_D] - s1 * p[_D + 1], s1 * p[_D] + c1 * p[_D + 1]
+        j12, j22 = -ty, tx
+        j11, j21 = j12 - dy, j22 + dx
+        x, y = p[_O] + dx + tx, p[_O + 1] + dy + ty
+        vx, vy = j11 * qd1 + j12 * qd2, j21 * qd1 + j22 * qd2
+        r1 = p[_OFFSET] + p[_TASK] * x + p[_TASK + 1] * y
+        r2 = p[_OFFSET + 1] + p[_TASK + 2] * x + p[_TASK + 3] * y
+        v1 = p[_TASK] * vx + p[_TASK + 1] * vy
+        v2 = p[_TASK + 2] * vx + p[_TASK + 3] * vy
+        u1 = theta[0, 0] * r1 + theta[0, 1] * r2 + theta[0, 2] * v1 + theta[0, 3] * v2 + theta[0, 4]
+        u2 = theta[1, 0] * r1 + theta[1, 1] * r2 + theta[1, 2] * v1 + theta[1, 3] * v2 + theta[1, 4]
+        if k % record_every == 0 and sample < n_samples:
+            out_states[b, sample, 0] = q1
+            out_states[b, sample, 1] = q2
+            out_states[b, sample, 2] = qd1
+            out_states[b, sample, 3] = qd2
+            out_positions[b, sample, 0] = r1
+            out_positions[b, sample, 1] = r2
+            out_velocities[b, sample, 0] = v1
+            out_velocities[b, sample, 1] = v2
+            out_actions[b, sample, 0] = u1
+            out_actions[b, sample, 1] = u2
+            sample += 1
+        if k == n_steps:
+            break
+        # the force in the plane T^T u, held as tau = J^T F (+ g(q_k))
+        fx, fy = p[_TASK] * u1 + p[_TASK + 2] * u2, p[_TASK + 1] * u1 + p[_TASK + 3] * u2
+        tau1, tau2 = j11 * fx + j21 * fy, j12 * fx + j22 * fy
+        if compensate:
+            g1, g2 = _planar_gravity(p, q1, q2)
+            tau1 += g1
+            tau2 += g2
+        tau1 = min(max(tau1, -p[_EFFORT]), p[_EFFORT])
+        tau2 = min(max(tau2, -p[_EFFORT + 1]), p[_EFFORT + 1])
+        h = 0.5 * dt
+        a1, a2 = _planar_acceleration(p, q1, q2, qd1, qd2, tau1, tau2)
+        k1q1, k1q2, k1v1, k1v2 = qd1, qd2, a1, a2
+        a1, a2 = _planar_acceleration(p, q1 + h * k1q1, q2 + h * k1q2, qd1 + h * k1v1, qd2 + h * k1v2, tau1, tau2)
+        k2q1, k2q2, k2v1, k2v2 = qd1 + h * k1v1, qd2 + h * k1v2, a1, a2
+        a1, a2 = _planar_acceleration(p, q1 + h * k2q1, q2 + h * k2q2, qd1 + h * k2v1, qd2 + h * k2v2, tau1, tau2)
+        k3q1, k3q2, k3v1, k3v2 = qd1 + h * k2v1, qd2 + h * k2v2, a1, a2
+        a1, a2 = _planar_acceleration(p, q1 + dt * k3q1, q2 + dt * k3q2, qd1 + dt * k3v1, qd2 + dt * k3v2,
+                                      tau1, tau2)
+        k4q1, k4q2, k4v1, k4v2 = qd1 + dt * k3v1, qd2 + dt * k3v2, a1, a2
+        w = dt / 6.0
+        n1 = q1 + w * (k1q1 + 2.0 * k2q1 + 2.0 * k3q1 + k4q1)
+        n2 = q2 + w * (k1q2 + 2.0 * k2q2 + 2.0 * k3q2 + k4q2)
+        n3 = qd1 + w * (k1v1 + 2.0 * k2v1 + 2.0 * k3v1 + k4v1)
+        n4 = qd2 + w * (k1v2 + 2.0 * k2v2 + 2.0 * k3v2 + k4v2)
+        # safety_code's checks, in its order, for a scene without table or pairs
+        code = 0
+        if not (math.isfinite(n1) and math.isfinite(n2) and math.isfinite(n3) and math.isfinite(n4)):
+            code = DIVERGED
+        elif n1 < p[_LOWER] or n1 > p[_UPPER] or n2 < p[_LOWER + 1] or n2 > p[_UPPER + 1]:
+            code = JOINT_LIMIT
+        elif abs(n3) > p[_SPEED] or abs(n4) > p[_SPEED + 1]:
+            code = JOINT_SPEED
+        if code != 0:
+            stop_step[b] = k + 1
+            stop_code[b] = code
+            break
+        q1, q2, qd1, qd2 = n1, n2, n3, n4
+    _freeze(b, sample, out)
+
+
+@njit(cache=True, error_model="numpy")
+def planar_rollout_serial(p, compensate, thetas, start, dt, n_steps, record_every, out):
+    """``rollout_serial`` for a planar pair: p from ``planar_pair``."""
+    for b in range(thetas.shape[0]):
+        _planar_rollout_one(b, p, compensate, thetas, start, dt, n_steps, record_every, out)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def planar_rollout_parallel(p, compensate, thetas, start, dt, n_steps, record_every, out):
+    """``planar_rollout_serial`` with the batch spread over all cores."""
+    for b in prange(thetas.shape[0]):
+        _planar_rollout_one(b, p, compensate, thetas, start, dt, n_steps, record_every, out)
+
+
 #: Batches at least this large are spread over cores; below it threads cost more than they save.
 PARALLEL_FROM = 4
 _PARALLEL_LAUNCH = threading.Lock()
 
 
 def rollout(model, scene, control, thetas, start, dt, n_steps, record_every, out):
-    """Runs ``rollout_serial`` or, for a batch of ``PARALLEL_FROM`` or more, ``rollout_parallel``."""
-    if thetas.shape[0] >= PARALLEL_FROM:
-        # Where numba falls back to its workqueue threading layer, two Python threads launching
-        # parallel kernels at once abort the process (as for the planar arm): one launch at a time.
-        with _PARALLEL_LAUNCH:
-            rollout_parallel(model, scene, control, thetas, start, dt, n_steps, record_every, out)
+    """Runs ``rollout_serial`` or, for a batch of ``PARALLEL_FROM`` or more, ``rollout_parallel``.
+
+    A planar pair (``planar_pair``) takes the fast path with the same arithmetic in scalars.
+    """
+    p = planar_pair(model, scene, control, thetas.shape[2])
+    parallel = thetas.shape[0] >= PARALLEL_FROM
+    if p.shape[0]:
+        kernel = planar_rollout_parallel if parallel else planar_rollout_serial
+        arguments = (p, control.gravity_compensation, thetas, start, dt, n_steps, record_every, out)
     else:
-        rollout_serial(model, scene, control, thetas, start, dt, n_steps, record_every, out)
+        kernel = rollout_parallel if parallel else rollout_serial
+        arguments = (model, scene, control, thetas, start, dt, n_steps, record_every, out)
+    if parallel:
+        # Where numba falls back to its workqueue threading layer, two Python threads launching
+        # parallel kernels at once abort the process: one launch at a time.
+        with _PARALLEL_LAUNCH:
+            kernel(*arguments)
+    else:
+        kernel(*arguments)

@@ -35,8 +35,8 @@ class FeatureMap:
 class EndEffectorFeatures(FeatureMap):
     """phi(x) = (r1, r2, r1dot, r2dot, 1): end-effector position, velocity and a bias.
 
-    The paper's features for the simulated arm. The compiled arm rollout recognises this map
-    and evaluates it inline.
+    The paper's features for the simulated arm. ``ArmPlant``'s rollout recognises this map and
+    the chain engine evaluates it inline.
     """
 
     names = ("r1", "r2", "r1dot", "r2dot", "1")

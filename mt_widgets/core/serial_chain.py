@@ -263,7 +263,9 @@ class SerialChain:
 @njit(cache=True)
 def _origins_batch(model, Q, out):
     n = Q.shape[1]
-    local_R, local_p, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    # local_p starts as the joints' placements: local_frames writes only sliding joints' rows
+    local_R, local_p = np.empty((n, 3, 3)), model.placement_p.copy()
+    world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3))
     tool = np.empty(3)
     for b in range(Q.shape[0]):
         dyn.local_frames(model, Q[b], local_R, local_p)
@@ -279,7 +281,9 @@ def _origins_batch(model, Q, out):
 @njit(cache=True)
 def _tool_pose_batch(model, Q, rotations, positions):
     n = Q.shape[1]
-    local_R, local_p, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    # local_p starts as the joints' placements: local_frames writes only sliding joints' rows
+    local_R, local_p = np.empty((n, 3, 3)), model.placement_p.copy()
+    world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3))
     tool_R = model.tool_R
     for b in range(Q.shape[0]):
         dyn.local_frames(model, Q[b], local_R, local_p)
@@ -296,7 +300,9 @@ def _tool_pose_batch(model, Q, rotations, positions):
 @njit(cache=True)
 def _jacobian_batch(model, Q, out):
     n = Q.shape[1]
-    local_R, local_p, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    # local_p starts as the joints' placements: local_frames writes only sliding joints' rows
+    local_R, local_p = np.empty((n, 3, 3)), model.placement_p.copy()
+    world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3))
     tool = np.empty(3)
     for b in range(Q.shape[0]):
         dyn.local_frames(model, Q[b], local_R, local_p)
@@ -308,7 +314,7 @@ def _jacobian_batch(model, Q, out):
 @njit(cache=True)
 def _mass_batch(model, Q, out):
     n = Q.shape[1]
-    local_R, local_p, cm, ch, cJ = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty(n), np.empty((n, 3)), \
+    local_R, local_p, cm, ch, cJ = np.empty((n, 3, 3)), model.placement_p.copy(), np.empty(n), np.empty((n, 3)), \
         np.empty((n, 3, 3))
     for b in range(Q.shape[0]):
         dyn.local_frames(model, Q[b], local_R, local_p)
@@ -318,7 +324,7 @@ def _mass_batch(model, Q, out):
 @njit(cache=True)
 def _rnea_batch(model, Q, QD, QDD, use_gravity, out):
     n = Q.shape[1]
-    local_R, local_p = np.empty((n, 3, 3)), np.empty((n, 3))
+    local_R, local_p = np.empty((n, 3, 3)), model.placement_p.copy()
     w, v, aw, al, fn, fl = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)),
                             np.empty((n, 3)), np.empty((n, 3)))
     for b in range(Q.shape[0]):
@@ -329,7 +335,7 @@ def _rnea_batch(model, Q, QD, QDD, use_gravity, out):
 @njit(cache=True)
 def _forward_batch(model, Q, QD, TAU, out):
     n = Q.shape[1]
-    local_R, local_p = np.empty((n, 3, 3)), np.empty((n, 3))
+    local_R, local_p = np.empty((n, 3, 3)), model.placement_p.copy()
     w, v, aw, al, fn, fl = (np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)),
                             np.empty((n, 3)), np.empty((n, 3)))
     cm, ch, cJ, M, L = np.empty(n), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, n)), np.zeros((n, n))

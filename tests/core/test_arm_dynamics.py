@@ -181,3 +181,113 @@ def test_the_two_link_arm_on_the_chain_engine_agrees_with_its_closed_form(arm):
         assert np.abs(chain.nonlinear_effects(q, qd) - bias).max() < 1e-12
         torque = arm.applied_torque(q, force)
         assert np.abs(chain.forward_dynamics(q, qd, torque) - arm.joint_acceleration(q, qd, torque)).max() < 1e-12
+
+
+# -- rollouts: the chain engine (its planar fast path and its general algorithms) against the closed form --
+
+def engine_rollout(leading, kernel, thetas, start, n_steps):
+    """Runs one of the engine's serial kernels (its arguments before thetas: ``leading``) into fresh outputs."""
+    batch, dim, n_task = thetas.shape[0], start.shape[0], thetas.shape[1]
+    out = (np.empty((batch, n_steps + 1, dim)), np.empty((batch, n_steps + 1, n_task)),
+           np.empty((batch, n_steps + 1, n_task)), np.empty((batch, n_steps + 1, n_task)),
+           np.empty(batch, dtype=np.int64), np.empty(batch, dtype=np.int64), np.empty(batch, dtype=np.int64))
+    kernel(*leading, thetas, start, 1e-3, n_steps, 1, out)
+    return out
+
+
+@pytest.mark.parametrize("compensate", [True, False])
+@pytest.mark.parametrize("arm_name", list(ARMS))
+def test_the_two_link_arms_rollouts_on_the_chain_engine_agree_with_its_closed_form(arm_name, compensate):
+    from mt_widgets import SKILLS
+    from mt_widgets.core import ArmPlant, EndEffectorFeatures, FunctionFeatures, chain_rollout
+    from mt_widgets.core.plants import ContinuousPlant
+
+    plant = ArmPlant(TwoLinkArm(**ARMS[arm_name], gravity_compensation=compensate))
+    features = EndEffectorFeatures(plant)
+    rng = np.random.default_rng(1)
+    thetas = SKILLS["sim-point"].theta + rng.normal(scale=0.3, size=(3, 2, 5))
+    start = np.array([0.3, 0.5, 0.4, -0.7])
+    model, scene, control = plant.chain.model, plant.scene(), plant.control()
+    assert chain_rollout.planar_pair(model, scene, control, 5).shape == (chain_rollout._PLANAR_SIZE,)
+    # the plant's rollout (the engine's fast path) against RK4 of the closed form (the generic numpy loop)
+    engine = plant.rollout(thetas, features, start, 0.5)
+    oracle = ContinuousPlant.rollout(plant, thetas, FunctionFeatures(plant, features, names=features.names), start, 0.5)
+    for name in ("states", "positions", "velocities", "actions"):
+        assert np.abs(getattr(engine, name) - getattr(oracle, name)).max() < 1e-12, name
+    # the engine's general algorithms (RNEA, CRBA, Cholesky) give the same rollout as its fast path
+    general = engine_rollout((model, scene, control), chain_rollout.rollout_serial, thetas, start, 500)
+    for got, expected in zip(general[:4], (engine.states, engine.positions, engine.velocities, engine.actions)):
+        assert np.abs(got - expected).max() < 1e-12
+    assert np.all(general[5] == -1) and not np.any(engine.diverged)
+
+
+def tilted_pair():
+    """A two-joint chain in a tilted plane, its second joint and every inertial off the links' line."""
+    joints = [
+        {"name": "a", "type": "revolute", "parent": "base", "child": "l1", "xyz": (0.1, -0.2, 0.3),
+         "rpy": (0.3, 0.0, 0.2), "axis": (0.0, -1.0, 0.0), "lower": -2.0, "upper": 2.0, "velocity": 9.0,
+         "effort": 40.0},
+        # turned about its own axis (rpy about y) and set off along it (y): still parallel to the first
+        {"name": "b", "type": "revolute", "parent": "l1", "child": "l2", "xyz": (0.8, 0.05, 0.1),
+         "rpy": (0.0, 0.4, 0.0), "axis": (0.0, -1.0, 0.0), "lower": -2.5, "upper": 2.5, "velocity": 9.0,
+         "effort": 30.0},
+        {"name": "tool", "type": "fixed", "parent": "l2", "child": "tip", "xyz": (0.7, 0.02, -0.05),
+         "rpy": (0.0, 0.0, 0.0), "axis": (1.0, 0.0, 0.0)},
+    ]
+    inertials = [
+        {"link": "l1", "mass": 1.7, "xyz": (0.4, 0.02, 0.07), "rpy": (0.1, 0.2, 0.3),
+         "inertia": (0.04, 0.002, 0.001, 0.05, 0.003, 0.03)},
+        {"link": "l2", "mass": 0.9, "xyz": (0.3, -0.03, -0.06), "rpy": (0.0, 0.5, 0.0),
+         "inertia": (0.02, 0.001, 0.0, 0.03, 0.002, 0.025)},
+    ]
+    return {"robot": "tilted", "source": "tilted pair", "joints": joints, "inertials": inertials, "tip": "tip",
+            "locked": ()}
+
+
+@pytest.mark.parametrize("compensate", [True, False])
+def test_a_planar_pair_in_any_pose_takes_the_fast_path_with_the_general_algorithms_results(compensate):
+    from mt_widgets.core import chain_rollout
+
+    chain = SerialChain.from_description(tilted_pair())
+    scene = chain_rollout.ChainScene(-np.inf, 4, np.empty((0, 2), dtype=np.int64), 0.0, 0.0, False)
+    task = np.array([[1.0, 0.0, 0.0], [0.0, 0.6, 0.8]])
+    task.flags.writeable = False   # as the plants' tasks: the engine's kernels compiled for them serve
+    control = chain_rollout.ChainControl(0.0, 0.0, 0.05, 0.0, np.zeros(2), False, task, True, compensate, True)
+    p = chain_rollout.planar_pair(chain.model, scene, control, 5)
+    assert p.shape == (chain_rollout._PLANAR_SIZE,)
+    assert abs(p[chain_rollout._B]) > 1e-3 and abs(p[chain_rollout._PHI1]) > 1e-3  # the general case, not the paper's
+    rng = np.random.default_rng(2)
+    # small policies swing inside the limits; large ones reach a joint limit or a speed limit and stop
+    thetas = np.concatenate([rng.normal(scale=0.5, size=(4, 2, 5)), rng.normal(scale=40.0, size=(4, 2, 5))])
+    start = np.array([0.2, -0.4, 0.5, 0.3])
+    fast = engine_rollout((p, compensate), chain_rollout.planar_rollout_serial, thetas, start, 500)
+    general = engine_rollout((chain.model, scene, control), chain_rollout.rollout_serial, thetas, start, 500)
+    assert np.array_equal(fast[4], general[4]) and np.array_equal(fast[5], general[5])
+    assert np.array_equal(fast[6], general[6])
+    stopped = set(fast[6].tolist()) - {0}
+    assert np.any(fast[5] == -1) and stopped, "the test should hold rollouts that run through and ones that stop"
+    for got, expected in zip(fast[:4], general[:4]):
+        assert np.abs(got - expected).max() < 1e-12
+    # the readouts agree with the chain's kinematics: positions are the task's view of the tool point
+    for b in range(len(thetas)):
+        n = fast[4][b]
+        q, qd = fast[0][b, :n, :2], fast[0][b, :n, 2:]
+        assert np.abs(fast[1][b, :n] - chain.forward_kinematics(q) @ task.T).max() < 1e-12
+        assert np.abs(fast[2][b, :n] - chain.tool_velocity(q, qd) @ task.T).max() < 1e-12
+
+
+def test_a_chain_that_is_not_a_planar_pair_takes_the_general_path():
+    from mt_widgets.core import chain_rollout
+
+    description = tilted_pair()
+    scene = chain_rollout.ChainScene(-np.inf, 4, np.empty((0, 2), dtype=np.int64), 0.0, 0.0, False)
+    task = np.eye(3)[[0, 2]]
+    task.flags.writeable = False
+    control = chain_rollout.ChainControl(0.0, 0.0, 0.0, 0.0, np.zeros(2), False, task, True, True, True)
+    description["joints"][1]["axis"] = (0.0, -0.8, 0.6)   # the second axis no longer parallel to the first
+    assert chain_rollout.planar_pair(SerialChain.from_description(description).model, scene, control, 5).size == 0
+    chain = SerialChain.from_description(tilted_pair())
+    table = scene._replace(table_height=-0.5, first_table_point=2)
+    assert chain_rollout.planar_pair(chain.model, table, control, 5).size == 0   # a table to check
+    velocity = control._replace(force_control=False, velocity_features=False)
+    assert chain_rollout.planar_pair(chain.model, scene, velocity, 3).size == 0   # a velocity-taught arm

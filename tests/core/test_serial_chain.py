@@ -219,7 +219,8 @@ def test_gravity_from_the_composite_bodies_equals_the_newton_euler_gravity():
     chain = SerialChain.from_description(parse_urdf(EVERY_JOINT, "tool"))
     model = chain.model
     n = chain.n_joints
-    local_R, local_p, world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, 3))
+    local_R, local_p = np.empty((n, 3, 3)), model.placement_p.copy()
+    world_R, world_p = np.empty((n, 3, 3)), np.empty((n, 3))
     cm, ch, cJ, M, out = np.empty(n), np.empty((n, 3)), np.empty((n, 3, 3)), np.empty((n, n)), np.empty(n)
     for q, *_ in samples(chain, 20, seed=3):
         dyn.local_frames(model, q, local_R, local_p)
