@@ -228,7 +228,8 @@ class ProgressRecorder:
                         guidance_shown=record.guidance_shown, method=record.method)
 
         def finished(result):
-            self.record("episode", lesson=lesson, skill=result.skill_key, error=result.error,
+            self.record("episode", lesson=lesson, skill=result.skill_key,
+                        theta_error=result.theta_error, policy_risk=result.policy_risk,
                         demonstrations=result.demonstrations, diverged=result.diverged, lam=result.lam)
 
         episode.on_demonstration(demonstrated)

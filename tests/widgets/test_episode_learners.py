@@ -24,5 +24,5 @@ def test_an_episode_of_any_learner_runs_in_the_widget_with_its_guidance(key, nam
         assert widget.phase == "guidance" and given.contribution_norm > 0
         widget.next()
     assert widget.phase == "finished" and finished and finished[0].episode is episode
-    assert widget.error == pytest.approx(episode.error) and episode.error > 0
+    assert widget.theta_error is None and widget.policy_risk == pytest.approx(episode.policy_risk) > 0
     assert episode.reproduced and len(episode.reproduction.positions) > 1
