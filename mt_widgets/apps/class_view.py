@@ -66,11 +66,13 @@ def errors_figure(summary: ClassSummary) -> Figure:
     axes = figure.add_subplot()
     longest = max((len(s.theta_errors) for s in summary.students), default=0)
     for number, student in enumerate(s for s in summary.students if s.theta_errors):
-        axes.plot(np.arange(1, len(student.theta_errors) + 1), student.theta_errors, marker="o", ms=3, lw=1.2, alpha=0.8,
+        errors = student.theta_errors
+        axes.plot(np.arange(1, len(errors) + 1), errors, marker="o", ms=3, lw=1.2, alpha=0.8,
                   color=_PALETTE[number % len(_PALETTE)], ls=_LINESTYLES[(number // len(_PALETTE)) % 4],
                   label=student.student)
     if longest:
-        means = [np.mean([s.theta_errors[i] for s in summary.students if len(s.theta_errors) > i]) for i in range(longest)]
+        means = [np.mean([s.theta_errors[i] for s in summary.students if len(s.theta_errors) > i])
+                 for i in range(longest)]
         axes.plot(np.arange(1, longest + 1), means, color="black", lw=2.6, label="class mean")
         axes.set_xticks(np.arange(1, longest + 1))
         if sum(1 for s in summary.students if s.theta_errors) <= 14:

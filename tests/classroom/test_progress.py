@@ -22,8 +22,8 @@ from mt_widgets.classroom import (
     read_student,
     summarise,
 )
-from mt_widgets.widgets import EpisodeWidget
 from mt_widgets.classroom.summary import episode_errors
+from mt_widgets.widgets import EpisodeWidget
 
 
 def test_without_a_class_folder_nothing_is_written_anywhere(tmp_path, monkeypatch):
@@ -237,7 +237,8 @@ def test_the_summary_follows_each_students_errors_over_episodes(tmp_path):
         for error in (3.0 - number, 2.0 - number / 2, 1.0):
             recorder.record("episode", lesson="08_guided", theta_error=error, policy_risk=error / 2)
     summary = summarise(read_class(tmp_path))
-    assert sorted(s.theta_errors for s in summary.students) == sorted([[3.0, 2.0, 1.0], [2.0, 1.5, 1.0], [1.0, 1.0, 1.0]])
+    assert sorted(s.theta_errors for s in summary.students) == sorted([[3.0, 2.0, 1.0], [2.0, 1.5, 1.0],
+                                                                        [1.0, 1.0, 1.0]])
     assert SKILLS  # the paper's registry is untouched by the recorder
 
 

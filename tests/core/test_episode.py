@@ -50,7 +50,8 @@ def test_the_result_matches_the_learner_the_risk_and_the_bound():
     singular = np.linalg.svd(Phi, compute_uv=False)
     assert episode.rho1 == pytest.approx(np.max(singular / (singular**2 + DEFAULT_LAMBDA)), rel=1e-10)
     assert episode.rho2 == pytest.approx(np.linalg.norm(U - episode.optimal_actions), rel=1e-12)
-    assert episode.theta_error <= episode.rho1 * episode.rho2 and episode.bound == pytest.approx(episode.rho1 * episode.rho2)
+    assert episode.theta_error <= episode.rho1 * episode.rho2
+    assert episode.bound == pytest.approx(episode.rho1 * episode.rho2)
     assert episode.theta_error > 0.1, "a test of the bound needs a real error"
 
 
