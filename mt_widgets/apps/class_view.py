@@ -81,7 +81,7 @@ def errors_figure(summary: ClassSummary) -> Figure:
     else:
         axes.text(0.5, 0.5, "no finished episodes yet", ha="center", va="center", transform=axes.transAxes)
     axes.set_xlabel("episode (each student's own, in order)")
-    axes.set_ylabel("teaching error E")
+    axes.set_ylabel("teaching error ||Theta_hat - Theta||")
     axes.set_title("Teaching error over episodes", fontsize=10)
     axes.grid(alpha=0.3)
     return figure

@@ -1,7 +1,7 @@
 """What the instructor's view shows, worked out from the students' events (no I/O, no widgets).
 
 ``summarise`` turns a ``ClassProgress`` into: where each student is (the lesson or exercise of
-their latest event), each student's teaching errors over their episodes (the class's own
+their latest event), each student's teaching errors (Theta's error) over their episodes (the class's own
 version of the paper's Fig. 3a), per exercise the share of its checks each student has
 passed, and who is stuck: no progress (a new lesson, a check passed for the first time, a
 finished episode) for ``stuck_after_s`` seconds, with the words of the check they last failed.
