@@ -408,8 +408,8 @@ def simulate_changes(protocol, population: TeacherPopulation, n_studies: int, n_
     results = _simulate(protocol, population, groups, study_of, states, progress, keep_demonstrations=False,
                         forgetting=forgetting, delays=delays)
     # The error the analysis compares (``analysis.tables.error_measure``'s rule): Theta's error where
-    # the learner has a Theta, else the policy risk; one learner per protocol, so one measure throughout.
-    measure = "policy_risk" if results[0].theta_error is None else "theta_error"
+    # every episode has one, else the policy risk.
+    measure = "theta_error" if all(r.theta_error is not None for r in results) else "policy_risk"
     errors = np.stack([getattr(r, measure) for r in results], axis=1)       # (B, episodes)
     index = {(step["phase"], step["episode"]): e for e, step in enumerate(plan)}
     last = {step["phase"]: e for e, step in enumerate(plan)}
