@@ -34,6 +34,12 @@ RETIRED = [
     ("mt_widgets.core.episode", "TeachingEpisode.ridge"),
     ("mt_widgets.core.episode", "TeachingEpisode._require_ridge"),
     ("mt_widgets.core.kernel_learners", "_check_inputs"),
+    # Theta's error and the policy risk by their own names (issue 42): no field holds one or the other.
+    ("mt_widgets.core.episode", "TeachingEpisode.error"),
+    ("mt_widgets.core.episode", "EpisodeResult.error"),
+    ("mt_widgets.core.episode", "EpisodeResult.teaching_error"),
+    ("mt_widgets.in_silico.engine", "_BatchOutcome.error"),
+    ("mt_widgets.widgets", "EpisodeWidget.error"),
 ]
 
 

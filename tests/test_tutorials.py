@@ -129,4 +129,4 @@ def test_a_tutorials_episode_reaches_the_class_folder(tmp_path, monkeypatch):
     (student,) = read_class(tmp_path).students.values()
     kinds = [event["kind"] for event in student.events]
     assert kinds[0] == "lesson" and kinds.count("demonstration") == 5 and kinds[-1] == "episode"
-    assert student.events[-1]["error"] == pytest.approx(episode.result.error)
+    assert student.events[-1]["theta_error"] == pytest.approx(episode.result.theta_error)

@@ -64,22 +64,24 @@ def errors_figure(summary: ClassSummary) -> Figure:
     """Each student's teaching error over their episodes, and the class mean (the paper's Fig. 3a, for a class)."""
     figure = Figure(figsize=(6.4, 4.4), dpi=100, layout="constrained")
     axes = figure.add_subplot()
-    longest = max((len(s.errors) for s in summary.students), default=0)
-    for number, student in enumerate(s for s in summary.students if s.errors):
-        axes.plot(np.arange(1, len(student.errors) + 1), student.errors, marker="o", ms=3, lw=1.2, alpha=0.8,
+    longest = max((len(s.theta_errors) for s in summary.students), default=0)
+    for number, student in enumerate(s for s in summary.students if s.theta_errors):
+        errors = student.theta_errors
+        axes.plot(np.arange(1, len(errors) + 1), errors, marker="o", ms=3, lw=1.2, alpha=0.8,
                   color=_PALETTE[number % len(_PALETTE)], ls=_LINESTYLES[(number // len(_PALETTE)) % 4],
                   label=student.student)
     if longest:
-        means = [np.mean([s.errors[i] for s in summary.students if len(s.errors) > i]) for i in range(longest)]
+        means = [np.mean([s.theta_errors[i] for s in summary.students if len(s.theta_errors) > i])
+                 for i in range(longest)]
         axes.plot(np.arange(1, longest + 1), means, color="black", lw=2.6, label="class mean")
         axes.set_xticks(np.arange(1, longest + 1))
-        if sum(1 for s in summary.students if s.errors) <= 14:
+        if sum(1 for s in summary.students if s.theta_errors) <= 14:
             # Below the axes: inside, the legend of a dozen students hides their first episodes.
             axes.legend(fontsize=6, ncols=4, loc="upper center", bbox_to_anchor=(0.5, -0.18), frameon=False)
     else:
         axes.text(0.5, 0.5, "no finished episodes yet", ha="center", va="center", transform=axes.transAxes)
     axes.set_xlabel("episode (each student's own, in order)")
-    axes.set_ylabel("teaching error E")
+    axes.set_ylabel("teaching error ||Theta_hat - Theta||")
     axes.set_title("Teaching error over episodes", fontsize=10)
     axes.grid(alpha=0.3)
     return figure
@@ -121,8 +123,8 @@ def summary_table(summary: ClassSummary, names: dict[str, str] | None = None) ->
         return f"<td class='student-name'>{html.escape(name)}</td>" if name else "<td><i>not on the roster</i></td>"
 
     for s in order:
-        latest = f"{s.errors[-1]:.3f}" if s.errors else "–"
-        best = f"{min(s.errors):.3f}" if s.errors else "–"
+        latest = f"{s.theta_errors[-1]:.3f}" if s.theta_errors else "–"
+        best = f"{min(s.theta_errors):.3f}" if s.theta_errors else "–"
         status = "<b style='color:#b00020'>stuck</b>" if s.stuck else "working"
         if s.stuck and s.last_failure:
             status += f"<br><small>{html.escape(s.last_failure[:160])}</small>"
@@ -130,7 +132,7 @@ def summary_table(summary: ClassSummary, names: dict[str, str] | None = None) ->
         rows.append(f"<tr{style} class='student-row' data-student='{html.escape(s.student)}'>"
                     f"<td><code>{html.escape(s.student)}</code></td>{name_cell(s.student)}"
                     f"<td>{html.escape(s.place or '–')}</td>"
-                    f"<td>{_ago(s.idle_s)}</td><td>{len(s.errors)}</td><td>{latest}</td><td>{best}</td>"
+                    f"<td>{_ago(s.idle_s)}</td><td>{len(s.theta_errors)}</td><td>{latest}</td><td>{best}</td>"
                     f"<td>{status}</td></tr>")
     head = ("<tr><th>student</th>" + ("<th>name</th>" if names else "")
             + "<th>where</th><th>no progress for</th><th>episodes</th><th>latest error</th>"

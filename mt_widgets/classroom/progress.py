@@ -8,7 +8,7 @@ argument); with none set, nothing is written anywhere. In the folder:
   login and this salt, so the folder never holds a login name.
 - ``<pseudonym>.jsonl``: that student's progress, one JSON object a line: lessons opened,
   exercise checks run (passed or not, with the words shown), demonstrations and finished
-  episodes (with the teaching error).
+  episodes (with theta_error, Theta's error where the learner has a Theta, and policy_risk).
 - ``.locks/``: one lock file per student (``fcntl.flock``, released when its process dies).
 
 Crash safety comes from the study log's own mechanisms (``mt_widgets/study/log.py``: its lock,
@@ -228,7 +228,8 @@ class ProgressRecorder:
                         guidance_shown=record.guidance_shown, method=record.method)
 
         def finished(result):
-            self.record("episode", lesson=lesson, skill=result.skill_key, error=result.error,
+            self.record("episode", lesson=lesson, skill=result.skill_key,
+                        theta_error=result.theta_error, policy_risk=result.policy_risk,
                         demonstrations=result.demonstrations, diverged=result.diverged, lam=result.lam)
 
         episode.on_demonstration(demonstrated)

@@ -1,7 +1,7 @@
 """What the instructor's view shows, worked out from the students' events (no I/O, no widgets).
 
 ``summarise`` turns a ``ClassProgress`` into: where each student is (the lesson or exercise of
-their latest event), each student's teaching errors over their episodes (the class's own
+their latest event), each student's teaching errors (Theta's error) over their episodes (the class's own
 version of the paper's Fig. 3a), per exercise the share of its checks each student has
 passed, and who is stuck: no progress (a new lesson, a check passed for the first time, a
 finished episode) for ``stuck_after_s`` seconds, with the words of the check they last failed.
@@ -23,6 +23,22 @@ def parse_time(text: str) -> _dt.datetime:
     return _dt.datetime.fromisoformat(text.replace("Z", "+00:00"))
 
 
+
+def _number(value) -> float | None:
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else None
+
+
+def episode_errors(event: dict) -> tuple[float | None, float | None]:
+    """(theta_error, policy_risk) of a recorded episode event, None where it has none.
+
+    Files written before the two had their own names hold one ``error``: every lesson that recorded
+    episodes then (a5_teach_in_widget, tutorials 07, 08, 09 and 13) taught the ridge learner, whose
+    ``error`` was Theta's error, so it reads as the theta_error.
+    """
+    if "theta_error" in event or "policy_risk" in event:
+        return _number(event.get("theta_error")), _number(event.get("policy_risk"))
+    return _number(event.get("error")), None
+
 @dataclass
 class StudentSummary:
     """One student's row in the instructor's view.
@@ -33,8 +49,10 @@ class StudentSummary:
         last_seen: time of the latest event.
         idle_s: seconds since the latest progress (a new lesson, a first pass, an episode).
         stuck: ``idle_s >= stuck_after_s``.
-        errors: teaching errors of the finished episodes, in order.
+        theta_errors: Theta's error ||Theta_hat - Theta|| of the finished episodes that have a Theta,
+            in order (the class's own Fig. 3a).
         episode_lessons: the lesson of each of those episodes.
+        policy_risks: the policy risk of the finished episodes recorded with one, in order.
         checks: exercise -> {check: passed on its latest run}.
         last_failure: the words of the latest failed check run, if the student has not passed it since.
         torn_lines: lines skipped in the student's file.
@@ -45,8 +63,9 @@ class StudentSummary:
     last_seen: _dt.datetime | None = None
     idle_s: float = 0.0
     stuck: bool = False
-    errors: list[float] = field(default_factory=list)
+    theta_errors: list[float] = field(default_factory=list)
     episode_lessons: list[str] = field(default_factory=list)
+    policy_risks: list[float] = field(default_factory=list)
     checks: dict[str, dict[str, bool]] = field(default_factory=dict)
     last_failure: str | None = None
     torn_lines: int = 0
@@ -127,10 +146,14 @@ def summarise(progress: ClassProgress, now: _dt.datetime | None = None,
                         row.last_failure = None
                 else:
                     row.last_failure = f"{exercise}/{check}: {event.get('message') or 'failed'}"
-            elif kind == "episode" and isinstance(event.get("error"), (int, float)):
-                row.errors.append(float(event["error"]))
-                row.episode_lessons.append(str(event.get("lesson", "")))
-                progressed = True
+            elif kind == "episode":
+                theta_error, policy_risk = episode_errors(event)
+                if theta_error is not None:
+                    row.theta_errors.append(theta_error)
+                    row.episode_lessons.append(str(event.get("lesson", "")))
+                if policy_risk is not None:
+                    row.policy_risks.append(policy_risk)
+                progressed = theta_error is not None or policy_risk is not None
             if progressed:
                 last_progress = moment
         reference = last_progress or row.last_seen

@@ -7,7 +7,7 @@ gap to the optimal action, and how much that gap can move the learnt skill). Onc
 given the episode knows what the robot learnt and how far it is from the skill:
 
 - ``theta_hat``: (R, S) ``Theta_hat^T = A U`` with ``A = (Phi^T Phi + lam I)^-1 Phi^T``;
-- ``error``: E = ||vec(Theta_hat) - vec(Theta)||_2;
+- ``theta_error``: E = ||vec(Theta_hat) - vec(Theta)||_2 (``policy_risk`` for every learner);
 - ``rho1 = ||A||_2``, ``rho2 = ||U - U_bar||_F`` and the bound ``rho1 * rho2 >= E``;
 - ``contributions``: each demonstration's exact term of the error,
   ``Theta_hat - Theta = sum_n (u_n - u_bar_n) a_n^T + residual`` (a_n the n-th column of A;
@@ -395,13 +395,6 @@ class TeachingEpisode:
         return self.analysis.theta_hat
 
     @property
-    def error(self) -> float:
-        """The teaching error as the paper's analysis reads it: ``theta_error`` where the learner has
-        a Theta, else ``policy_risk`` (the two named quantities are the ones to report)."""
-        self._require_complete("error")
-        return self.theta_error if self.has_theta else self.policy_risk
-
-    @property
     def theta_error(self) -> float | None:
         """||vec(Theta_hat) - vec(Theta)||_2 where the learner has a Theta (ridge), else None."""
         self._require_complete("theta_error")
@@ -546,14 +539,6 @@ class EpisodeResult:
     def theta_hat(self) -> np.ndarray:
         """(R, S) the learnt policy."""
         return self.episode.theta_hat
-
-    @property
-    def error(self) -> float:
-        """The teaching error E = ||vec(theta_hat) - vec(theta)||."""
-        return self.episode.error
-
-    #: The name ``error`` had in the study log before theta_error and policy_risk had their own.
-    teaching_error = error
 
     @property
     def theta_error(self) -> float | None:

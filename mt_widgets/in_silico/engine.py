@@ -87,12 +87,6 @@ class _BatchOutcome:
     first_input: np.ndarray   # (B, N) s
     drawing: np.ndarray       # (B, N) s
 
-    @property
-    def error(self) -> np.ndarray:
-        """(B,) the error the analysis compares (``analysis.tables.error_measure``'s rule): Theta's
-        error where the learner has a Theta, else the policy risk."""
-        return self.policy_risk if self.theta_error is None else self.theta_error
-
 
 
 def _simulate(protocol, population: TeacherPopulation, groups: np.ndarray, study_of: np.ndarray,
@@ -413,7 +407,10 @@ def simulate_changes(protocol, population: TeacherPopulation, n_studies: int, n_
     study_of = np.zeros(n_studies * per_study, dtype=int) if shared else np.repeat(np.arange(n_studies), per_study)
     results = _simulate(protocol, population, groups, study_of, states, progress, keep_demonstrations=False,
                         forgetting=forgetting, delays=delays)
-    errors = np.stack([r.error for r in results], axis=1)       # (B, episodes)
+    # The error the analysis compares (``analysis.tables.error_measure``'s rule): Theta's error where
+    # every episode has one, else the policy risk.
+    measure = "theta_error" if all(r.theta_error is not None for r in results) else "policy_risk"
+    errors = np.stack([getattr(r, measure) for r in results], axis=1)       # (B, episodes)
     index = {(step["phase"], step["episode"]): e for e, step in enumerate(plan)}
     last = {step["phase"]: e for e, step in enumerate(plan)}
     out = {}

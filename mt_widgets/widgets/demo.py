@@ -209,8 +209,15 @@ class DemoPage(VBox):
 
     def _on_finished(self, result: EpisodeResult) -> None:
         guided = self.guidance_switch.value
-        self.errors.append((result.skill_key, guided, result.error))
-        earlier = [error for key, with_guidance, error in self.errors[:-1]
+        # The measure the episode has, by its own name: Theta's error where the learner has a Theta.
+        has_theta = result.theta_error is not None
+        error = result.theta_error if has_theta else result.policy_risk
+        units = "" if has_theta else f" {result.episode.skill.action_units}"
+        measure = ("&Theta;'s error ||&Theta;&#770; &minus; &Theta;||, the distance between what the robot learnt "
+                   "and the skill" if has_theta else "the policy risk, the distance between the learnt actions "
+                   "and the skill's")
+        self.errors.append((result.skill_key, guided, error))
+        earlier = [value for key, with_guidance, value in self.errors[:-1]
                    if key == result.skill_key and with_guidance == guided]
         history = (f" Your best before on this skill ({'with' if guided else 'without'} guidance): "
                    f"{min(earlier):.3f}." if earlier else "")
@@ -218,5 +225,5 @@ class DemoPage(VBox):
                   else "Switch guidance on to see the best arrow after each of yours.")
         self.result_line.value = (
             f"<div style='font-size:1.15em;margin:6px 0;max-width:400px'><b>Your teaching error: "
-            f"{result.error:.3f}</b> (0 means the robot learnt the skill exactly; it is the distance between "
-            f"what the robot learnt and the skill).{history} {advice}</div>")
+            f"{error:.3f}{units}</b> ({measure}; 0 means the robot learnt the skill exactly).{history} "
+            f"{advice}</div>")

@@ -20,7 +20,7 @@ plant's drawing asks for (``mt_widgets.core.drawing``): a ``PlantDrawing`` gets 
 Nothing here keeps a second list: ``records`` and the ``demonstrations`` trait read the episode.
 
 A study runner drives it through constructor arguments, the observable traits
-(``phase``, ``state_index``, ``demonstrations``, ``error``) and the two callbacks
+(``phase``, ``state_index``, ``demonstrations``, ``theta_error``, ``policy_risk``) and the two callbacks
 ``on_demonstration`` and ``on_finished``.
 """
 
@@ -186,7 +186,9 @@ class EpisodeWidget(VBox):
     phase = Unicode("teaching", help="One of 'teaching', 'guidance', 'finished'.")
     state_index = Int(0, help="Index of the query state shown.")
     demonstrations = List(help="Confirmed actions so far, one list of R floats each.")
-    error = Float(None, allow_none=True, help="Teaching error once the episode is finished.")
+    theta_error = Float(None, allow_none=True,
+                        help="||Theta_hat - Theta|| once the episode is finished, where the learner has a Theta.")
+    policy_risk = Float(None, allow_none=True, help="The learnt policy's risk once the episode is finished.")
 
     def __init__(self, skill="sim-point", query_states=None, seed: int | None = 0, guidance: bool = True,
                  lam: float | None = None, theme=None, duration: float | None = None, ghost: bool = True,
@@ -436,7 +438,7 @@ class EpisodeWidget(VBox):
             self.progress.episodes_done = min(self.episode_index + 1, self.progress.episode_budget)
         elif event == "finished":
             if self.result is not None:
-                self.error = self.episode.error
+                self.theta_error, self.policy_risk = self.episode.theta_error, self.episode.policy_risk
             self.phase = "finished"
 
     def _show_guidance(self) -> None:
@@ -463,7 +465,8 @@ class EpisodeWidget(VBox):
             return
         episode = self.episode
         ghost = episode.target_reproduction if self.show_ghost else None
-        self.player.play(episode.reproduction, error=episode.error, ghost=ghost)
+        self.player.play(episode.reproduction, theta_error=episode.theta_error, policy_risk=episode.policy_risk,
+                         ghost=ghost)
         # The reproduction plays where the teaching canvas was: the person's eyes are there.
         self.teaching.view.canvas.layout.display = "none"
         self.teaching.controls.layout.display = "none"

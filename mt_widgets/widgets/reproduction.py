@@ -74,7 +74,8 @@ class ReproductionPlayer(VBox):
         self.error_label = plain(HTML, value="")
         self.trajectory = None
         self.ghost = None
-        self.error = None
+        self.theta_error = None
+        self.policy_risk = None
         self._frames = None
         self.view.show_state(skill.start, show_velocity=False)
         self.view.legend.remove("velocity")  # frames draw the robot, not its velocity
@@ -84,18 +85,22 @@ class ReproductionPlayer(VBox):
                           self.status],
                          layout=Layout(align_items="flex-start"))
 
-    def play(self, trajectory, error: float | None = None, ghost=None) -> None:
-        """Animate ``trajectory`` (a core ``Trajectory``) and show ``error`` and divergence.
+    def play(self, trajectory, theta_error: float | None = None, policy_risk: float | None = None,
+             ghost=None) -> None:
+        """Animate ``trajectory`` (a core ``Trajectory``) and show the episode's error and divergence.
 
         Args:
             trajectory: The learnt skill's rollout (``times``, ``states``, ``positions``,
                 ``diverged``, ``diverged_at``).
-            error: The teaching error E (``teaching_risk``), shown under the view.
+            theta_error: Theta's error E = ||Theta_hat - Theta|| where the learner has a Theta; shown
+                under the view in preference to the policy risk.
+            policy_risk: the learnt policy's risk, shown where there is no ``theta_error``.
             ghost: Optionally the target skill's own rollout, drawn faintly for comparison.
         """
         if len(trajectory.times) < 1:
             raise ValueError("trajectory: expected at least one sample, got none")
-        self.trajectory, self.ghost, self.error = trajectory, ghost, error
+        self.trajectory, self.ghost = trajectory, ghost
+        self.theta_error, self.policy_risk = theta_error, policy_risk
         times = frame_times(float(trajectory.times[0]), float(trajectory.times[-1]), self.fps)
         states = sample_at(trajectory.times, trajectory.states, times)
         frames = self.view.painter.frame_points(self.view.transform, states)
@@ -176,12 +181,16 @@ class ReproductionPlayer(VBox):
             return
         trajectory, units = self.trajectory, self.skill.units
         end = trajectory.positions[-1]
-        if self.error is not None:
-            # Fixed decimals: the optimal demonstration gives an error like 3.3e-15, which a
-            # novice reads as a large number; 0.000 says what it is.
-            self.error_label.value = (f"<b>Teaching error</b> E = ||vec(&Theta;&#770;) &minus; vec(&Theta;)|| = "
-                                      f"<b>{self.error:.3f}</b> <small>(0 = the robot learnt the skill "
-                                      f"exactly)</small>")
+        # Fixed decimals: the optimal demonstration gives an error like 3.3e-15, which a
+        # novice reads as a large number; 0.000 says what it is.
+        if self.theta_error is not None:
+            self.error_label.value = (f"<b>Teaching error</b> (&Theta;'s error) E = ||vec(&Theta;&#770;) &minus; "
+                                      f"vec(&Theta;)|| = <b>{self.theta_error:.3f}</b> <small>(0 = the robot learnt "
+                                      f"the skill exactly)</small>")
+        elif self.policy_risk is not None:
+            self.error_label.value = (f"<b>Teaching error</b> (policy risk) = <b>{self.policy_risk:.3f} "
+                                      f"{self.skill.action_units}</b> <small>(the learnt actions' distance to the "
+                                      f"skill's; 0 = the robot learnt the skill exactly)</small>")
         if trajectory.diverged:
             when = "" if trajectory.diverged_at is None else f" at t = {trajectory.diverged_at:.2f} s"
             self.status.value = (

@@ -22,6 +22,7 @@ from mt_widgets.classroom import (
     read_student,
     summarise,
 )
+from mt_widgets.classroom.summary import episode_errors
 from mt_widgets.widgets import EpisodeWidget
 
 
@@ -145,7 +146,7 @@ def test_an_episode_widget_is_followed_through_its_public_callbacks(tmp_path):
         episode.next()
     events = read_student(recorder.path).events
     assert [e["kind"] for e in events] == ["demonstration"] * 5 + ["episode"]
-    assert events[-1]["error"] == pytest.approx(episode.result.error)
+    assert events[-1]["theta_error"] == pytest.approx(episode.result.theta_error)
     assert events[-1]["skill"] == "sim-point" and events[2]["index"] == 2
     np.testing.assert_allclose(events[0]["optimal_action"], episode.optimal[0])
     detach()
@@ -225,7 +226,7 @@ def test_who_is_stuck_is_measured_from_their_last_progress_not_their_last_failur
     working.record("episode", lesson="a5", error=1.25)
     summary = summarise(read_class(tmp_path), now=later - dt.timedelta(minutes=15), stuck_after_s=600)
     rows = {row.student: row for row in summary.students}
-    assert not rows[working.student].stuck and rows[working.student].errors == [1.25]
+    assert not rows[working.student].stuck and rows[working.student].theta_errors == [1.25]
     assert rows[working.student].place == "a5"
     assert summary.at_place() == {"a1": [rows[stuck.student].student], "a5": [working.student]}
 
@@ -234,9 +235,10 @@ def test_the_summary_follows_each_students_errors_over_episodes(tmp_path):
     recorders = [ProgressRecorder(tmp_path, name) for name in ("a", "b", "c")]
     for number, recorder in enumerate(recorders):
         for error in (3.0 - number, 2.0 - number / 2, 1.0):
-            recorder.record("episode", lesson="08_guided", error=error)
+            recorder.record("episode", lesson="08_guided", theta_error=error, policy_risk=error / 2)
     summary = summarise(read_class(tmp_path))
-    assert sorted(s.errors for s in summary.students) == sorted([[3.0, 2.0, 1.0], [2.0, 1.5, 1.0], [1.0, 1.0, 1.0]])
+    assert sorted(s.theta_errors for s in summary.students) == sorted([[3.0, 2.0, 1.0], [2.0, 1.5, 1.0],
+                                                                        [1.0, 1.0, 1.0]])
     assert SKILLS  # the paper's registry is untouched by the recorder
 
 
@@ -280,3 +282,19 @@ def test_a_by_hand_check_refuses_the_package_and_names_the_direction_without_the
     assert notebook["helper"] is not by_numpy and notebook["RidgeLearner"] is RidgeLearner
     with pytest.raises(CheckFailed, match="uses the package's RidgeLearner"):
         checks.function("fit", notebook["sneaky"], [("x", (Phi, U, 0.3))], references.ridge_fit, by_hand=True)
+
+
+def test_a_progress_file_written_before_theta_error_had_its_name_still_reads(tmp_path):
+    # Before issue 42 an episode event held one `error`: every lesson that recorded episodes then taught
+    # the ridge learner, whose `error` was Theta's error. A record written so is read as the theta_error.
+    recorder = ProgressRecorder(tmp_path, "ada")
+    recorder.record("episode", lesson="a5_teach_in_widget", skill="sim-point", error=0.75,
+                    demonstrations=[[0.0, 1.0]], diverged=False, lam=0.01)
+    # A learner without a Theta records its policy risk only: it joins no curve of Theta's errors.
+    recorder.record("episode", lesson="14_learners", skill="uarm-point", theta_error=None, policy_risk=0.25)
+    recorder.record("episode", lesson="08_one_full_episode", skill="sim-point", theta_error=0.5, policy_risk=0.1)
+    row = summarise(read_class(tmp_path)).students[0]
+    assert row.theta_errors == [0.75, 0.5] and row.episode_lessons == ["a5_teach_in_widget", "08_one_full_episode"]
+    assert row.policy_risks == [0.25, 0.1]
+    assert episode_errors({"kind": "episode", "error": 0.75}) == (0.75, None)
+    assert episode_errors({"kind": "episode", "theta_error": None, "policy_risk": 0.25}) == (None, 0.25)

@@ -33,7 +33,7 @@ def test_mt_teaches_every_skill_of_the_panda_and_the_so101_exactly(key):
     episode = TeachingEpisode(skill, seed=4)
     for action in episode.optimal_actions:
         episode.demonstrate(action)
-    assert episode.error < 1e-12 and not episode.reproduction.diverged
+    assert episode.theta_error < 1e-12 and not episode.reproduction.diverged
 
 
 @pytest.mark.parametrize("key", KEYS)

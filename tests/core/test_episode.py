@@ -32,7 +32,7 @@ def test_learning_from_the_optimal_actions_gives_back_theta(key, lam):
         assert analysis.contribution_norm < 1e-10 and np.allclose(analysis.gap, 0)
     assert episode.complete
     np.testing.assert_allclose(episode.theta_hat, skill.theta, atol=1e-10)
-    assert episode.error < 1e-10 and episode.rho2 < 1e-10
+    assert episode.theta_error < 1e-10 and episode.rho2 < 1e-10
 
 
 def test_the_result_matches_the_learner_the_risk_and_the_bound():
@@ -46,12 +46,13 @@ def test_the_result_matches_the_learner_the_risk_and_the_bound():
     theta_hat = RidgeLearner(DEFAULT_LAMBDA).fit(Phi, U).theta
     np.testing.assert_allclose(episode.theta_hat, theta_hat, atol=1e-10)
     np.testing.assert_allclose(episode.theta_hat, (_ridge_map(Phi, DEFAULT_LAMBDA) @ U).T, atol=1e-9)
-    assert episode.error == pytest.approx(teaching_risk(theta_hat, skill.theta), rel=1e-10)
+    assert episode.theta_error == pytest.approx(teaching_risk(theta_hat, skill.theta), rel=1e-10)
     singular = np.linalg.svd(Phi, compute_uv=False)
     assert episode.rho1 == pytest.approx(np.max(singular / (singular**2 + DEFAULT_LAMBDA)), rel=1e-10)
     assert episode.rho2 == pytest.approx(np.linalg.norm(U - episode.optimal_actions), rel=1e-12)
-    assert episode.error <= episode.rho1 * episode.rho2 and episode.bound == pytest.approx(episode.rho1 * episode.rho2)
-    assert episode.error > 0.1, "a test of the bound needs a real error"
+    assert episode.theta_error <= episode.rho1 * episode.rho2
+    assert episode.bound == pytest.approx(episode.rho1 * episode.rho2)
+    assert episode.theta_error > 0.1, "a test of the bound needs a real error"
 
 
 @pytest.mark.parametrize("n_states", [3, 5, 8])
@@ -78,9 +79,9 @@ def test_contributions_sum_to_theta_hat_minus_theta(n_states):
     np.testing.assert_allclose(episode.contribution_norms, norms, rtol=1e-9)
     np.testing.assert_allclose([a.contribution_norm for a in analyses], norms, rtol=1e-9)
     # The norms are sizes of terms that partly cancel: their sum bounds E but is not E.
-    assert episode.error <= episode.contribution_norms.sum() + episode.residual_norm + 1e-12
-    assert episode.error < episode.contribution_norms.sum()
-    assert episode.error <= episode.bound + 1e-12
+    assert episode.theta_error <= episode.contribution_norms.sum() + episode.residual_norm + 1e-12
+    assert episode.theta_error < episode.contribution_norms.sum()
+    assert episode.theta_error <= episode.bound + 1e-12
 
 
 def test_below_the_teaching_dimension_the_episode_is_not_exact_and_its_optimum_is_the_least_error_one():
@@ -93,7 +94,7 @@ def test_below_the_teaching_dimension_the_episode_is_not_exact_and_its_optimum_i
     np.testing.assert_allclose(episode.optimal_actions, reference, atol=1e-10)
     for action in episode.optimal_actions:
         episode.demonstrate(action)
-    assert episode.error == pytest.approx(episode.residual_norm, rel=1e-9) and episode.error > 0.1
+    assert episode.theta_error == pytest.approx(episode.residual_norm, rel=1e-9) and episode.theta_error > 0.1
 
 
 def test_each_demonstration_is_analysed_as_it_comes():
@@ -150,7 +151,7 @@ def test_resuming_from_actions_gives_the_same_episode():
     assert len(resumed.demonstrations) == 2 and not resumed.complete
     resumed.restore(actions[2:])
     np.testing.assert_allclose(resumed.theta_hat, live.theta_hat, atol=1e-12)
-    assert resumed.error == pytest.approx(live.error)
+    assert resumed.theta_error == pytest.approx(live.theta_error)
     resumed.restore([])
     with pytest.raises(ValueError, match="actions: expected at most 0 more"):
         resumed.restore(actions[:1])
@@ -217,5 +218,5 @@ def test_the_episode_and_analyse_demonstrations_compute_through_one_path(n_state
     assert np.array_equal(episode.optimal_actions, reference.optimal)
     for field in dataclasses.fields(reference):
         assert np.array_equal(getattr(episode.analysis, field.name), getattr(reference, field.name)), field.name
-    assert episode.theta_hat is episode.analysis.theta_hat and episode.error == reference.risk
+    assert episode.theta_hat is episode.analysis.theta_hat and episode.theta_error == reference.risk
     assert episode.exact == reference.exact and episode.rho1 == reference.rho1

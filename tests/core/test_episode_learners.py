@@ -39,7 +39,7 @@ def test_a_kernel_learners_episode_guides_with_its_mt_and_scores_the_policy_risk
     moved = risk_of_actions(learner, skill, states, np.vstack([first.action, episode.optimal_actions[1:]]))
     assert abs(moved - teaching.risk) <= first.contribution_norm * (1 + 1e-9)
     episode.restore(episode.optimal_actions[1:])
-    assert episode.error == pytest.approx(risk_of_actions(learner, skill, states, episode.actions), rel=1e-12)
+    assert episode.policy_risk == pytest.approx(risk_of_actions(learner, skill, states, episode.actions), rel=1e-12)
     for ridge_only in ("theta_hat", "analysis", "contributions", "bound", "residual"):
         with pytest.raises(EpisodeStateError, match="only a learner with a Theta on the skill.s features"):
             getattr(episode, ridge_only)
@@ -51,7 +51,7 @@ def test_the_reward_learners_episode_of_8_reaches_the_goal():
     skill = SKILLS["uarm-point"]
     episode = TeachingEpisode(skill, skill.query_states(seed=0, n=8), learner=make_learner("reward"))
     episode.restore(episode.optimal_actions)
-    assert episode.error < 1e-9 and episode.exact is False   # approximate MT: never claimed exact
+    assert episode.policy_risk < 1e-9 and episode.exact is False   # approximate MT: never claimed exact
     # Taught exactly, the robot's reproduction is the target's own.
     np.testing.assert_allclose(episode.reproduction.positions, episode.target_reproduction.positions, atol=1e-6)
 
@@ -67,7 +67,7 @@ def test_a_network_episode_has_linearised_gains_and_its_error_falls_with_mt():
     episode = TeachingEpisode(skill, states, learner=learner)
     episode.restore(episode.optimal_actions)
     own = risk_of_actions(learner, skill, states, skill.target_actions(states), evaluation_states(skill))
-    assert episode.error < own
+    assert episode.policy_risk < own
 
 
 def test_the_episode_reports_theta_error_where_a_theta_exists_and_policy_risk_always():
@@ -75,7 +75,7 @@ def test_the_episode_reports_theta_error_where_a_theta_exists_and_policy_risk_al
     states = skill.query_states(seed=2)
     actions = skill.target_actions(states) + 0.3
     ridge = TeachingEpisode.from_actions(skill, states, actions)
-    assert ridge.theta_error == ridge.error > 0
+    assert ridge.theta_error == ridge.analysis.risk > 0
     assert ridge.policy_risk == pytest.approx(risk_of_actions(RidgeLearner(), skill, states, actions), rel=1e-12)
     kernel = TeachingEpisode.from_actions(skill, states, actions, learner=make_learner("kernel-ridge", skill))
-    assert kernel.theta_error is None and kernel.policy_risk == kernel.error > 0
+    assert kernel.theta_error is None and kernel.policy_risk > 0

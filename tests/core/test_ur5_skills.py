@@ -35,7 +35,7 @@ def test_a_teaching_episode_runs_on_the_arm(key):
     for action in episode.optimal_actions:
         demonstration = episode.demonstrate(action)
         assert demonstration.action_difference is None   # arrows in space: no planar angle
-    assert episode.error < 1e-12
+    assert episode.theta_error < 1e-12
     trajectory = episode.reproduction
     assert not trajectory.diverged and trajectory.positions.shape[1] == 3
 

@@ -620,7 +620,7 @@ for index, slip in enumerate((1.0, 0.5, 0.2)):
     for optimal in episode.optimal:
         episode.demonstrate(optimal + rng.normal(0, slip * {number} / 11, size=2))
         episode.next()
-    errors.append(episode.result.error)
+    errors.append(episode.result.theta_error)
     latencies.append(episode.result.feedback_latency_s)
 checks = ExerciseChecks("a1_ridge_learner", recorder)
 checks.true("ridge-fit", True, "")

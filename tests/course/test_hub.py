@@ -462,7 +462,7 @@ def test_a_class_of_thirty_logs_in_at_once_and_every_episode_completes(hub, brow
     drawn = [e for s in read_class(hub.class_folder).students.values() for e in s.events
              if e["kind"] == "demonstration" and e.get("method") == "pointer"]
     assert len(drawn) == 2 and {e["lesson"] for e in drawn} == {"hub-draw"}
-    recorded = sorted(e["error"] for s in read_class(hub.class_folder).students.values() for e in s.events
+    recorded = sorted(e["theta_error"] for s in read_class(hub.class_folder).students.values() for e in s.events
                       if e["kind"] == "episode" and e["lesson"] == "hub-episode")
     returned = sorted(error for r in results.values() for error in r["errors"])
     # Every episode of the thirty is recorded (earlier tests' episodes are recorded too).

@@ -18,7 +18,7 @@ def test_the_worked_example_of_a_users_own_arm_teaches_it_exactly(tmp_path, monk
     for block in re.findall(r"```python\n(.*?)```", text, re.S):
         exec(block, namespace)
     episode = namespace["episode"]
-    assert episode.error < 1e-12
+    assert episode.theta_error < 1e-12
     assert np.linalg.norm(episode.reproduction.final_position - (0.32, -0.08, 0.08)) < 2e-3
     assert namespace["chain"].joint_names == ("turn", "shoulder", "elbow") and namespace["plant"].robot == "my_arm"
     assert sorted(namespace["skills"]) == ["mine-place", "mine-reach"]

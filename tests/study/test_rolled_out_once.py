@@ -118,7 +118,7 @@ def test_an_episode_shown_by_the_widget_and_logged_by_the_session_is_rolled_out_
         assert reproduction.kind == "reproduction"
         assert reproduction.result.trajectory is widget.result.trajectory is widget.episode.reproduction
         widget.player.replay_button.click()
-        assert reproduction.result.teaching_error == pytest.approx(widget.error)
+        assert reproduction.result.theta_error == pytest.approx(widget.theta_error)
         learnt = _learnt(rollouts, step.skill)
         assert len(learnt) == 1, f"the learnt skill was rolled out {len(learnt)} times"
         np.testing.assert_allclose(learnt[0], widget.episode.theta_hat)

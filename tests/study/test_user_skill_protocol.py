@@ -72,8 +72,8 @@ def test_a_lesson_of_a_user_skill_runs_in_the_episode_widget(protocol_file):
             result = session.finish_episode()
             if widget.phase != "finished":
                 widget.finish()
-            assert widget.result.error == pytest.approx(result.teaching_error, abs=1e-12)
-            errors.append((step.skill, result.teaching_error))
+            assert widget.result.theta_error == pytest.approx(result.theta_error, abs=1e-12)
+            errors.append((step.skill, result.theta_error))
         else:
             session.advance()
     assert [skill for skill, _ in errors] == ["puck-park", "puck-park", "sim-point"]
@@ -95,7 +95,7 @@ def test_a_logged_study_of_a_user_skill_runs_and_reopens(protocol_file, tmp_path
             assert skill.plant.action_dim == 2
         elif step.kind == "episode_end":
             result = session.finish_episode()
-            assert result.teaching_error < 1e-9, "the optimal demonstration teaches the user's skill exactly"
+            assert result.theta_error < 1e-9, "the optimal demonstration teaches the user's skill exactly"
         else:
             session.advance()
     session.close()

@@ -47,13 +47,13 @@ def test_the_teaching_error_is_shown_after_the_episode_and_compared_with_earlier
     page = DemoPage(duration=1.0)
     assert page.result_line.value == ""
     finish(page.episode)
-    first = page.episode.result.error
+    first = page.episode.result.theta_error
     assert first > 0.01
     assert f"{first:.3f}" in page.result_line.value and "best before" not in page.result_line.value
     page.new_states_button.click()
     assert page.result_line.value == ""
     finish(page.episode)
-    assert f"{page.episode.result.error:.3f}" in page.result_line.value
+    assert f"{page.episode.result.theta_error:.3f}" in page.result_line.value
     assert f"best before on this skill (with guidance): {first:.3f}" in page.result_line.value
 
 
@@ -114,7 +114,7 @@ def test_the_visitor_picks_the_ur5_and_back_and_each_arm_gets_its_own_widget_and
     for index in range(shown.episode.n_states):
         shown.demonstrate(shown.episode.optimal_actions[index])
         shown.next()
-    assert shown.phase == "finished" and shown.error < 1e-9
+    assert shown.phase == "finished" and shown.theta_error < 1e-9
     assert page.errors[-1][0] == "ur5-place" and "Your teaching error: 0.000" in page.result_line.value
     page.guidance_switch.value = False   # after a finished 3-D episode: a fresh one, unguided
     assert not page.episode.guidance and page.episode.skill.key == "ur5-place"

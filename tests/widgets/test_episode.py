@@ -59,7 +59,7 @@ def test_an_episode_runs_teaching_guidance_finished_and_reports_what_it_learnt()
     (result,) = results
     theta_hat = RidgeLearner(lam=DEFAULT_LAMBDA).fit(skill.features(episode.query_states), actions).theta
     assert np.allclose(result.theta_hat, theta_hat)
-    assert result.error == pytest.approx(teaching_risk(theta_hat, skill.theta)) == episode.error
+    assert result.theta_error == pytest.approx(teaching_risk(theta_hat, skill.theta)) == episode.theta_error
     assert len(result.trajectory.times) > 1 and result.diverged == result.trajectory.diverged
     assert episode.progress.episodes_done == 3 and episode.teaching.locked
     with pytest.raises(RuntimeError, match="demonstrate"):
@@ -71,7 +71,7 @@ def test_teaching_the_optimal_arrows_gives_zero_error():
     episode = EpisodeWidget(skill, seed=5, guidance=False)
     for action in episode.optimal:
         episode.demonstrate(action)
-    assert episode.phase == "finished" and episode.error < 1e-8
+    assert episode.phase == "finished" and episode.theta_error < 1e-8
 
 
 def test_pointer_timing_is_recorded_for_the_study_log():
@@ -97,7 +97,7 @@ def test_resuming_restores_given_demonstrations_and_finishes_when_all_are_there(
     assert resumed.state_index == 2 and resumed.demonstrations == given and resumed.phase == "teaching"
     assert resumed.progress.demonstrations_done == 2
     done = EpisodeWidget(skill, seed=3, guidance=False, demonstrations=first.optimal)
-    assert done.phase == "finished" and done.error < 1e-8
+    assert done.phase == "finished" and done.theta_error < 1e-8
 
 
 def test_bad_arguments_name_themselves():

@@ -114,7 +114,7 @@ def test_every_arm_gives_the_same_events_in_the_same_order(key, pause):
     assert seen == expected_events(episode.n_states, pause)
     assert set(event for event, _, _ in seen) <= set(EVENTS)
     assert len(results) == 1 and isinstance(results[0], EpisodeResult) and results[0] is controller.result
-    assert results[0].error < 1e-9          # the optimal arrows teach the skill exactly
+    assert results[0].theta_error < 1e-9          # the optimal arrows teach the skill exactly
     assert controller.current_state is None and not controller.accepting
 
 
@@ -136,7 +136,7 @@ def test_restore_takes_logged_demonstrations_without_callbacks_and_finishes_when
     controller.restore(actions)                           # all given: what was learnt, at once
     assert called == [] and controller.phase == "finished" and len(finished) == 1
     assert [event for event, _, _ in seen[1:]] == ["reproduce", "finished"]
-    assert finished[0].error == pytest.approx(controller.episode.error)
+    assert finished[0].theta_error == pytest.approx(controller.episode.theta_error)
 
 
 def test_the_moves_out_of_turn_are_refused_and_drawing_only_finishes_without_a_result():
@@ -209,7 +209,7 @@ def test_a_planar_and_a_3d_episode_widget_give_the_same_events_callbacks_and_tra
                 widget.next()
             else:
                 widget.demonstrate(widget.optimal[widget.state_index])
-        assert widget.result is not None and widget.error < 1e-9 and widget.progress.episodes_done == 5
+        assert widget.result is not None and widget.theta_error < 1e-9 and widget.progress.episodes_done == 5
         assert trace[-2:] == [("phase", "finished"), ("finished", widget.episode.n_states)]
     assert traces["sim-point"] == traces["ur5-reach"]
     first = traces["sim-point"][0]

@@ -76,4 +76,4 @@ def test_tutorial_13_after_drawing_a_3d_demonstration_by_hand(recorder, count, m
     assert teach.demonstrations == [[0.05, -0.04, -0.03]] * count
     assert teach.phase == ("finished" if count == 4 else "teaching")
     assert (teach.result is not None) == (count == 4)
-    assert namespace["by_code"].result.error < 1e-12
+    assert namespace["by_code"].result.theta_error < 1e-12

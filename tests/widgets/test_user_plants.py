@@ -75,7 +75,7 @@ def test_the_your_own_skill_tutorials_plant_is_taught_with_pointer_drags_in_the_
     assert episode.phase == "finished"
     # Drawn to the pixel, the optimal arrows teach the skill to well within a pixel's worth.
     one_pixel = 1.0 / view.transform.pixels_per_action
-    assert episode.result.error < 1e-6 + 10 * one_pixel
+    assert episode.result.theta_error < 1e-6 + 10 * one_pixel
     assert episode.result.trajectory.positions.shape[-1] == 2
     frames = episode.player.view.painter.frame_points(episode.player.view.transform,
                                                       episode.result.trajectory.states[:3])

@@ -177,7 +177,7 @@ def test_reproduction_is_one_message_with_a_frame_per_sixtieth_of_a_second(recor
     player = ReproductionPlayer(skill)
     trajectory = skill.reproduce(skill.theta * 0.5)
     recorder.clear()
-    player.play(trajectory, error=0.5, ghost=skill.reproduce(skill.theta))
+    player.play(trajectory, theta_error=0.5, ghost=skill.reproduce(skill.theta))
     assert len(recorder.messages) == 1
     sleeps = [a[0] for c, n, a in recorder.commands(0) if n == "sleep"]
     assert len(sleeps) == round(trajectory.times[-1] * 60) and sleeps[0] == pytest.approx(1000 / 60, abs=0.01)
@@ -197,7 +197,7 @@ def test_a_diverging_skill_is_shown_as_diverged(recorder):
     unstable = -5.0 * np.asarray(skill.theta)
     trajectory = skill.reproduce(unstable)
     assert trajectory.diverged, "precondition: this policy pushes the arm away"
-    player.play(trajectory, error=10.0)
+    player.play(trajectory, theta_error=10.0)
     assert "diverged" in player.status.value
     strokes = [a for n, a in recorder.on(player.view.layer("robot")) if n == "strokeLine"]
     assert len(strokes) >= 2, "a cross at the point of divergence"
@@ -245,16 +245,17 @@ def test_a_blinded_episode_shows_neither_formula_nor_outcome(recorder):
     for u in skill.target_actions(episode.query_states) + 0.7:
         episode.demonstrate(u)
     episode.finish()
-    assert episode.result is not None and episode.result.error > 0
+    assert episode.result is not None and episode.result.theta_error > 0
     shown = episode.player.error_label.value + episode.player.status.value
-    assert "error" not in shown.lower() and "goal" not in shown.lower() and f"{episode.result.error:.3f}" not in shown
+    assert "error" not in shown.lower() and "goal" not in shown.lower()
+    assert f"{episode.result.theta_error:.3f}" not in shown
     # Without blinding the same episode states both.
     open_episode = EpisodeWidget(skill, seed=1, guidance=False)
     for u in skill.target_actions(open_episode.query_states) + 0.7:
         open_episode.demonstrate(u)
     open_episode.finish()
     assert skill.description in open_episode.header.value
-    assert f"{open_episode.result.error:.3f}" in open_episode.player.error_label.value
+    assert f"{open_episode.result.theta_error:.3f}" in open_episode.player.error_label.value
 
 
 def test_enter_mid_drag_ends_the_drag_so_later_moves_draw_nothing_at_the_next_state(recorder, caplog):
