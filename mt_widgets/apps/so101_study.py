@@ -353,7 +353,8 @@ def open_so101(port: str = "sim", calibration=None, *, leader_port: str | None =
     """
     if not isinstance(port, str) or not port:
         raise ValueError(f"port: expected a serial port (e.g. /dev/ttyACM0) or 'sim', got {port!r}")
-    if leader_port is not None and (not isinstance(leader_port, str) or not leader_port or leader_port == port):
+    if leader_port is not None and (not isinstance(leader_port, str) or not leader_port
+                                    or (leader_port == port and port != "sim")):
         raise ValueError(f"leader_port: expected the leader arm's own serial port, 'sim' or None, got {leader_port!r}")
     hands, servers = [], []
 
