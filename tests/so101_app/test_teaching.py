@@ -90,10 +90,14 @@ def test_a_simulated_leader_arm_is_the_hand_held_input():
         assert [title for title in (v.children[0].value for v in teaching.hand_views)][0].count("leader") == 1
         leader_hand = teaching.hand_views[0].hand
         wait_until(lambda: released_at(teaching, page.episode.query_states[0]), teaching)
-        assert leader_hand.move_tool_by([0.0, 0.02, 0.0])
-        # 2 cm of the leader's gripper, at the arm's query state: an arrow of 0.04 m/s (0.5 m per m/s).
+        start = leader_hand.joints()
+        turned = start + np.array([0.1, -0.05, 0.08, 0.0, 0.0])    # the leader's joints turned by hand
+        assert leader_hand.move_joints(turned)
+        state = page.episode.query_states[0]
+        chain = teaching.arm.kinematics
+        expected = (chain.tool_point(state + turned - start) - chain.tool_point(state)) / 0.5   # 0.5 m per m/s
         wait_until(lambda: page.episode.pending_action is not None
-                   and np.linalg.norm(page.episode.pending_action) > 0.03, teaching)
+                   and np.linalg.norm(np.subtract(page.episode.pending_action, expected)) < 0.005, teaching)
         servos = teaching.simulated_ports[0].bus.servos
         assert all(servos[SO101_IDS[j]].torque for j in ("shoulder_pan", "elbow_flex"))  # the arm held on
     finally:
