@@ -204,7 +204,8 @@ class SO101Teaching:
         the modality is "drawn"."""
         episode = self.episode
         if (self.demonstration_modality != "hand" or episode is None or episode.phase != "teaching"
-                or self.hand_move_active or (self.hand_demonstration is not None and self.hand_demonstration.released)):
+                or self.hand_move_active
+                or (self.hand_demonstration is not None and self.hand_demonstration.released)):
             return None
         if self.arm.stopped:
             self.panel.say("The arm is stopped. Press Resume arm when it is safe to move it again.")
@@ -228,7 +229,8 @@ class SO101Teaching:
             move.begin()
             who = "the leader arm" if self.leader is not None else "the arm"
             self.panel.say(f"The torque is off: hold {who}'s gripper and move it to show the robot how its gripper "
-                           f"should move from here. The arrow shows your demonstration; press Confirm when it is right.")
+                           f"should move from here. The arrow shows your demonstration; press Confirm when it is "
+                           f"right.")
             self._refresh_hand_views()
             drawn_at = None
             period = 1.0 / self.hand_rate

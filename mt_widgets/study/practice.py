@@ -45,5 +45,6 @@ def _practice_skills() -> dict[str, Skill]:
     )}
 
 
-#: Practice skills by key ("sim-practice", "uarm-practice", "ur5-practice", "so101-practice"); protocols name them like skills.
+#: Practice skills by key ("sim-practice", "uarm-practice", "ur5-practice", "so101-practice"); protocols
+#: name them like skills.
 PRACTICE_SKILLS: dict[str, Skill] = _practice_skills()

@@ -43,10 +43,10 @@ def test_a_scripted_hand_teaches_a_whole_episode_and_the_arm_reproduces_it(page)
     hand = teaching.hand_views[0].hand
     length = episode.skill.plant.drawing().action_length
     for k, state in enumerate(episode.query_states):
-        wait_until(lambda: released_at(teaching, state), teaching)
+        wait_until(lambda state=state: released_at(teaching, state), teaching)
         shown = episode.skill.theta @ episode.features[k]      # the target policy's own action
         assert hand.move_tool_by(shown * length)
-        wait_until(lambda: episode.pending_action is not None
+        wait_until(lambda shown=shown: episode.pending_action is not None
                    and np.linalg.norm(np.subtract(episode.pending_action, shown)) < 0.01, teaching)
         episode.teaching.confirm()
         assert episode.phase == "guidance"                      # MT's optimal arrow beside the person's
