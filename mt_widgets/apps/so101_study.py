@@ -263,7 +263,7 @@ class SO101Teaching:
         except SO101Stopped:
             raise
         except SO101Error as error:
-            log.warning("hand demonstration at state %d failed: %r", index, error, stack_info=True)
+            log.warning("hand demonstration at state %d failed: %r", index, error)
             limp = " Its torque is off, so it cannot move by itself: it is safe." if move.released else ""
             self.panel.say(f"The robot arm stopped during your demonstration: {error}{limp} {_SAFE_AND_SAVED}",
                            error=True)
