@@ -57,6 +57,7 @@ NOTEBOOK_PARAMETERS: dict[str, dict[str, object]] = {
     "notebooks/study_sim.ipynb": {"LOG_FOLDER": Scratch("study_sim")},
     "notebooks/study_online.ipynb": {"LOG_FOLDER": Scratch("study_online"), "CHECK_REFUSED_WITHOUT_LINK": True},
     "notebooks/study_uarm.ipynb": {"LOG_FOLDER": Scratch("study_uarm"), "PORT": SIMULATED_ARM},
+    "notebooks/study_so101.ipynb": {"LOG_FOLDER": Scratch("study_so101"), "PORT": "sim", "LEADER_PORT": None},
     "notebooks/analysis.ipynb": {"FAST": True},
     # The switch's own test: the notebook asserts it got these values, not its own.
     "tests/data/parameters_cell.ipynb": {"N_STUDIES": 3, "LABEL": "under test", "FOLDER": Scratch("parameters_cell")},

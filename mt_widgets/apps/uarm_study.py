@@ -28,13 +28,12 @@ tutorials and tests.
 
 from __future__ import annotations
 
-import html
 import logging
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
-from ipywidgets import HTML, Button, HBox, Label, Layout, VBox
+from ipywidgets import HTML, VBox
 
 from mt_widgets.core import UArmPlant
 from mt_widgets.core.validation import as_bool
@@ -43,6 +42,7 @@ from mt_widgets.hardware.bridge import UArmBridge, connect_arm, describe_error, 
 from mt_widgets.hardware.kinesthetic import HandMove
 from mt_widgets.widgets import EpisodeWidget
 
+from .arm_panel import ArmPanel
 from .study_app import StudyApp
 from .uarm_audio import AudioCues
 from .uarm_hand import SimulatedHand
@@ -53,41 +53,6 @@ log = logging.getLogger(__name__)
 #: How a demonstration is given: drawn on the screen, or shown by moving the arm by hand.
 DEMONSTRATION_MODALITIES = ("drawn", "hand")
 HAND_KEYS = ("h", "H")
-
-
-class ArmPanel(VBox):
-    """What the participant sees of the arm: where it is, a Stop button, messages.
-
-    Attributes:
-        position_label: ``"arm at x = 200.0 mm, y = 0.0 mm"`` after every move.
-        stop_button: halts the arm immediately.
-        resume_button: shown after a stop; lets the arm move again.
-        hand_button: "Teach by hand": releases the arm for a demonstration by hand.
-        message: what the arm is doing, or what went wrong.
-    """
-
-    def __init__(self, port_text: str):
-        self.position_label = Label("arm position unknown")
-        self.stop_button = Button(description="Stop the arm", button_style="danger", icon="stop",
-                                  layout=Layout(width="200px", height="48px"))
-        self.resume_button = Button(description="Resume arm", icon="play", layout=Layout(display="none"))
-        self.hand_button = Button(description="Teach by hand (H)", icon="hand-paper-o",
-                                  tooltip="Release the arm and move its tip to show the step (key: H)",
-                                  layout=Layout(display="none", width="200px", height="48px"))
-        self.message = HTML("")
-        self.port = HTML(f"<small>{html.escape(port_text)}</small>")
-        super().__init__([HBox([self.stop_button, self.resume_button, self.hand_button, self.position_label],
-                               layout=Layout(align_items="center")), self.message, self.port],
-                         layout=Layout(padding="2px"))
-
-    def say(self, text: str, error: bool = False) -> None:
-        colour = "#b00020" if error else "#333333"
-        weight = "bold" if error else "normal"
-        self.message.value = (f"<div style='color:{colour};font-weight:{weight};max-width:900px'>"
-                              f"{html.escape(text)}</div>")
-
-    def show_position(self, x_mm: float, y_mm: float) -> None:
-        self.position_label.value = f"arm at x = {x_mm:.1f} mm, y = {y_mm:.1f} mm"
 
 
 class UArmTeaching:

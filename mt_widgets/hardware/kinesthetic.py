@@ -37,10 +37,10 @@ REPORT_INTERVAL_S = 0.05
 
 
 def limit_step(displacement_cm, max_step_cm: float) -> np.ndarray:
-    """Scale a displacement down to at most ``max_step_cm`` long (the plant's step limit),
-    keeping its direction, as ``UArmPlant.step`` limits an action."""
-    d = np.asarray(displacement_cm, dtype=float).reshape(2)
-    length = float(np.hypot(*d))
+    """Scale a displacement (any number of coordinates) down to at most ``max_step_cm`` long
+    (the plant's step limit), keeping its direction, as ``UArmPlant.step`` limits an action."""
+    d = np.asarray(displacement_cm, dtype=float).reshape(-1)
+    length = float(np.linalg.norm(d))
     if length > max_step_cm > 0:
         d = d * (max_step_cm / length)
     return d

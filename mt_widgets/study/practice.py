@@ -15,7 +15,7 @@ from mt_widgets.core.targets import SpacePointTarget
 
 
 def _practice_skills() -> dict[str, Skill]:
-    sim, uarm, ur5 = SKILLS["sim-point"], SKILLS["uarm-point"], SKILLS["ur5-reach"]
+    sim, uarm, ur5, so101 = SKILLS["sim-point"], SKILLS["uarm-point"], SKILLS["ur5-reach"], SKILLS["so101-reach"]
     # The simulated arm's practice goal mirrors skill 1's point across the vertical axis.
     sim_goal = (-0.8, 1.2)
     # The uArm's practice goal lies right of skill 1's start, inside the workspace (r 26.6 cm,
@@ -25,6 +25,9 @@ def _practice_skills() -> dict[str, Skill]:
     # The UR5's practice goal hangs in the air on the other side of the base from the part
     # (0.55, -0.10, 0.10) m and high above the fixture and the conveyor: no phase's goal.
     ur5_goal = np.array([0.30, 0.30, 0.45])
+    # The SO-101's practice goal is high above the table on the other side from the part
+    # (0.22, -0.08, 0.04) m and above the fixture (0.18, 0.09, 0.06) m: no phase's goal.
+    so101_goal = np.array([0.16, 0.10, 0.14])
     return {skill.key: skill for skill in (
         Skill("sim-practice", "Practice: reach the point (-0.8, 1.2) m", sim.plant, sim.feature_map,
               [[-1, 0, -1, 0, sim_goal[0]], [0, -1, 0, -1, sim_goal[1]]], sim.start, PointTarget(sim_goal),
@@ -35,8 +38,13 @@ def _practice_skills() -> dict[str, Skill]:
         Skill("ur5-practice", "Practice: reach the point (0.30, 0.30, 0.45) m", ur5.plant, ur5.feature_map,
               np.hstack([-0.8 * np.eye(3), 0.8 * ur5_goal[:, None]]) + 0.0, ur5.start, SpacePointTarget(ur5_goal),
               "A practice goal that no part of the study uses.", max_condition=ur5.max_condition),
+        Skill("so101-practice", "Practice: reach the point (0.16, 0.10, 0.14) m", so101.plant, so101.feature_map,
+              np.hstack([-0.8 * np.eye(3), 0.8 * so101_goal[:, None]]) + 0.0, so101.start,
+              SpacePointTarget(so101_goal), "A practice goal that no part of the study uses.",
+              max_condition=so101.max_condition),
     )}
 
 
-#: Practice skills by key ("sim-practice", "uarm-practice", "ur5-practice"); protocols name them like skills.
+#: Practice skills by key ("sim-practice", "uarm-practice", "ur5-practice", "so101-practice"); protocols
+#: name them like skills.
 PRACTICE_SKILLS: dict[str, Skill] = _practice_skills()

@@ -98,7 +98,7 @@ PROTOCOL_FOLDER = Path(__file__).parent / "protocols"
 #: The protocols shipped with the package, by short name.
 BUILTIN_PROTOCOLS = {"paper-sim": "paper_sim.toml", "paper-uarm": "paper_uarm.toml",
                      "paper-sim-followup": "paper_sim_followup.toml",
-                     "industrial-sim": "industrial_sim.toml"}
+                     "industrial-sim": "industrial_sim.toml", "paper-so101": "paper_so101.toml"}
 
 # The reward-learning follow-up's study (arXiv 2505.10151; docs/guide/learners.md).
 BUILTIN_PROTOCOLS["reward-sim"] = "reward_sim.toml"

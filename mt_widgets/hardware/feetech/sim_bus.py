@@ -32,6 +32,16 @@ from .sim_servo import SimulatedServo
 #: Seconds a byte takes on the wire.
 BYTE_TIME = 10.0 / BAUD
 
+#: The simulated arm's calibration, as ``lerobot-calibrate`` writes it (a real arm's order of
+#: magnitude): what :func:`calibrated_bus` flashes into the servos, as LeRobot leaves them.
+SIMULATED_CALIBRATION = {
+    "shoulder_pan": {"id": 1, "drive_mode": 0, "homing_offset": -1470, "range_min": 760, "range_max": 3330},
+    "shoulder_lift": {"id": 2, "drive_mode": 0, "homing_offset": 120, "range_min": 900, "range_max": 3200},
+    "elbow_flex": {"id": 3, "drive_mode": 0, "homing_offset": 300, "range_min": 950, "range_max": 3150},
+    "wrist_flex": {"id": 4, "drive_mode": 0, "homing_offset": -50, "range_min": 950, "range_max": 3150},
+    "wrist_roll": {"id": 5, "drive_mode": 0, "homing_offset": 1000, "range_min": 0, "range_max": 4095},
+    "gripper": {"id": 6, "drive_mode": 0, "homing_offset": 700, "range_min": 2000, "range_max": 3400},
+}
 
 
 @dataclass
@@ -190,3 +200,24 @@ class SimulatedBus:
         with self.lock:
             self.disconnected = True
             self._out.clear()
+
+
+def calibrated_bus(speed_scale: float = 1.0, calibration=None) -> SimulatedBus:
+    """Six servos with ``calibration`` (default :data:`SIMULATED_CALIBRATION`) in their EEPROM, as
+    LeRobot leaves a calibrated arm, each at the middle of its range, powered on with torque off.
+
+    Args:
+        speed_scale: as for :class:`SimulatedBus` (1: the STS3215's own speed).
+        calibration: {joint: {"id", "drive_mode", "homing_offset", "range_min", "range_max"}}.
+    """
+    calibration = SIMULATED_CALIBRATION if calibration is None else calibration
+    bus = SimulatedBus(speed_scale=speed_scale)
+    for joint, servo_id in SO101_IDS.items():
+        servo = bus.servos[servo_id]
+        c = calibration[joint]
+        servo.flash("homing_offset", c["homing_offset"])
+        servo.flash("min_position_limit", c["range_min"])
+        servo.flash("max_position_limit", c["range_max"])
+        servo.position = (c["range_min"] + c["range_max"]) / 2 + c["homing_offset"]
+        servo.power_on(0.0)
+    return bus
