@@ -305,3 +305,38 @@ code = "W1THDR4WN"
 
 def online_protocol(text=ONLINE):
     return parse_protocol(SHORT_PROTOCOL + text, "online.toml")
+
+
+#: Answers to the forms of the shipped paper-like protocols (industrial-sim, paper-so101), by step id.
+PAPER_FORM_ANSWERS = {"eligibility": {"robotics_background": "no"}, "demographics": {"age": 30, "sex": "female"},
+                      "questionnaire": {"difficulty": "easy", "comments": ""}}
+
+
+class LearningTeacher:
+    """A scripted participant whose arrows stray from the skill's own by a seeded relative noise that
+    shrinks by ``learning`` after every optimal arrow they are shown (the target group's guidance)."""
+
+    def __init__(self, seed: int, noise: float = 0.6, learning: float = 0.93):
+        self.rng = np.random.default_rng(seed)
+        self.noise, self.learning = noise, learning
+
+    def act(self, step) -> np.ndarray:
+        target = SKILLS[step.skill].target_actions(step.state[None])[0]
+        return target + self.rng.normal(0.0, self.noise * (0.05 + np.abs(target)), size=target.shape)
+
+    def run(self, session) -> None:
+        while not session.finished:
+            step = session.current_step()
+            if step.kind in PAPER_FORM_ANSWERS:
+                session.submit_answers(PAPER_FORM_ANSWERS[step.kind])
+            elif step.kind == "practice":
+                session.finish_practice(duration_s=120.0)
+            elif step.kind == "demonstration":
+                feedback = session.submit_demonstration(self.act(step), {"time_to_first_input_s": 1.0,
+                                                                         "drawing_duration_s": 2.0}, index=step.index)
+                if feedback.optimal is not None:
+                    self.noise *= self.learning
+            elif step.kind == "episode_end":
+                session.finish_episode()
+            else:
+                session.advance()

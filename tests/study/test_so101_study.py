@@ -12,7 +12,7 @@ from mt_widgets.analysis.study_analysis import analyse_study
 from mt_widgets.study import Session, StudyFolder, export_bids, load_protocol
 from mt_widgets.study.practice import PRACTICE_SKILLS
 
-from .test_industrial_sim import LearningTeacher
+from .scripted import LearningTeacher
 
 #: Participants per group: the fewest for the paper's tests to have a spread.
 PER_GROUP = 2
