@@ -64,16 +64,18 @@ def test_the_front_ends_are_package_data():
 @pytest.fixture
 def pages(tmp_path):
     """Every widget alive after building the demo page with an arrow drawn, and an online study page
-    whose participant declined (its goodbye holds the navigation widget)."""
+    whose participant declined (its goodbye holds the navigation widget: the pilot given the pool's
+    completion links, which the shipped pilot leaves out)."""
     from mt_widgets.apps.study import OnlineStudyPage
     from mt_widgets.apps.study.navigation import PageAddress
     from mt_widgets.widgets import DemoPage
-    from tests.study_pages.support import PILOT, buttons_in, prolific
+    from tests.study_pages.support import buttons_in, pilot_with_completion_urls, prolific
 
     before = set(live_widgets)
     demo = DemoPage(skill="sim-point")
     demo.episode.demonstrate([1.0, 0.5])
-    online = OnlineStudyPage(PILOT, tmp_path / "logs", prolific("D1"), redirect_delay_s=0)
+    online = OnlineStudyPage(pilot_with_completion_urls(tmp_path), tmp_path / "logs", prolific("D1"),
+                             redirect_delay_s=0)
     while not online.session.finished:
         assert online.session.current_step().kind != "demonstration", "the consent step comes first"
         declines = [b for b in buttons_in(online.view.body) if b.description == "I do not agree"]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from urllib.parse import urlencode
 
@@ -10,6 +11,20 @@ from ipywidgets import Button
 from mt_widgets import SKILLS
 
 PILOT = str(Path(__file__).resolve().parents[2] / "notebooks" / "study_online_pilot.toml")
+
+
+#: The pool's completion link, as docs/user/study.md says to give each ending for the real study.
+PROLIFIC_COMPLETION = "https://app.prolific.com/submissions/complete?cc={code}"
+
+
+def pilot_with_completion_urls(folder: Path) -> str:
+    """The online pilot with every ending given the pool's completion link (the shipped pilot has none:
+    it ends on its page); the protocol's path, written into ``folder``."""
+    text = Path(PILOT).read_text(encoding="utf-8")
+    text = re.sub(r"(\[online\.completion\.\w+\]\n)", lambda m: m.group(1) + f'url = "{PROLIFIC_COMPLETION}"\n', text)
+    protocol = Path(folder) / "study.toml"
+    protocol.write_text(text, encoding="utf-8")
+    return str(protocol)
 
 
 def prolific(pid, study="S1", session="X1"):

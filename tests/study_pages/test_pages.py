@@ -17,7 +17,7 @@ from mt_widgets.apps.study.lab_page import MAX_ATTEMPTS
 from mt_widgets.apps.study.navigation import PageAddress
 from mt_widgets.study import Session, StudyFolder, load_protocol, read_events
 
-from .support import PILOT, act, buttons_in, prolific
+from .support import PILOT, act, buttons_in, pilot_with_completion_urls, prolific
 
 GROUP_WORDS = re.compile(r"\b(target|control|group|groups|condition)\b", re.IGNORECASE)
 
@@ -138,12 +138,8 @@ def test_each_ending_of_the_pilot_shows_its_own_code_and_sends_no_one_anywhere(t
 
 def test_a_protocol_with_the_pool_s_completion_urls_sends_the_participant_there(tmp_path):
     # What docs/user/study.md says to do for the real study: each ending given the pool's url.
-    text = Path(PILOT).read_text(encoding="utf-8")
-    prolific_url = 'url = "https://app.prolific.com/submissions/complete?cc={code}"\n'
-    text = re.sub(r'(\[online\.completion\.\w+\]\n)', lambda m: m.group(1) + prolific_url, text)
-    protocol = tmp_path / "study.toml"
-    protocol.write_text(text, encoding="utf-8")
-    page = OnlineStudyPage(str(protocol), tmp_path / "logs", prolific("U1"), redirect_delay_s=0)
+    protocol = pilot_with_completion_urls(tmp_path)
+    page = OnlineStudyPage(protocol, tmp_path / "logs", prolific("U1"), redirect_delay_s=0)
     while page.session.current_step().kind != "consent":
         act(page.view)
     [b for b in buttons_in(page.view.body) if b.description == "I do not agree"][0].click()
