@@ -1,5 +1,5 @@
 """A scripted hand teaches the simulated SO-101 a whole episode in Chromium (pages/episode_so101_hand.ipynb
-in Voila): at each query state the arm lets go, the hand drags the gripper in the simulated hand's view
+in Voila): at each query state the person presses "Teach by hand", the arm lets go, the hand drags the gripper in the simulated hand's view
 (its canvas, top panel then side panel, with real mouse events), the page shows the demonstration
 arrow, the hand confirms, MT's guidance answers, and the arm plays the learnt skill's reproduction within
 its envelope.
@@ -55,7 +55,9 @@ def test_a_scripted_hand_teaches_the_simulated_so101_a_whole_episode(browser, vo
     index = hand_canvas(page)
     view = page.locator("canvas").nth(index)
     for k in range(n):
-        wait_for_status(page, f"s.released && s.index === {k} && s.phase === 'teaching'", timeout=30_000)
+        wait_for_status(page, f"s.index === {k} && s.phase === 'teaching'", timeout=30_000)
+        page.get_by_role("button", name="Teach by hand").click(timeout=30_000)   # the page's arm lets go
+        wait_for_status(page, f"s.released && s.index === {k}", timeout=30_000)
         wanted = np.asarray(episode.skill.theta @ episode.features[k]) * length   # the target policy's action, m
         start = np.array(status(page)["tool"])
         view.scroll_into_view_if_needed()
