@@ -84,7 +84,7 @@ def feedback_by_hand(demonstrations: int) -> None:
                 shown = episode.skill.theta @ episode.features[k]          # the target policy's own action
                 if not hand.move_tool_by(shown * length):
                     raise RuntimeError(f"the scripted hand could not move the gripper by {shown * length} m")
-                wait_until(lambda shown=shown: episode.pending_action is not None
+                wait_until(lambda shown=shown, episode=episode: episode.pending_action is not None
                            and np.linalg.norm(np.subtract(episode.pending_action, shown)) < 0.01, teaching)
                 arrow = teaching.arrow_latencies[-1]                      # the arrow now confirmed
                 t0 = time.perf_counter()

@@ -1,8 +1,8 @@
 """A scripted hand teaches the simulated SO-101 a whole episode in Chromium (pages/episode_so101_hand.ipynb
-in Voila): at each query state the person presses "Teach by hand", the arm lets go, the hand drags the gripper in the simulated hand's view
-(its canvas, top panel then side panel, with real mouse events), the page shows the demonstration
-arrow, the hand confirms, MT's guidance answers, and the arm plays the learnt skill's reproduction within
-its envelope.
+in Voila): at each query state the person presses "Teach by hand", the arm lets go, the hand drags
+the gripper in the simulated hand's view (its canvas, top panel then side panel, with real mouse
+events), the page shows the demonstration arrow, the hand confirms, MT's guidance answers, and the
+arm plays the learnt skill's reproduction within its envelope.
 
 Pixel targets come from the view's own mapping (``so101_hand.to_view``) of the wanted tool point, so
 the gripper moves by the wanted displacement (within a pixel, 1/350 m, per axis).
