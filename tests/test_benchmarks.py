@@ -17,7 +17,8 @@ EXPECTED = {
     "bench_core.py": ["agreement with MuJoCo", "(a) one 10 s rollout", "(b) 1000 rollouts", "fit + optimal_actions"],
     "bench_study.py": ["in-silico study, 32 participants", "power by simulation"],
     "bench_uarm.py": ["P2220 round trip", "worst overhead per round trip"],
-    "bench_so101.py": ["sync read round trip", "target 2 ms", "hand-teaching loop at rate=50"],
+    "bench_so101.py": ["sync read round trip", "target 2 ms", "hand-teaching loop at rate=50",
+                       "feedback after a demonstration by hand", "hand loop while teaching"],
     "bench_ur5.py": ["agreement of 10 s reproductions", "pinocchio ABA stepped from Python",
                      "MuJoCo stepped from Python", "feedback: fit + optimal actions"],
     "bench_widgets.py": ["feedback latency", "animation message", "Chromium playback", "pointer-to-arrow latency"],
@@ -29,7 +30,8 @@ EXPECTED = {
 }
 # Shorter runs where a full one takes minutes (the figures are reported, never asserted).
 ARGS = {"bench_kiosk.py": ["--loads", "2", "--no-study"], "bench_online.py": ["--participants", "2", "--think", "1"],
-        "bench_install.py": ["--shapes", "core"], "bench_learners.py": ["--quick"],
+        "bench_install.py": ["--shapes", "core"],
+        "bench_so101.py": ["--demonstrations", "3"], "bench_learners.py": ["--quick"],
         "bench_kill_soak.py": ["--kills", "1", "--protocols", "paper-sim"]}
 
 
