@@ -219,7 +219,8 @@ class SO101Teaching:
         return self._hand_job
 
     def _still_teaching(self, episode, index) -> bool:
-        return (not self._hand_stop.is_set() and not self._closing.is_set() and episode is self.episode and episode.phase == "teaching"
+        return (not self._hand_stop.is_set() and not self._closing.is_set() and episode is self.episode
+                and episode.phase == "teaching"
                 and episode.state_index == index and not self.arm.stopped)
 
     def _hand_move(self, episode, index, state) -> None:
