@@ -53,6 +53,7 @@ NOTEBOOK_PARAMETERS: dict[str, dict[str, object]] = {
     "tutorials/12_the_uarm.ipynb": {"PORT": SIMULATED_ARM, "DURATION": 3.0},
     "tutorials/13_teaching_an_industrial_arm.ipynb": {"N_QUERY_SETS": 5},
     "tutorials/14_when_the_robot_learns_differently.ipynb": {"N_SETS": 10, "N_STATES_MANY": 40},
+    "tutorials/15_the_so101.ipynb": {"PORT": "sim", "CALIBRATION": None, "DURATION": 2.0},
     "tutorials/appendix_a_widget_api.ipynb": {"DURATION": 2.0},
     "notebooks/study_sim.ipynb": {"LOG_FOLDER": Scratch("study_sim")},
     "notebooks/study_online.ipynb": {"LOG_FOLDER": Scratch("study_online"), "CHECK_REFUSED_WITHOUT_LINK": True},

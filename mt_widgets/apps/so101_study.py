@@ -109,6 +109,9 @@ class SO101Teaching:
         #: Seconds from a reading of the hand to its arrow drawn, one per arrow drawn (for the benchmark).
         self.arrow_latencies: list[float] = []
         self._hand_stop = threading.Event()
+        # Set once by close(): unlike _hand_stop, which each new query state clears, it ends any hand
+        # loop for good (a close while the arm drives to a state must not leave the loop waiting on the hand).
+        self._closing = threading.Event()
         self._hand_job: Future | None = None
         self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="so101")
         self._submit(self._update_position)
@@ -216,7 +219,8 @@ class SO101Teaching:
         return self._hand_job
 
     def _still_teaching(self, episode, index) -> bool:
-        return (not self._hand_stop.is_set() and episode is self.episode and episode.phase == "teaching"
+        return (not self._hand_stop.is_set() and not self._closing.is_set() and episode is self.episode
+                and episode.phase == "teaching"
                 and episode.state_index == index and not self.arm.stopped)
 
     def _hand_move(self, episode, index, state) -> None:
@@ -329,6 +333,7 @@ class SO101Teaching:
 
     def close(self) -> None:
         """Stop the hand, drop the queued work, hold the arm and close its port (and the leader's)."""
+        self._closing.set()
         self._hand_stop.set()
         self._worker.shutdown(wait=True, cancel_futures=True)
         for arm in (self.arm, self.leader):

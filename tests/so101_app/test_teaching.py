@@ -5,6 +5,7 @@ fault mid-teach is said in words and loses nothing; a simulated leader arm is th
 from __future__ import annotations
 
 import sys
+import threading
 import time
 
 import numpy as np
@@ -119,3 +120,14 @@ def test_the_study_app_runs_the_so101_protocol_by_hand(tmp_path):
         assert "simulated SO-101" in app.arm_status.value
     finally:
         app.arm_teaching.close()
+
+
+def test_closing_while_the_arm_drives_to_a_state_ends_the_hand_loop():
+    # Closed right after the page is built, the worker is still driving the arm to the first query state;
+    # it then started the hand loop with the stop cleared, and close() waited for a hand that never came.
+    teaching = open_so101("sim", speed_scale=20.0)
+    SO101EpisodePage(teaching, "so101-reach", seed=0)
+    closer = threading.Thread(target=teaching.close, daemon=True)
+    closer.start()
+    closer.join(20.0)
+    assert not closer.is_alive(), "close() is still waiting for the hand loop"
