@@ -108,6 +108,8 @@ class SO101Teaching:
         self.hand_demonstration: HandDemonstration | None = None
         #: Seconds from a reading of the hand to its arrow drawn, one per arrow drawn (for the benchmark).
         self.arrow_latencies: list[float] = []
+        #: The query state the envelope refused to go to (the person draws its arrow), or None.
+        self._refused_state: np.ndarray | None = None
         self._hand_stop = threading.Event()
         self._hand_job: Future | None = None
         self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="so101")
@@ -177,10 +179,20 @@ class SO101Teaching:
             raise SO101Stopped("stopped")
         self.panel.say("The arm is moving to the next situation...")
         self.arm.torque(True)
-        self.arm.move_joints(dict(zip(ARM_JOINTS, (float(v) for v in state[:len(ARM_JOINTS)]))))
+        episode = self.episode
+        try:
+            self.arm.move_joints(dict(zip(ARM_JOINTS, (float(v) for v in state[:len(ARM_JOINTS)]))))
+        except UnsafeMoveError as error:
+            # A situation this arm's envelope refuses (its calibrated range may be narrower than the
+            # skill allowed for): the person draws the arrow for it and goes on; the arm stays put.
+            self._refused_state = state.copy()
+            self._update_position()
+            self.panel.say(f"The arm cannot go to this situation: {error}. It stays where it is. Draw your arrow "
+                           f"for this situation in the views, confirm it and go on.", error=True)
+            return
+        self._refused_state = None
         self._update_position()
         self.panel.say("")
-        episode = self.episode
         if (self.release_at_each_state and self.demonstration_modality == "hand" and episode is not None
                 and episode.phase == "teaching"):
             self._hand_stop.clear()
@@ -210,10 +222,18 @@ class SO101Teaching:
         if self.arm.stopped:
             self.panel.say("The arm is stopped. Press Resume arm when it is safe to move it again.")
             return None
-        self._hand_stop.clear()
         index = episode.state_index
+        if self.state_refused(np.asarray(episode.query_states[index], dtype=float)):
+            self.panel.say("The arm cannot go to this situation (it is outside its safe range), so it cannot be "
+                           "shown by hand: draw your arrow for it in the views, confirm it and go on.", error=True)
+            return None
+        self._hand_stop.clear()
         self._hand_job = self._submit(self._hand_move, episode, index, np.array(episode.query_states[index]))
         return self._hand_job
+
+    def state_refused(self, state) -> bool:
+        """Whether the arm's envelope refused to go to ``state`` (the last query state it was sent to)."""
+        return self._refused_state is not None and np.array_equal(self._refused_state, state)
 
     def _still_teaching(self, episode, index) -> bool:
         return (not self._hand_stop.is_set() and episode is self.episode and episode.phase == "teaching"
