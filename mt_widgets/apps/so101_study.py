@@ -10,8 +10,11 @@ space) to the arm:
   state; guidance follows as the episode's settings say (MT's optimal arrow beside the person's);
 - with a leader arm (a second SO-101 bus, LeRobot's ``so101_leader``), the leader's joints are the
   hand-held input and the arm itself holds the query state throughout;
+- a query state the arm's envelope refuses (an arm calibrated narrower than the skill allows
+  for) is said in words; the arm stays put and the person draws the arrow for that state;
 - the learnt skill's reproduction is played on the arm through waypoints the envelope checks
-  (:mod:`mt_widgets.hardware.feetech.reproduction`);
+  (:mod:`mt_widgets.hardware.feetech.reproduction`); the simulated hand's views are redrawn at
+  every waypoint and whenever the arm has moved by itself;
 - **Stop the arm** holds every servo at once and lets nothing move until **Resume arm**;
 - a fault (a pulled cable, a servo that stops answering, an overload) stops the arm and is said in
   words; the confirmed demonstrations are the episode's (a study logs them before the arm does
@@ -199,10 +202,14 @@ class SO101Teaching:
             self._hand_move(episode, episode.state_index, state)
 
     def _update_position(self) -> None:
+        """Show where the arm is: after every move it makes by itself (a query state, each waypoint of a
+        reproduction, back from the hand), in the panel and in the simulated hand's views."""
         try:
             self.panel.show_position(*(1000 * v for v in self.arm.tool_point()))
         except SO101Error as error:
             self.panel.say(f"The robot arm cannot be read: {error}", error=True)
+        # The stand-in hand's views draw the simulated servos: the arm moved them, not the hand.
+        self._refresh_hand_views()
 
     # ------------------------------------------------------------------ teaching by hand
     @property
