@@ -17,10 +17,10 @@ Two kinds of arm:
 
 Query states are at rest, with the tool in the teaching box above the table, reached from the
 home pose by position-only inverse kinematics, inside the joint limits (``query_margin`` inside
-them), clear of the table and of the arm itself, and away from singular poses. A redundant arm (more than three joints the
-tool's position depends on: every six- or seven-joint arm here) gets the minimum-norm joint
-motion, plus with ``null_gain`` > 0 a pull towards its home pose in the null space
-(``chain_rollout``'s docstring).
+them), clear of the table and of the arm itself, and away from singular poses. A redundant arm
+(more than three joints the tool's position depends on: every six- or seven-joint arm here) gets
+the minimum-norm joint motion, plus with ``null_gain`` > 0 a pull towards its home pose in the
+null space (``chain_rollout``'s docstring).
 """
 
 from __future__ import annotations

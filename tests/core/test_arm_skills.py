@@ -148,6 +148,12 @@ def test_bad_input_is_refused_by_name():
         skill.plant.state_at((0.8, 0.0, 0.1))
     with pytest.raises(ValueError, match=r"home: expected joint shoulder_pan within"):
         ChainPlant(skill.plant.chain, [3.0, 0, 0, 0, 0], skill.plant.teaching_box, skill.plant.scene_box)
+    with pytest.raises(ValueError, match="query_margin: expected a non-negative finite number, got -0.1"):
+        ChainPlant(skill.plant.chain, skill.plant.home, skill.plant.teaching_box, skill.plant.scene_box,
+                   query_margin=-0.1)
+    with pytest.raises(ValueError, match="query_margin: expected less than half of every joint's range, got 2.0"):
+        ChainPlant(skill.plant.chain, skill.plant.home, skill.plant.teaching_box, skill.plant.scene_box,
+                   query_margin=2.0)
     with pytest.raises(TypeError, match="kinematic: expected"):
         ChainPlant(skill.plant.chain, skill.plant.home, skill.plant.teaching_box, skill.plant.scene_box, kinematic=1)
     description = load_shipped("so101")
