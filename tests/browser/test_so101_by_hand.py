@@ -25,7 +25,7 @@ TOLERANCE_M = 0.008
 
 
 def reference():
-    """The page's episode, built here without a kernel: its query states and the target's actions."""
+    """The page's episode, built here without a kernel: its query states and MT's optimal actions."""
     from mt_widgets.widgets import EpisodeWidget
     return EpisodeWidget("so101-reach", seed=0, guidance=True)
 
@@ -58,7 +58,7 @@ def test_a_scripted_hand_teaches_the_simulated_so101_a_whole_episode(browser, vo
         wait_for_status(page, f"s.index === {k} && s.phase === 'teaching'", timeout=30_000)
         page.get_by_role("button", name="Teach by hand").click(timeout=30_000)   # the page's arm lets go
         wait_for_status(page, f"s.released && s.index === {k}", timeout=30_000)
-        wanted = np.asarray(episode.skill.theta @ episode.features[k]) * length   # the target policy's action, m
+        wanted = np.asarray(episode.optimal[k]) * length   # MT's arrow (what guidance shows), m
         start = np.array(status(page)["tool"])
         view.scroll_into_view_if_needed()
         # The top panel moves the gripper across the table (x, y), the side panel forward and up (x, z).
@@ -82,10 +82,10 @@ def test_a_scripted_hand_teaches_the_simulated_so101_a_whole_episode(browser, vo
             page.screenshot(path=artifacts("guidance"), full_page=True)
         page.get_by_role("button", name="Finish and watch" if k == n - 1 else "Next state").click()
     # The reproduction is played on the arm through the envelope, whole: the skill's goal is 4 cm above the
-    # table's clearance, so what was learnt from these pixel-rounded demonstrations stays above it.
+    # table's clearance, so what was learnt from these pixel-rounded demonstrations of MT's arrows stays above it.
     s = wait_for_status(page, "s.phase === 'finished' && s.report !== null", timeout=60_000)
     recorded = np.array(s["records"]) * length
-    wanted = np.array([episode.skill.theta @ f for f in episode.features[:n]]) * length
+    wanted = np.array(episode.optimal[:n]) * length
     assert np.allclose(recorded, wanted, atol=TOLERANCE_M), (recorded, wanted)
     reached, total, stopped, error = s["report"]
     assert s["reproduced"] and reached == total and not stopped and error == "", s["report"]

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from mt_widgets import SKILLS, RidgeLearner, optimal_actions
+from mt_widgets.core.learner import DEFAULT_LAMBDA
 from mt_widgets.arms import SO101_QUERY_MARGIN
 from mt_widgets.hardware.feetech import ARM_JOINTS
 from mt_widgets.hardware.feetech.calibration import calibration_from_dict
@@ -62,11 +63,12 @@ def test_reproductions_of_the_target_and_of_a_nearly_right_learnt_skill_stay_abo
         return float(arm.kinematics.points(trajectory.states[:, :len(ARM_JOINTS)])[..., 2].min())
 
     assert lowest(skill.theta) >= floor + 0.035
-    for seed in range(9):   # the first nine episodes' query states
+    for seed in range(9):   # the first nine episodes' query states, taught as a page teaches them
         features = skill.features(skill.query_states(seed=seed))
-        actions = optimal_actions(features, skill.theta, 0.0)
+        actions = optimal_actions(features, skill.theta, DEFAULT_LAMBDA)   # MT's arrows
         # shown by a hand up to 2 pixels of the simulated hand's view (1/350 m) off on each axis
         shown = actions + np.random.default_rng(seed).uniform(-2 / 350, 2 / 350, actions.shape) / length
-        learnt = RidgeLearner(lam=0.0).fit(features, shown).theta
-        assert np.linalg.norm(learnt - skill.theta) > 0.1          # not the target: a nearly right skill
-        assert lowest(learnt) >= floor, seed
+        learnt = RidgeLearner(lam=DEFAULT_LAMBDA).fit(features, shown).theta
+        assert np.linalg.norm(learnt - skill.theta) > 1e-3          # not the target: a nearly right skill
+        # a margin above the clearance (the goals of 4 and 6 cm above the table left it 1 cm on reach)
+        assert lowest(learnt) >= floor + 0.02, seed
