@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from mt_widgets import SKILLS, RidgeLearner, optimal_actions
-from mt_widgets.core.learner import DEFAULT_LAMBDA
 from mt_widgets.arms import SO101_QUERY_MARGIN
+from mt_widgets.core.learner import DEFAULT_LAMBDA
 from mt_widgets.hardware.feetech import ARM_JOINTS
 from mt_widgets.hardware.feetech.calibration import calibration_from_dict
 from mt_widgets.hardware.feetech.envelope import SO101Envelope

@@ -46,7 +46,7 @@ def test_a_scripted_hand_teaches_a_whole_episode_and_the_arm_reproduces_it(page)
     length = episode.skill.plant.drawing().action_length
     for k, state in enumerate(episode.query_states):
         wait_until(lambda state=state: released_at(teaching, state), teaching)
-        shown = episode.skill.theta @ episode.features[k]      # the target policy's own action
+        shown = episode.optimal[k]                             # MT's arrow (what guidance shows)
         assert hand.move_tool_by(shown * length)
         wait_until(lambda shown=shown: episode.pending_action is not None
                    and np.linalg.norm(np.subtract(episode.pending_action, shown)) < 0.01, teaching)
