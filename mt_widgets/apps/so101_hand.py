@@ -63,6 +63,7 @@ class SimulatedHandView(VBox):
         cable_button, loose_button, block_button: the faults.
         note: what the hand can do now.
         dragging: which panel's drag holds the gripper ("top", "side") or None.
+        drawn_tool: (3,) m, the gripper point the views show (as of the last ``refresh``).
     """
 
     def __init__(self, hand: SimulatedHand, title: str = "Your hand on the simulated arm"):
@@ -73,6 +74,7 @@ class SimulatedHandView(VBox):
         self.hand = hand
         self.bus: SimulatedBus = hand.bus
         self.dragging: str | None = None
+        self.drawn_tool = np.full(3, np.nan)
         self._lock = threading.Lock()
         self.canvas = Canvas(width=WIDTH_PX, height=HEIGHT_PX,
                              layout=Layout(width=f"{WIDTH_PX}px", height=f"{HEIGHT_PX}px"))
@@ -120,10 +122,11 @@ class SimulatedHandView(VBox):
 
     # ------------------------------------------------------------------ drawing
     def refresh(self) -> None:
-        """Draw the arm as it is now."""
+        """Draw the arm as it is now (whoever moved it: the hand, or the arm by itself)."""
         with self._lock:
             q = self.hand.joints()
             points = self.hand.kinematics.chain.frame_origins(q)
+            self.drawn_tool = points[-1].copy()
             limp = self.hand.limp
             c = self.canvas
             with hold_canvas():

@@ -10,8 +10,11 @@ space) to the arm:
   state; guidance follows as the episode's settings say (MT's optimal arrow beside the person's);
 - with a leader arm (a second SO-101 bus, LeRobot's ``so101_leader``), the leader's joints are the
   hand-held input and the arm itself holds the query state throughout;
+- a query state the arm's envelope refuses (an arm calibrated narrower than the skill allows
+  for) is said in words; the arm stays put and the person draws the arrow for that state;
 - the learnt skill's reproduction is played on the arm through waypoints the envelope checks
-  (:mod:`mt_widgets.hardware.feetech.reproduction`);
+  (:mod:`mt_widgets.hardware.feetech.reproduction`); the simulated hand's views are redrawn at
+  every waypoint and whenever the arm has moved by itself;
 - **Stop the arm** holds every servo at once and lets nothing move until **Resume arm**;
 - a fault (a pulled cable, a servo that stops answering, an overload) stops the arm and is said in
   words; the confirmed demonstrations are the episode's (a study logs them before the arm does
@@ -108,6 +111,8 @@ class SO101Teaching:
         self.hand_demonstration: HandDemonstration | None = None
         #: Seconds from a reading of the hand to its arrow drawn, one per arrow drawn (for the benchmark).
         self.arrow_latencies: list[float] = []
+        #: The query state the envelope refused to go to (the person draws its arrow), or None.
+        self._refused_state: np.ndarray | None = None
         self._hand_stop = threading.Event()
         # Set once by close(): unlike _hand_stop, which each new query state clears, it ends any hand
         # loop for good (a close while the arm drives to a state must not leave the loop waiting on the hand).
@@ -180,20 +185,34 @@ class SO101Teaching:
             raise SO101Stopped("stopped")
         self.panel.say("The arm is moving to the next situation...")
         self.arm.torque(True)
-        self.arm.move_joints(dict(zip(ARM_JOINTS, (float(v) for v in state[:len(ARM_JOINTS)]))))
+        episode = self.episode
+        try:
+            self.arm.move_joints(dict(zip(ARM_JOINTS, (float(v) for v in state[:len(ARM_JOINTS)]))))
+        except UnsafeMoveError as error:
+            # A situation this arm's envelope refuses (its calibrated range may be narrower than the
+            # skill allowed for): the person draws the arrow for it and goes on; the arm stays put.
+            self._refused_state = state.copy()
+            self._update_position()
+            self.panel.say(f"The arm cannot go to this situation: {error}. It stays where it is. Draw your arrow "
+                           f"for this situation in the views, confirm it and go on.", error=True)
+            return
+        self._refused_state = None
         self._update_position()
         self.panel.say("")
-        episode = self.episode
         if (self.release_at_each_state and self.demonstration_modality == "hand" and episode is not None
                 and episode.phase == "teaching"):
             self._hand_stop.clear()
             self._hand_move(episode, episode.state_index, state)
 
     def _update_position(self) -> None:
+        """Show where the arm is: after every move it makes by itself (a query state, each waypoint of a
+        reproduction, back from the hand), in the panel and in the simulated hand's views."""
         try:
             self.panel.show_position(*(1000 * v for v in self.arm.tool_point()))
         except SO101Error as error:
             self.panel.say(f"The robot arm cannot be read: {error}", error=True)
+        # The stand-in hand's views draw the simulated servos: the arm moved them, not the hand.
+        self._refresh_hand_views()
 
     # ------------------------------------------------------------------ teaching by hand
     @property
@@ -213,10 +232,18 @@ class SO101Teaching:
         if self.arm.stopped:
             self.panel.say("The arm is stopped. Press Resume arm when it is safe to move it again.")
             return None
-        self._hand_stop.clear()
         index = episode.state_index
+        if self.state_refused(np.asarray(episode.query_states[index], dtype=float)):
+            self.panel.say("The arm cannot go to this situation (it is outside its safe range), so it cannot be "
+                           "shown by hand: draw your arrow for it in the views, confirm it and go on.", error=True)
+            return None
+        self._hand_stop.clear()
         self._hand_job = self._submit(self._hand_move, episode, index, np.array(episode.query_states[index]))
         return self._hand_job
+
+    def state_refused(self, state) -> bool:
+        """Whether the arm's envelope refused to go to ``state`` (the last query state it was sent to)."""
+        return self._refused_state is not None and np.array_equal(self._refused_state, state)
 
     def _still_teaching(self, episode, index) -> bool:
         return (not self._hand_stop.is_set() and not self._closing.is_set() and episode is self.episode

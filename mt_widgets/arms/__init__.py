@@ -14,6 +14,7 @@ from .shipped import (
     SHIPPED_ARMS,
     SO101_HOME,
     SO101_JOINT_SPEED,
+    SO101_QUERY_MARGIN,
     UR5_HOME,
     ShippedArm,
     UR5Plant,
@@ -25,5 +26,6 @@ from .shipped import (
 )
 from .urdf_arm import arm_skills
 
-__all__ = ["CHAIN_ARMS", "PANDA_HOME", "SHIPPED_ARMS", "SO101_HOME", "SO101_JOINT_SPEED", "UR5_HOME", "ShippedArm",
+__all__ = ["CHAIN_ARMS", "PANDA_HOME", "SHIPPED_ARMS", "SO101_HOME", "SO101_JOINT_SPEED", "SO101_QUERY_MARGIN",
+           "UR5_HOME", "ShippedArm",
            "UR5Plant", "arm_skills", "panda_chain", "panda_plant", "so101_chain", "so101_plant", "ur5_chain"]

@@ -76,6 +76,13 @@ SO101_SCENE = Cuboid((-0.08, 0.40), (-0.22, 0.22), (0.0, 0.36))
 #: (0.222 s per 60 degrees at 7.4 V, about 4.7 rad/s), so a servo under load still keeps up.
 SO101_JOINT_SPEED = 2.0
 
+#: How far inside the URDF's joint ranges the SO-101's query states stay (rad). The arm itself goes
+#: only where its envelope allows (``mt_widgets.hardware.feetech.envelope``): the URDF's range
+#: intersected with the range LeRobot calibrated, less a margin of 0.05 rad. This margin covers
+#: that 0.05 rad and a calibrated range up to 0.1 rad (6 degrees) narrower than the URDF's at
+#: either end, as a hand-calibrated real arm's may be, so a query state is one the arm will go to.
+SO101_QUERY_MARGIN = 0.15
+
 
 def ur5_chain() -> SerialChain:
     """The UR5's serial chain from its URDF (shipped with the package), tool point at ``tool0``."""
@@ -105,7 +112,7 @@ def so101_plant() -> ChainPlant:
     """The SO-101 on a table, kinematic (position servos), its tool taught in ``SO101_TEACHING_BOX``."""
     return ChainPlant(so101_chain(), SO101_HOME, SO101_TEACHING_BOX, SO101_SCENE, robot="so101", kinematic=True,
                       link_radius=0.015, first_table_point=3, collision_gap=3, damping=0.01, null_gain=1.0,
-                      min_singular_value=0.05, arrow_scale=0.5)
+                      min_singular_value=0.05, arrow_scale=0.5, query_margin=SO101_QUERY_MARGIN)
 
 
 class UR5Plant(ChainPlant):
@@ -185,8 +192,12 @@ PANDA_FIXTURE = (0.40, 0.22, 0.15)
 PANDA_CONVEYOR = Conveyor(origin=(0.45, -0.25, 0.12), direction=(0.0, 1.0, 0.0), speed=0.05, phase_range=(0.0, 0.5))
 
 #: The SO-101's table top (m, base frame): a part in front of it to the right, a fixture to the left.
-SO101_PART = (0.22, -0.08, 0.04)
-SO101_FIXTURE = (0.18, 0.09, 0.06)
+#: The goals (the jaws' point when grasping) are 6 and 8 cm above the table: the arm's envelope keeps
+#: every link 2 cm above it (``SO101Envelope.clearance``), and a skill learnt from demonstrations a
+#: few millimetres off settles a centimetre or two from its goal, so a goal 4 cm above the clearance
+#: leaves the reproduction of a nearly right skill room (tests/core/test_arm_skills.py measures it).
+SO101_PART = (0.22, -0.08, 0.06)
+SO101_FIXTURE = (0.18, 0.09, 0.08)
 
 
 def panda_skills() -> dict[str, Skill]:
@@ -201,7 +212,8 @@ def panda_skills() -> dict[str, Skill]:
 
 def so101_skills() -> dict[str, Skill]:
     """The SO-101's table-top skills: reach and place (``production_line_skills``, no conveyor)."""
-    # The inverse kinematics' pose for the jaws 8 cm above the part, rounded to 1e-4 rad (as the Panda's).
+    # The inverse kinematics' pose for the jaws 6 cm above the part (12 cm above the table), rounded
+    # to 1e-4 rad (as the Panda's).
     above_part = np.array([0.4148, -0.894, 0.7088, 0.9771, 0.0237])
     return production_line_skills("so101", "SO-101", so101_plant(), SO101_PART, SO101_FIXTURE, above_part, 128.0)
 

@@ -16,11 +16,11 @@ Two kinds of arm:
   the resolved rate exactly. No inertia is needed.
 
 Query states are at rest, with the tool in the teaching box above the table, reached from the
-home pose by position-only inverse kinematics, inside the joint limits, clear of the table and
-of the arm itself, and away from singular poses. A redundant arm (more than three joints the
-tool's position depends on: every six- or seven-joint arm here) gets the minimum-norm joint
-motion, plus with ``null_gain`` > 0 a pull towards its home pose in the null space
-(``chain_rollout``'s docstring).
+home pose by position-only inverse kinematics, inside the joint limits (``query_margin`` inside
+them), clear of the table and of the arm itself, and away from singular poses. A redundant arm
+(more than three joints the tool's position depends on: every six- or seven-joint arm here) gets
+the minimum-norm joint motion, plus with ``null_gain`` > 0 a pull towards its home pose in the
+null space (``chain_rollout``'s docstring).
 """
 
 from __future__ import annotations
@@ -98,6 +98,10 @@ class ChainPlant(ContinuousPlant):
             this (m/rad): away from the stretched and folded poses where teaching is ill-posed.
         speed_tolerance: a joint faster than its limit by more than this fraction stops a rollout.
         arrow_scale: the drawing's arrow length in m per m/s.
+        query_margin: how far (rad, or m for a sliding joint) inside each joint's range a query
+            state's joints stay. A query state near the end of a URDF range may lie beyond what a
+            real arm's controller allows (a calibrated range, a safety margin of its own): the
+            margin keeps every query state one the arm will go to (0: the URDF's range itself).
     """
 
     units = "m"
@@ -110,7 +114,8 @@ class ChainPlant(ContinuousPlant):
                  conveyor: Conveyor | None = None, kinematic: bool = False, table_height: float = 0.0,
                  link_radius: float = 0.045, first_table_point: int = 3, collision_gap: int = 3,
                  velocity_gain: float = 20.0, damping: float = 0.01, null_gain: float = 0.0,
-                 min_singular_value: float = 0.15, speed_tolerance: float = 0.1, arrow_scale: float = 0.5):
+                 min_singular_value: float = 0.15, speed_tolerance: float = 0.1, arrow_scale: float = 0.5,
+                 query_margin: float = 0.0):
         if not isinstance(chain, SerialChain):
             raise TypeError(f"chain: expected a SerialChain, got {type(chain).__name__}")
         if conveyor is not None and not isinstance(conveyor, Conveyor):
@@ -138,6 +143,9 @@ class ChainPlant(ContinuousPlant):
         self.min_singular_value = as_positive("min_singular_value", min_singular_value, allow_zero=True)
         self.speed_tolerance = as_positive("speed_tolerance", speed_tolerance, allow_zero=True)
         self.arrow_scale = as_positive("arrow_scale", arrow_scale)
+        self.query_margin = as_positive("query_margin", query_margin, allow_zero=True)
+        if np.any(chain.upper - chain.lower <= 2 * self.query_margin):
+            raise ValueError(f"query_margin: expected less than half of every joint's range, got {query_margin!r}")
         n = self.chain.n_joints
         self.first_table_point = as_count("first_table_point", first_table_point, minimum=0)
         if self.first_table_point > n + 1:
@@ -310,7 +318,9 @@ class ChainPlant(ContinuousPlant):
         q = states[..., :self.n_joints]
         tool = self.chain.forward_kinematics(q)
         conditioned = np.linalg.svd(self.chain.jacobian(q), compute_uv=False)[..., -1] >= self.min_singular_value
-        valid = (self.safety(states) == "") & self.teaching_box.contains(tool) & conditioned
+        inside = np.all((q >= self.chain.lower + self.query_margin) & (q <= self.chain.upper - self.query_margin),
+                        axis=-1)
+        valid = (self.safety(states) == "") & self.teaching_box.contains(tool) & conditioned & inside
         if self.conveyor is not None:
             low, high = self.conveyor.phase_range
             phase = states[..., -1]

@@ -26,7 +26,7 @@ def _practice_skills() -> dict[str, Skill]:
     # (0.55, -0.10, 0.10) m and high above the fixture and the conveyor: no phase's goal.
     ur5_goal = np.array([0.30, 0.30, 0.45])
     # The SO-101's practice goal is high above the table on the other side from the part
-    # (0.22, -0.08, 0.04) m and above the fixture (0.18, 0.09, 0.06) m: no phase's goal.
+    # (0.22, -0.08, 0.06) m and above the fixture (0.18, 0.09, 0.08) m: no phase's goal.
     so101_goal = np.array([0.16, 0.10, 0.14])
     return {skill.key: skill for skill in (
         Skill("sim-practice", "Practice: reach the point (-0.8, 1.2) m", sim.plant, sim.feature_map,

@@ -11,8 +11,10 @@ import time
 import numpy as np
 import pytest
 
-from mt_widgets.apps.so101_study import SO101EpisodePage, SO101StudyApp, open_so101
-from mt_widgets.hardware.feetech import SO101_IDS
+from mt_widgets.apps.so101_study import SO101EpisodePage, SO101StudyApp, SO101Teaching, open_so101
+from mt_widgets.hardware.feetech import SO101, SO101_IDS
+from mt_widgets.hardware.feetech.sim_bus import SIMULATED_CALIBRATION, calibrated_bus
+from mt_widgets.hardware.feetech.sim_pty import SimulatedArmPort
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals are POSIX")
 
@@ -45,7 +47,7 @@ def test_a_scripted_hand_teaches_a_whole_episode_and_the_arm_reproduces_it(page)
     length = episode.skill.plant.drawing().action_length
     for k, state in enumerate(episode.query_states):
         wait_until(lambda state=state: released_at(teaching, state), teaching)
-        shown = episode.skill.theta @ episode.features[k]      # the target policy's own action
+        shown = episode.optimal[k]                             # MT's arrow (what guidance shows)
         assert hand.move_tool_by(shown * length)
         wait_until(lambda shown=shown: episode.pending_action is not None
                    and np.linalg.norm(np.subtract(episode.pending_action, shown)) < 0.01, teaching)
@@ -59,6 +61,55 @@ def test_a_scripted_hand_teaches_a_whole_episode_and_the_arm_reproduces_it(page)
     # The arm ended where the reproduction ended, within a servo step.
     end = episode.result.trajectory.states[-1]
     assert hand.joints() == pytest.approx(end, abs=0.005)
+
+
+@pytest.mark.slow
+def test_the_hand_view_follows_the_arm_when_it_moves_by_itself_in_a_reproduction():
+    teaching = open_so101("sim", speed_scale=20.0, release_at_each_state=False)
+    try:
+        page = SO101EpisodePage(teaching, "so101-reach", seed=0)
+        teaching.wait(60)
+        view, skill = teaching.hand_views[0], page.episode.skill
+        at_state = view.hand.tool_point()
+        assert np.allclose(view.drawn_tool, at_state, atol=1e-3)   # drawn where the arm went to the query state
+        drawn = []
+        refresh = view.refresh
+        view.refresh = lambda: (refresh(), drawn.append(view.drawn_tool.copy()))
+        report = teaching.execute(skill.reproduce(skill.theta)).result(120)
+        assert report.complete, report
+        # redrawn at every waypoint the arm reached by itself, each time where the arm then was
+        assert len(drawn) >= report.waypoints
+        end = view.hand.tool_point()
+        assert np.linalg.norm(end - at_state) > 0.02 and np.allclose(drawn[-1], end, atol=1e-3)
+        assert np.linalg.norm(end - np.array(skill.target.point)) < 0.01
+    finally:
+        teaching.close()
+
+
+@pytest.mark.slow
+def test_a_query_state_the_arms_envelope_refuses_is_said_and_drawn_instead():
+    # An arm calibrated with a wrist that bends only about 0.5 rad either way: the skill's query states
+    # (about 1 rad) are beyond its envelope. The page says so, the hand is not offered, a drawn arrow goes on.
+    calibration = {**SIMULATED_CALIBRATION,
+                   "wrist_flex": {**SIMULATED_CALIBRATION["wrist_flex"], "range_min": 1700, "range_max": 2400}}
+    bus = calibrated_bus(speed_scale=20.0, calibration=calibration)
+    with SimulatedArmPort(bus) as server:
+        teaching = SO101Teaching(SO101(server.path, calibration, timeout=0.25), port_text="narrow arm")
+        try:
+            episode = SO101EpisodePage(teaching, "so101-reach", seed=0).episode
+            first = np.asarray(episode.query_states[0])
+            assert first[3] > teaching.arm.envelope.ranges["wrist_flex"][1]
+            teaching.wait(60)
+            message = teaching.panel.message.value
+            assert "cannot go to this situation" in message and "wrist_flex" in message and "Draw" in message
+            assert teaching.state_refused(first) and teaching.hand_demonstration is None
+            assert teaching.teach_by_hand() is None                 # not offered by hand, said again in words
+            assert "cannot be shown by hand" in teaching.panel.message.value
+            episode.demonstrate(episode.skill.theta @ episode.features[0])
+            episode.next()
+            assert episode.state_index == 1 and len(episode.records) == 1
+        finally:
+            teaching.close()
 
 
 @pytest.mark.slow
