@@ -498,6 +498,36 @@ _O, _D, _T, _TASK, _OFFSET, _LOWER, _UPPER, _SPEED, _EFFORT = 8, 10, 12, 14, 18,
 _PLANAR_SIZE = 28
 
 
+# Small products written out: numba compiles `@` and np.linalg through BLAS, which it takes from scipy,
+# and the core install (numpy and numba, tests/install/smoke_core.py) has no scipy.
+@njit(cache=True, inline="always")
+def _dot(u, v):
+    total = 0.0
+    for k in range(u.shape[0]):
+        total += u[k] * v[k]
+    return total
+
+
+@njit(cache=True, inline="always")
+def _matvec(M, v):
+    out = np.empty(M.shape[0])
+    for i in range(M.shape[0]):
+        out[i] = _dot(M[i], v)
+    return out
+
+
+@njit(cache=True, inline="always")
+def _matmul(A, B):
+    out = np.empty((A.shape[0], B.shape[1]))
+    for i in range(A.shape[0]):
+        for j in range(B.shape[1]):
+            total = 0.0
+            for k in range(A.shape[1]):
+                total += A[i, k] * B[k, j]
+            out[i, j] = total
+    return out
+
+
 @njit(cache=True, error_model="numpy")
 def planar_pair(model, scene, control, n_features):
     """The constants of the planar fast path (above) when it applies to this rollout, else an empty array.
@@ -511,32 +541,32 @@ def planar_pair(model, scene, control, n_features):
                                                             and scene.table_height > -np.inf):
         return none
     B0 = model.placement_R[0]
-    B1 = B0 @ model.placement_R[1]
-    if np.max(np.abs(model.placement_R[1] @ model.axis[1] - model.axis[0])) > 1e-15:
+    B1 = _matmul(B0, model.placement_R[1])
+    if np.max(np.abs(_matvec(model.placement_R[1], model.axis[1]) - model.axis[0])) > 1e-15:
         return none
-    a = B0 @ model.axis[0]
+    a = _matvec(B0, model.axis[0])
     # e1: the base's x (else y) in the plane; e2 = a x e1, so that a turn about a is a turn from e1 to e2
     e1 = np.array([1.0, 0.0, 0.0]) - a[0] * a
-    if np.linalg.norm(e1) < 0.5:
+    if math.sqrt(_dot(e1, e1)) < 0.5:
         e1 = np.array([0.0, 1.0, 0.0]) - a[1] * a
-    e1 = e1 / np.linalg.norm(e1)
+    e1 = e1 / math.sqrt(_dot(e1, e1))
     e2 = np.cross(a, e1)
     plane = np.empty((2, 3))
     plane[0], plane[1] = e1, e2
     m1, m2 = model.mass[0], model.mass[1]
-    o = plane @ model.placement_p[0]
-    d, c1 = plane @ (B0 @ model.placement_p[1]), plane @ (B0 @ model.com[0])
-    c2, t = plane @ (B1 @ model.com[1]), plane @ (B1 @ model.tool_p)
-    inertia1 = model.axis[0] @ (model.inertia[0] @ model.axis[0])
-    inertia2 = model.axis[1] @ (model.inertia[1] @ model.axis[1])
+    o = _matvec(plane, model.placement_p[0])
+    d, c1 = _matvec(plane, _matvec(B0, model.placement_p[1])), _matvec(plane, _matvec(B0, model.com[0]))
+    c2, t = _matvec(plane, _matvec(B1, model.com[1])), _matvec(plane, _matvec(B1, model.tool_p))
+    inertia1 = _dot(model.axis[0], _matvec(model.inertia[0], model.axis[0]))
+    inertia2 = _dot(model.axis[1], _matvec(model.inertia[1], model.axis[1]))
     k22 = inertia2 + m2 * (c2[0] * c2[0] + c2[1] * c2[1])
     k11 = inertia1 + m1 * (c1[0] * c1[0] + c1[1] * c1[1]) + m2 * (d[0] * d[0] + d[1] * d[1]) + k22
-    gp = plane @ model.gravity
+    gp = _matvec(plane, model.gravity)
     w1, w2 = m1 * c1 + m2 * d, m2 * c2
     # The tool's height along a is fixed; the task's coordinates of the tool are offset + T (x, y).
-    height = a @ (model.placement_p[0] + B0 @ model.placement_p[1] + B1 @ model.tool_p)
-    T = control.task @ plane.T
-    offset = (control.task @ a) * height
+    height = _dot(a, model.placement_p[0] + _matvec(B0, model.placement_p[1]) + _matvec(B1, model.tool_p))
+    T = _matmul(control.task, plane.T)
+    offset = _matvec(control.task, a) * height
     p = np.empty(_PLANAR_SIZE)
     p[_K11], p[_K22] = k11, k22
     p[_A], p[_B] = m2 * (d[0] * c2[0] + d[1] * c2[1]), m2 * (d[0] * c2[1] - d[1] * c2[0])
