@@ -314,15 +314,18 @@ PAPER_FORM_ANSWERS = {"eligibility": {"robotics_background": "no"}, "demographic
 
 class LearningTeacher:
     """A scripted participant whose arrows stray from the skill's own by a seeded relative noise that
-    shrinks by ``learning`` after every optimal arrow they are shown (the target group's guidance)."""
+    shrinks by ``learning`` after every optimal arrow they are shown (the target group's guidance).
+    ``skills``: where the steps' skills are found (a protocol's own, for an arm it names); ``floor``:
+    the noise's absolute part, per action component."""
 
-    def __init__(self, seed: int, noise: float = 0.6, learning: float = 0.93):
+    def __init__(self, seed: int, noise: float = 0.6, learning: float = 0.93, skills=None, floor: float = 0.05):
         self.rng = np.random.default_rng(seed)
         self.noise, self.learning = noise, learning
+        self.skills, self.floor = SKILLS if skills is None else skills, floor
 
     def act(self, step) -> np.ndarray:
-        target = SKILLS[step.skill].target_actions(step.state[None])[0]
-        return target + self.rng.normal(0.0, self.noise * (0.05 + np.abs(target)), size=target.shape)
+        target = self.skills[step.skill].target_actions(step.state[None])[0]
+        return target + self.rng.normal(0.0, self.noise * (self.floor + np.abs(target)), size=target.shape)
 
     def run(self, session) -> None:
         while not session.finished:

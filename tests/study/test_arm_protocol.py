@@ -21,6 +21,8 @@ from mt_widgets.robot_models import shipped_urdf
 from mt_widgets.study import ProtocolError, Session, StudyFolder, export_bids, export_study, load_protocol
 from protocols import _table, phase, protocol_toml
 
+from .scripted import LearningTeacher
+
 #: The lab's arm: its URDF beside the protocol, the tool between the jaws, the jaw held shut.
 ARM = {"urdf": "arms/so101_copy.urdf", "tool": "gripper_frame_link", "name": "lab", "label": "Lab arm",
        "locked": ["gripper"],
@@ -49,29 +51,6 @@ def lab(tmp_path):
     return path
 
 
-class Teacher:
-    """A scripted participant: the skill's own action plus a seeded relative noise that shrinks after every
-    optimal arrow shown (the target group's guidance)."""
-
-    def __init__(self, protocol, seed: int, noise: float = 0.6, learning: float = 0.8):
-        self.protocol, self.rng, self.noise, self.learning = protocol, np.random.default_rng(seed), noise, learning
-
-    def run(self, session) -> None:
-        while not session.finished:
-            step = session.current_step()
-            if step.kind == "demonstration":
-                target = self.protocol.skills[step.skill].target_actions(step.state[None])[0]
-                action = target + self.rng.normal(0.0, self.noise * (0.02 + np.abs(target)), size=3)
-                feedback = session.submit_demonstration(action, {"time_to_first_input_s": 1.0,
-                                                                 "drawing_duration_s": 1.5}, index=step.index)
-                if feedback.optimal is not None:
-                    self.noise *= self.learning
-            elif step.kind == "episode_end":
-                session.finish_episode()
-            else:
-                session.advance()
-
-
 @pytest.mark.slow   # 4 participants x 6 episodes on a URDF arm, export, BIDS, analysis: about 10-20 s
 def test_a_study_of_an_arm_from_a_urdf_beside_the_protocol_runs_through_export_and_analysis(lab, tmp_path,
                                                                                           monkeypatch):
@@ -85,7 +64,7 @@ def test_a_study_of_an_arm_from_a_urdf_beside_the_protocol_runs_through_export_a
     folder = StudyFolder.create(tmp_path / "logs", protocol)
     for number in range(2 * PER_GROUP):
         session = Session.start(folder, f"P{number + 1:02d}", group=("target", "control")[number % 2])
-        Teacher(protocol, seed=number).run(session)
+        LearningTeacher(number, learning=0.8, skills=protocol.skills, floor=0.02).run(session)
         assert session.completed
         session.close()
 
