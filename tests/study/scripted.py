@@ -7,7 +7,7 @@ import time
 import numpy as np
 
 from mt_widgets import SKILLS
-from mt_widgets.study import load_protocol, parse_protocol
+from mt_widgets.study import Session, StudyFolder, load_protocol, parse_protocol
 from mt_widgets.study.protocol import PROTOCOL_FOLDER
 
 #: A short protocol with every kind of step (practice, phases with and without guidance,
@@ -343,3 +343,15 @@ class LearningTeacher:
                 session.finish_episode()
             else:
                 session.advance()
+
+
+def scripted_study(root, protocol: str, participants: int, learning: float = 0.93):
+    """A study folder of a shipped protocol under ``root`` with ``participants`` scripted learning teachers,
+    alternately of the target and the control group, each run to the end; the folder."""
+    folder = StudyFolder.create(root / "study", load_protocol(protocol))
+    for number in range(participants):
+        session = Session.start(folder, f"P{number + 1:02d}", group=("target", "control")[number % 2])
+        LearningTeacher(seed=number, learning=learning).run(session)
+        assert session.completed
+        session.close()
+    return folder

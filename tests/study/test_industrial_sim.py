@@ -10,10 +10,10 @@ import pytest
 
 from mt_widgets import SKILLS, RidgeLearner, teaching_risk
 from mt_widgets.analysis.study_analysis import analyse_study
-from mt_widgets.study import Session, StudyFolder, export_bids, export_study, load_protocol
+from mt_widgets.study import export_bids, export_study, load_protocol
 from mt_widgets.study.practice import PRACTICE_SKILLS
 
-from .scripted import LearningTeacher
+from .scripted import scripted_study
 
 #: Participants per group: enough for the paper's tests to have two samples of spread.
 PER_GROUP = 4
@@ -22,13 +22,7 @@ PER_GROUP = 4
 @pytest.fixture(scope="module")
 def study(tmp_path_factory):
     root = tmp_path_factory.mktemp("industrial-sim")
-    folder = StudyFolder.create(root / "study", load_protocol("industrial-sim"))
-    for number in range(2 * PER_GROUP):
-        group = ("target", "control")[number % 2]
-        session = Session.start(folder, f"P{number + 1:02d}", group=group)
-        LearningTeacher(seed=number).run(session)
-        assert session.completed
-        session.close()
+    folder = scripted_study(root, "industrial-sim", 2 * PER_GROUP)
     return folder, root
 
 

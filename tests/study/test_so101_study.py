@@ -9,10 +9,10 @@ import pytest
 
 from mt_widgets import SKILLS
 from mt_widgets.analysis.study_analysis import analyse_study
-from mt_widgets.study import Session, StudyFolder, export_bids, load_protocol
+from mt_widgets.study import export_bids, load_protocol
 from mt_widgets.study.practice import PRACTICE_SKILLS
 
-from .scripted import LearningTeacher
+from .scripted import scripted_study
 
 #: Participants per group: the fewest for the paper's tests to have a spread.
 PER_GROUP = 2
@@ -23,12 +23,7 @@ DEMONSTRATIONS = 4 * 12
 @pytest.fixture(scope="module")
 def study(tmp_path_factory):
     root = tmp_path_factory.mktemp("paper-so101")
-    folder = StudyFolder.create(root / "study", load_protocol("paper-so101"))
-    for number in range(2 * PER_GROUP):
-        session = Session.start(folder, f"P{number + 1:02d}", group=("target", "control")[number % 2])
-        LearningTeacher(seed=number, learning=0.8).run(session)
-        assert session.completed
-        session.close()
+    folder = scripted_study(root, "paper-so101", 2 * PER_GROUP, learning=0.8)
     return folder, root
 
 
