@@ -376,6 +376,7 @@ def lecture_hall(count: int) -> None:
         try:
             with ThreadPoolExecutor(count) as pool:
                 list(pool.map(lambda name: hub.login(name, f"{name} password"), students))
+            cpu_before = _cpu_by_part(hub, students)
             start = time.perf_counter()
 
             def lecture_start(item):
@@ -393,6 +394,7 @@ def lecture_hall(count: int) -> None:
             with ThreadPoolExecutor(count) as pool:
                 outcomes = dict(zip(students, pool.map(lecture_start, enumerate(students))))
             load_after = os.getloadavg()
+            cpu = {part: seconds - cpu_before.get(part, 0.0) for part, seconds in _cpu_by_part(hub, students).items()}
             lost = {name: outcome["error"] for name, outcome in outcomes.items() if "error" in outcome}
             kept = [outcome for outcome in outcomes.values() if "error" not in outcome]
             pss, template_share = _pss_per_student(hub, [n for n in students if n not in lost])
@@ -416,6 +418,7 @@ def lecture_hall(count: int) -> None:
               f" target 30 s)")
         print(f"PSS per student (server, kernel template, kernel) p50 {pss:.0f} MiB, with the server template's "
               f"share {pss + template_share:.0f} MiB (target 100 MiB)")
+    print("CPU seconds during the start, by part: " + ", ".join(f"{part} {seconds:.1f}" for part, seconds in cpu.items()))
     print(f"student {count + 1}: HTTP {page.status_code}, page heading {heading!r}, {beyond_processes} processes")
 
 

@@ -40,9 +40,12 @@ students_python() {
         return 1
     fi
     local students="$VENV/students"
-    if [ ! -x "$students/bin/python" ]; then
+    local site="lib/python$version/site-packages"
+    # Made again when its site-packages is not .venv's own: a .venv reached through a symlink (a
+    # git worktree's) made links to a folder that may since have gone.
+    if [ ! -x "$students/bin/python" ] || [ "$(readlink -f "$students/$site")" != "$(readlink -f "$VENV/$site")" ]; then
+        rm -rf "${students:?}"
         "$system" -m venv --without-pip "$students" >&2
-        local site="lib/python$version/site-packages"
         rm -rf "${students:?}/$site"
         ln -s "$VENV/$site" "$students/$site"
         for shared in share etc; do
@@ -55,7 +58,7 @@ students_python() {
     local script first
     for script in "$VENV"/bin/*; do
         [ -f "$script" ] && [ ! -L "$script" ] || continue
-        first="$(head -c 200 "$script" | head -n 1)"
+        first="$(head -c 200 "$script" | tr -d '\000' | head -n 1)"
         if [ "$first" = "#!$VENV/bin/python" ] || [ "$first" = "#!$VENV/bin/python3" ]; then
             { echo "#!$students/bin/python"; tail -n +2 "$script"; } > "$students/bin/.$(basename "$script").new"
             chmod 755 "$students/bin/.$(basename "$script").new"
