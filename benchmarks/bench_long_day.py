@@ -8,7 +8,8 @@ lets each student teach as a person does, until the simulated day is over:
   kernel; the last lesson's kernel is shut down, as closing a notebook with "shut down kernel" does);
 - in a lesson, the student runs **an episode** (a cell: one teaching episode of ``sim-point`` with
   guidance, each arrow given after 3 to 8 s, its progress recorded in the class folder), then
-  reads for 20 to 90 s, then the next episode;
+  reads for 20 to 90 s, then the next episode; the lesson's notebook has ``CELLS_PER_LESSON`` such
+  cells, run in turn and then again, each run sent with its cell's id as JupyterLab sends it;
 - every 5 simulated minutes the machine is sampled: each student's PSS (server, kernel template,
   kernels), the processes and open file descriptors of the whole class (the hub, its proxy, the
   server template, every student's processes), the hub's own resident memory.
@@ -19,9 +20,9 @@ simulated minute is the same; the machine does it K times as often). The figures
 verdict against issue 46's targets:
 
 - memory per student flat within 10 % after the first ten simulated minutes (each sample's median
-  against the sample at minute 10, and the largest single student's change; and, since a lesson's
-  kernel grows with the widgets of every episode run in it, the samples at the same minute of
-  every lesson against the first lesson's);
+  against the sample at minute 10, and the largest single student's change; and the samples at the
+  same minute of every lesson against the first lesson's: until 2026-12-05 a lesson's kernel kept
+  every episode run in it open, about 1.4 MiB each);
 - no growth of processes or file descriptors (the last sample against the one at minute 10);
 - no error in any log: the hub's log (hub, proxy, every server) has no error line and no traceback,
   and no execution failed.
@@ -49,6 +50,9 @@ import psutil
 
 ROOT = Path(__file__).resolve().parents[1]
 LESSON_MIN = 30.0
+#: Episode cells in a lesson's notebook: the student runs them in turn, then each again (JupyterLab
+#: sends each run with its cell's id, so a cell run again retires its last episode: cells.py).
+CELLS_PER_LESSON = 4
 SAMPLE_EVERY_MIN = 5.0
 
 #: One episode, a cell the student runs: each arrow after a person's pause (scaled), progress recorded.
@@ -156,19 +160,22 @@ def main() -> None:
                 pace = random.Random(number)
                 # The class does not start in lockstep: a few seconds (scaled) apart.
                 time.sleep(pace.uniform(0, 30) / args.compression)
-                kernel, lesson = None, -1
+                kernel, lesson, run = None, -1, 0
                 while simulated_min() < args.minutes:
                     if int(simulated_min() // LESSON_MIN) != lesson:
                         lesson = int(simulated_min() // LESSON_MIN)
                         if kernel is not None:
                             hub.server_api(name, "DELETE", f"/api/kernels/{kernel}")
-                        kernel = None
+                        kernel, run = None, 0
                         with lock:
                             lessons[0] += 1
                     try:
+                        # A lesson's notebook has CELLS_PER_LESSON episode cells, run in turn and then again.
                         result = hub.run_in_kernel(name, EPISODE.format(seed=pace.randrange(10**6),
                                                                         compression=args.compression),
-                                                   timeout=600, kernel_id=kernel)
+                                                   timeout=600, kernel_id=kernel,
+                                                   cell=f"lesson-{lesson}-episode-{run % CELLS_PER_LESSON}")
+                        run += 1
                     except Exception as error:  # counted: a lost kernel is an error of the day
                         with lock:
                             errors.append(f"{name}: {type(error).__name__}: {error}")

@@ -37,6 +37,7 @@ from mt_widgets.core.drawing import SpaceDrawing
 from mt_widgets.core.guidance import guidance_parts
 from mt_widgets.core.validation import as_bool, as_count, as_positive
 
+from .cells import VIEWS
 from .episode_controller import PHASES, EpisodeController
 from .guidance import GuidancePanel, explain_difference
 from .looks import plain, shared_layout
@@ -245,6 +246,12 @@ class EpisodeWidget(VBox):
             self.restore(demonstrations)
         elif self.episode.demonstrations:  # an episode resumed in core: show what it holds
             self.controller.resume()
+        # A cell run again (or deleted) retires this view once nothing of the user's reaches it (cells.py).
+        VIEWS.own(self)
+
+    def _repr_mimebundle_(self, **kwargs):
+        VIEWS.shown(self)
+        return super()._repr_mimebundle_(**kwargs)
 
     # -- the two renderers ------------------------------------------------------------------------------
     def _planar_stage(self, theme, fps, show_outcome, view_args) -> list:

@@ -351,9 +351,11 @@ class ClassHub:
             raise RuntimeError(f"{method} /user/{name}{path}: {response.status_code} {response.text[:800]}")
         return response.json() if response.content else None
 
-    def run_in_kernel(self, name: str, code: str, timeout: float = 180, kernel_id: str | None = None) -> dict:
+    def run_in_kernel(self, name: str, code: str, timeout: float = 180, kernel_id: str | None = None,
+                      cell: str | None = None) -> dict:
         """Runs ``code`` in a new kernel of ``name``'s server (or in their kernel ``kernel_id``) and
-        returns its output and timings.
+        returns its output and timings. ``cell``: the notebook cell's id, sent as JupyterLab does
+        (``cellId``): running one cell again retires the episodes it made (mt_widgets/widgets/cells.py).
 
         Returns:
             {"stdout": text printed, "error": the error's name and value or None,
@@ -372,12 +374,12 @@ class ClassHub:
         stdout, error, replied, idle, died = [], None, False, False, False
         session, deadline = uuid.uuid4().hex, time.monotonic() + timeout
 
-        def request(msg_type: str, content: dict) -> str:
+        def request(msg_type: str, content: dict, metadata: dict | None = None) -> str:
             msg_id = uuid.uuid4().hex
             connection.send_binary(_encode_v1("shell", {
                 "header": {"msg_id": msg_id, "username": name, "session": session,
                            "msg_type": msg_type, "version": "5.3", "date": ""},
-                "parent_header": {}, "metadata": {}, "content": content}))
+                "parent_header": {}, "metadata": metadata or {}, "content": content}))
             return msg_id
 
         try:
@@ -395,7 +397,8 @@ class ClassHub:
                     break
             msg_id = request("execute_request", {"code": code, "silent": False, "store_history": False,
                                                  "user_expressions": {}, "allow_stdin": False,
-                                                 "stop_on_error": True})
+                                                 "stop_on_error": True},
+                             metadata={"cellId": cell} if cell is not None else {})
             while not (replied and idle) and not died:
                 if time.monotonic() > deadline:
                     raise TimeoutError(f"{name}'s kernel did not finish within {timeout} s")
