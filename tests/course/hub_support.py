@@ -464,6 +464,7 @@ class ClassHub:
             shutil.rmtree(self.root, ignore_errors=True)
             shutil.rmtree(self.runtime, ignore_errors=True)
             self._lock.close()
+            _remove_instructors_group_unless_used()
 
 
 #: The GECOS field the class hub's config gives the accounts it makes (``class_hub.MARKER`` in
@@ -542,7 +543,17 @@ def _remove_hub_accounts(logins, cgroups) -> None:
         done = subprocess.run(["userdel", login], capture_output=True, text=True, timeout=60)
         if done.returncode not in (0, 6):  # 6: the account is already gone
             raise RuntimeError(f"userdel {login} failed ({done.returncode}): {done.stderr.strip()}")
-    subprocess.run(["groupdel", TEST_INSTRUCTORS], capture_output=True, timeout=60)
+
+
+def _remove_instructors_group_unless_used() -> None:
+    """Removes the test hubs' instructors' group, unless another test hub still runs: they share it
+    (the group of a hub stopped while another started went from under the other's config)."""
+    with open(HUB_LOCK, "a") as lock:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return  # the last hub to stop removes it
+        subprocess.run(["groupdel", TEST_INSTRUCTORS], capture_output=True, timeout=60)
 
 
 def remove_leftovers() -> list[str]:
@@ -564,6 +575,7 @@ def remove_leftovers() -> list[str]:
             base = Path("/sys/fs/cgroup", controller, _own_cgroup(controller).lstrip("/"))
             cgroups.update(group.name for group in base.glob(f"{TEST_PREFIX}hub-*") if group.is_dir())
         _remove_hub_accounts(logins, sorted(cgroups))
+        subprocess.run(["groupdel", TEST_INSTRUCTORS], capture_output=True, timeout=60)
         for folder in Path("/tmp").glob(f"{TEST_PREFIX}hub-*"):
             if folder.is_dir():
                 shutil.rmtree(folder, ignore_errors=True)
