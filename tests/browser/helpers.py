@@ -187,8 +187,9 @@ def demo_at(browser, voila_server, width: int, height: int):
         context.close()
 
 
-def teach_by_numbers(page, episode, guidance: bool) -> None:
-    """Types each optimal arrow, sets and confirms it (and moves on after guidance)."""
+def teach_by_numbers(page, episode, guidance: bool, done: str = "Your teaching error") -> None:
+    """Types each optimal arrow, sets and confirms it (and moves on after guidance), then waits for the
+    text ``done`` (the demo's result; an ``EpisodeWidget``'s own says where the robot's hand ended)."""
     n = len(episode.query_states)
     for index, action in enumerate(episode.optimal):
         page.get_by_text(f"State {index + 1} of {n}").first.wait_for(timeout=10_000)
@@ -205,7 +206,7 @@ def teach_by_numbers(page, episode, guidance: bool) -> None:
         page.get_by_role("button", name="Confirm").click()
         if guidance:
             page.get_by_role("button", name="Finish and watch" if index == n - 1 else "Next state").click()
-    page.get_by_text("Your teaching error").wait_for(timeout=20_000)
+    page.get_by_text(done).first.wait_for(timeout=20_000)
 
 
 def open_demo(page, voila_server, console):
