@@ -16,7 +16,9 @@ has drawn what was sent to it) when
 2. after the cell that ran, nothing of the user's reaches it: no name of the user's namespace, nor
    anything reachable from one (lists, dicts, objects' attributes, functions' closures), nor a widget
    still open (a box of the user's that holds it, a button whose callback names it). The search is
-   bounded (``SEARCH_LIMIT`` objects): beyond it, the view is kept.
+   bounded (``SEARCH_LIMIT`` objects): beyond it, the view is kept. A view found kept is searched for
+   again after 1, 2, 4, ... cell runs (at most ``MAX_SEARCH_EVERY``): a search costs tens of
+   milliseconds, and a notebook that keeps a list of its episodes should not pay it at every cell.
 
 What IPython's output cache holds (``Out``, ``_5``, ``_``) does not count, since it would hold every
 episode shown as a cell's last expression for a thousand cells: a retired view leaves the cache too.
@@ -40,6 +42,8 @@ from .tree import widget_tree
 
 #: Objects the reachability search visits at most; beyond it every view in question is kept.
 SEARCH_LIMIT = 200_000
+#: At most how many cell runs apart a view the user keeps is searched for again.
+MAX_SEARCH_EVERY = 32
 #: The output cache's numbered names (``_5``); IPython's other names are found by their hidden value.
 _CACHED_RESULT = re.compile(r"_\d+")
 #: Objects never looked into: they hold nothing of the user's and reach everything (a module's names).
@@ -60,6 +64,9 @@ class _Views:
         self._running: str | None = None
         #: Views whose cells are all gone, waiting for nothing of the user's to reach them.
         self._waiting: weakref.WeakSet = weakref.WeakSet()
+        # A view the user keeps is searched for again after 1, 2, 4, ... 32 cell runs, not after every
+        # one: the search costs tens of milliseconds with a few episodes open.
+        self._search_every, self._runs_to_search = 1, 0
 
     # -- what the views say ----------------------------------------------------------------------
     def own(self, view: Widget) -> None:
@@ -104,15 +111,22 @@ class _Views:
                 cells -= gone
                 if not cells:
                     self._waiting.add(view)
+                    self._search_every, self._runs_to_search = 1, 0
 
     def _post_run_cell(self, _result) -> None:
         self._running = None
         waiting = [view for view in self._waiting if not self._cells.get(view) and view.comm is not None]
         if not waiting:
             return
+        if self._runs_to_search > 0:
+            self._runs_to_search -= 1
+            return
         reached = _reached(self._shell, waiting)
+        if reached is None or reached:  # still kept (or too much to search): look again later
+            self._search_every = min(2 * self._search_every, MAX_SEARCH_EVERY)
+            self._runs_to_search = self._search_every - 1
         if reached is None:
-            return  # too much to search: every view stays
+            return
         for view in waiting:
             if id(view) not in reached:
                 self._waiting.discard(view)
