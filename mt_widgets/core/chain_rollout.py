@@ -705,6 +705,11 @@ def rollout(model, scene, control, thetas, start, dt, n_steps, record_every, out
 
     A planar pair (``planar_pair``) takes the fast path with the same arithmetic in scalars.
     """
+    if control.kinematic and control.velocity_features:
+        # A kinematic arm's state is q alone: the tool velocity its features would read is the last
+        # step's command, not a measured velocity, so no skill can be taught through it.
+        raise ValueError("control: velocity_features=True needs a dynamic arm (its state carries joint speeds); "
+                         "got kinematic=True, whose state is the joint angles only")
     p = planar_pair(model, scene, control, thetas.shape[2])
     parallel = thetas.shape[0] >= PARALLEL_FROM
     if p.shape[0]:

@@ -291,3 +291,17 @@ def test_a_chain_that_is_not_a_planar_pair_takes_the_general_path():
     assert chain_rollout.planar_pair(chain.model, table, control, 5).size == 0   # a table to check
     velocity = control._replace(force_control=False, velocity_features=False)
     assert chain_rollout.planar_pair(chain.model, scene, velocity, 3).size == 0   # a velocity-taught arm
+
+
+def test_a_kinematic_arm_with_velocity_features_is_refused_by_name():
+    from mt_widgets.core import chain_rollout
+
+    chain = SerialChain.from_description(tilted_pair())
+    scene = chain_rollout.ChainScene(-np.inf, 4, np.empty((0, 2), dtype=np.int64), 0.0, 0.0, False)
+    task = np.eye(3)[[0, 2]]
+    control = chain_rollout.ChainControl(1.0, 0.01, 0.05, 0.0, np.zeros(2), True, task, False, False, True)
+    thetas, start = np.zeros((1, 2, 5)), np.zeros(2)
+    out = tuple(np.empty(shape) for shape in ((1, 3, 2), (1, 3, 2), (1, 3, 2), (1, 3, 2))) + tuple(
+        np.empty(1, dtype=np.int64) for _ in range(3))
+    with pytest.raises(ValueError, match=r"control: velocity_features=True needs a dynamic arm .* got kinematic=True"):
+        chain_rollout.rollout(chain.model, scene, control, thetas, start, 0.01, 2, 1, out)
