@@ -28,8 +28,8 @@ MIN_VALID_SHARE = 0.1
 
 def arm_skills(description: dict, name: str, home, teaching_box, part, fixture, *, kinematic: bool = False,
                scene_box=None, conveyor: Conveyor | None = None, lift: float = 0.1, link_radius: float = 0.02,
-               max_condition: float = 60.0, min_singular_value: float = 0.05, label: str | None = None
-               ) -> dict[str, Skill]:
+               max_condition: float = 60.0, min_singular_value: float = 0.05, label: str | None = None,
+               query_margin: float = 0.0) -> dict[str, Skill]:
     """An arm's ``<name>-reach`` and ``<name>-place`` skills (and ``<name>-conveyor`` with a conveyor).
 
     Args:
@@ -49,6 +49,9 @@ def arm_skills(description: dict, name: str, home, teaching_box, part, fixture, 
         min_singular_value: a query state's tool Jacobian must have all singular values above this
             (m/rad), away from stretched and folded poses; 0.05 suits a table-top arm (the SO-101's),
             a UR5-sized one takes 0.15.
+        query_margin: how far (rad, or m for a sliding joint) inside each joint's URDF range a query
+            state's joints stay: a real arm's controller may allow less than its URDF says (0: the
+            URDF's range; the shipped SO-101 keeps 0.1 rad).
 
     Raises:
         ValueError: naming the argument: a home pose outside a joint's range, a part, fixture or
@@ -82,7 +85,8 @@ def arm_skills(description: dict, name: str, home, teaching_box, part, fixture, 
         scene_box = Cuboid(*zip(points.min(axis=0) - 0.1, points.max(axis=0) + 0.1))
     elif not isinstance(scene_box, Cuboid):
         scene_box = _box("scene_box", scene_box)
-    settings = dict(robot=name, kinematic=kinematic, link_radius=link_radius, min_singular_value=min_singular_value)
+    settings = dict(robot=name, kinematic=kinematic, link_radius=link_radius, min_singular_value=min_singular_value,
+                    query_margin=query_margin)
     table = ChainPlant(chain, home, box, scene_box, **settings)
     line = None if conveyor is None else ChainPlant(chain, home, box, scene_box, conveyor=conveyor, **settings)
     for what, point in (("part", part), ("fixture", fixture)):

@@ -20,6 +20,7 @@ Two forms::
     link_radius = 0.02                    # optional: the links' capsule radius (m)
     max_condition = 60.0                  # optional: the query-state sampler's threshold
     min_singular_value = 0.05             # optional: query states away from singular poses (m/rad)
+    query_margin = 0.1                    # optional: query states this far inside each joint's range (rad/m)
     scene_box = [[...], [...], [...]]     # optional: what the views frame (m)
     [arm.conveyor]                        # optional: a belt, for "<name>-conveyor"
     origin = [0.3, -0.2, 0.08]
@@ -48,7 +49,8 @@ from mt_widgets.core.chain_plant import Conveyor
 from mt_widgets.robot_models.urdf import URDFError, parse_urdf
 
 _URDF_FIELDS = ("urdf", "urdf_text", "tool", "name", "label", "home", "teaching_box", "part", "fixture", "kinematic",
-                "locked", "lift", "link_radius", "max_condition", "min_singular_value", "scene_box", "conveyor")
+                "locked", "lift", "link_radius", "max_condition", "min_singular_value", "query_margin", "scene_box",
+                "conveyor")
 _CONVEYOR_FIELDS = ("origin", "direction", "speed", "phase_range")
 
 
@@ -95,6 +97,8 @@ def resolve_protocol_arm(raw: dict, check, source: str, skills: dict) -> tuple[s
     numbers = {key: _numbers(check, table, key) for key in ("home", "teaching_box", "part", "fixture", "scene_box")}
     options = {key: check.get(table, ("arm", key), "number", positive=True)
                for key in ("lift", "link_radius", "max_condition", "min_singular_value") if key in table}
+    if "query_margin" in table:
+        options["query_margin"] = check.get(table, ("arm", "query_margin"), "number", minimum=0.0)
     kinematic = table.get("kinematic", False)
     if not isinstance(kinematic, bool):
         check.fail(("arm", "kinematic"), f"expected true or false, got {kinematic!r}")

@@ -152,6 +152,8 @@ FLOATING = """<robot name="drone"><link name="world"/><link name="body"/>
      r"positive mass"),
     ({"name": "so101"}, None, "arm.name", r"expected a name whose skills are not taken, got 'so101' \('so101-reach'"),
     ({"tool": None, "speed": 3}, None, "arm.speed", r"unknown field"),
+    ({"query_margin": -0.1}, None, "arm.query_margin", r"expected a number >= 0\.0, got -0\.1"),
+    ({"query_margin": 2.0}, None, "arm.query_margin", r"query_margin: expected less than half of every joint's range"),
 ])
 def test_a_urdf_arm_the_protocol_cannot_build_is_refused_naming_the_file_the_field_and_what_was_expected(
         lab, change, urdf_text, field, message):
@@ -165,3 +167,14 @@ def test_a_urdf_arm_the_protocol_cannot_build_is_refused_naming_the_file_the_fie
     with pytest.raises(ProtocolError, match=message) as caught:
         load_protocol(lab)
     assert caught.value.field == field and caught.value.source == str(lab) and caught.value.line is not None
+
+
+def test_a_urdf_arms_query_margin_keeps_every_query_state_that_far_inside_the_joints_ranges(lab):
+    lab.write_text(arm_protocol({**ARM, "query_margin": 0.25}), encoding="utf-8")
+    skill = load_protocol(lab).skills["lab-reach"]
+    plant = skill.plant
+    assert plant.query_margin == 0.25
+    q = np.concatenate([skill.query_states(seed=seed)[:, :plant.n_joints] for seed in range(4)])
+    assert np.all(q >= plant.chain.lower + 0.25 - 1e-12) and np.all(q <= plant.chain.upper - 0.25 + 1e-12)
+    lab.write_text(arm_protocol(ARM), encoding="utf-8")
+    assert load_protocol(lab).skills["lab-reach"].plant.query_margin == 0.0   # the URDF's ranges without one
