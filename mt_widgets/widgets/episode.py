@@ -418,10 +418,11 @@ class EpisodeWidget(VBox):
         return self.controller.finish()
 
     # -- internals -----------------------------------------------------------------------------------------
-    def _sync(self) -> None:
-        """The traits, from the controller."""
+    def _sync(self, index: bool = True) -> None:
+        """The traits, from the controller (``index``: the state shown too)."""
         controller = self.controller
-        self.state_index = controller.state_index
+        if index:
+            self.state_index = controller.state_index
         demonstrations = controller.demonstrations
         if demonstrations != self.demonstrations:
             self.demonstrations = demonstrations
@@ -430,7 +431,9 @@ class EpisodeWidget(VBox):
     def _on_event(self, event: str) -> None:
         """What the controller says (episode_controller.EVENTS), shown; the renderer drew its part first."""
         if event == "recorded":
-            self._sync()
+            # With guidance the controller pauses at this state next, and "guidance" syncs the index:
+            # synced here, it would show the next state for a moment and come back.
+            self._sync(index=not self.controller.pause)
         elif event == "guidance":
             self._show_guidance()
         elif event == "state":

@@ -247,3 +247,17 @@ def test_the_planar_and_the_3d_episode_refuse_what_they_cannot_show_alike():
         with pytest.raises(ValueError, match=r"^duration: expected None when a TeachingEpisode is shown"):
             widget(shown, duration=2.0)
         assert widget(shown).episode is shown
+
+
+@pytest.mark.parametrize("skill, guidance", [("sim-point", True), ("sim-point", False), ("ur5-reach", True)])
+def test_the_state_index_moves_only_forward_through_an_episode(skill, guidance):
+    episode = EpisodeWidget(skill, seed=0, guidance=guidance)
+    seen = [episode.state_index]
+    episode.observe(lambda change: seen.append(change["new"]), "state_index")
+    for optimal in episode.optimal:
+        episode.demonstrate(optimal)
+        if guidance:
+            assert episode.state_index == seen[-1] == len(episode.demonstrations) - 1   # the guided state
+            episode.next()
+    n = len(episode.query_states)
+    assert seen == list(range(n + 1)), f"the state shown went {seen}, not 0, 1, ..., {n}"
