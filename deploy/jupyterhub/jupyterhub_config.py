@@ -151,6 +151,12 @@ logging.getLogger("tornado.application").addFilter(class_hub.DiskFullLog(STATE))
 # (docs/guide/faults.md). JupyterHub's default stops every server with the hub. To end a class's
 # servers, stop them first (the admin page's "Stop All", or the idle culler).
 c.JupyterHub.cleanup_servers = False
+# The proxy stays up too (as it does when the hub is killed): the students' pages keep their kernels'
+# websockets through it while the hub is down, and the restarted hub adopts it by its pid file. With
+# JupyterHub's default the proxy stopped with the hub, and every student's JupyterLab lost its kernel
+# and said "Your server ... is not running" until the hub was back (tests/course/test_hub.py). To end
+# the class server for good, stop the proxy after the hub (its pid is in proxy.pid, deploy/jupyterhub/README.md).
+c.JupyterHub.cleanup_proxy = False
 
 # -- who comes in ----------------------------------------------------------------------------------
 c.JupyterHub.authenticator_class = RosterAuthenticator

@@ -51,11 +51,13 @@ from tests.browser.helpers import drag, ee_pixel, reference_episode
 from .course_support import source_notebook
 from .hub_support import (
     EPISODE_CODE,
+    HUB_ACCOUNT,
     TEST_INSTRUCTORS,
     TEST_PREFIX,
     ClassHub,
     LoginRefused,
-    remove_leftovers,
+    other_test_hub_running,
+    remove_leftovers_unless_busy,
     warm_numba_template,
 )
 
@@ -143,8 +145,16 @@ def _files(folder: Path) -> dict[str, float]:
     return {str(p.relative_to(folder)): p.stat().st_mtime for p in folder.rglob("*")}
 
 
-def _test_accounts() -> list[str]:
-    return sorted(user.pw_name for user in pwd.getpwall() if user.pw_name.startswith(TEST_PREFIX))
+def _test_accounts(logins=None) -> list[str]:
+    """The accounts with the test prefix (of ``logins`` only, when given)."""
+    return sorted(user.pw_name for user in pwd.getpwall()
+                  if user.pw_name.startswith(TEST_PREFIX) and (logins is None or user.pw_name in logins))
+
+
+def _stray_accounts() -> list[str]:
+    """Accounts with the test prefix that no hub made (a test hub's own are another run's, not strays)."""
+    return sorted(user.pw_name for user in pwd.getpwall()
+                  if user.pw_name.startswith(TEST_PREFIX) and user.pw_gecos != HUB_ACCOUNT)
 
 
 @pytest.fixture(scope="module")
@@ -155,10 +165,12 @@ def hub(tmp_path_factory):
     installed_before = _files(REPO / "mt_widgets")
     # A run killed from outside (a CI timeout) cannot clean up; its accounts would make the roster's
     # logins clash with existing users, so they go first, and the run says so.
-    left = remove_leftovers()
+    left = remove_leftovers_unless_busy()
     if left:
         warnings.warn(f"removed {len(left)} test accounts an earlier, killed run left: {left[:3]}...", stacklevel=2)
-    assert _test_accounts() == [], "test accounts that are not the hub's own use the test prefix"
+    assert _stray_accounts() == [], "test accounts that are not the hub's own use the test prefix"
+    roster = [*STUDENTS, GUESSED, RUNAWAY, LEAVER, INSTRUCTOR, LATE]
+    assert _test_accounts(roster) == [], "this class's logins exist already (another run of this module?)"
     class_hub = ClassHub([*STUDENTS, GUESSED, RUNAWAY, LEAVER], [INSTRUCTOR], numba_template=template,
                          mem_limit="800M")
     class_hub.installed_before, class_hub.draw_start = installed_before, draw_start
@@ -170,9 +182,11 @@ def hub(tmp_path_factory):
         # The hub's log (hub, proxy, every student's server) outlives the temporary folder.
         shutil.copy(class_hub.kept_log, artifact_path("test_hub", "jupyterhub").replace(".png", ".log"))
         class_hub.kept_log.unlink()
-    # Nothing of the class is left on the machine.
-    assert _test_accounts() == []
-    assert TEST_INSTRUCTORS not in {group.gr_name for group in grp.getgrall()}
+    # Nothing of the class is left on the machine (the instructors' group is shared with any other
+    # test hub still running, which removes it when it stops).
+    assert _test_accounts(roster) == []
+    if not other_test_hub_running():
+        assert TEST_INSTRUCTORS not in {group.gr_name for group in grp.getgrall()}
     assert not list(Path("/sys/fs/cgroup/memory").rglob(class_hub.cgroup))
     assert not class_hub.root.exists()
 
@@ -217,7 +231,7 @@ def test_a_full_class_server_and_a_full_disk_under_the_hubs_database_are_refused
     students = ["mtt-rs0", "mtt-rs1"]
     late, newcomer = "mtt-rs2", "mtt-rs3"
     try:
-        left = remove_leftovers()
+        left = remove_leftovers_unless_busy()
     except RuntimeError:  # another test hub runs on this machine: its accounts are not leftovers
         left = []
     if left:
@@ -588,8 +602,41 @@ def _kill_proxy(hub) -> float:
     return hub.wait_until_answering(started)
 
 
+#: A cell a student runs in JupyterLab again and again: which run it is and in which kernel process.
+COUNTED_RUN = "import os\nruns = globals().get('runs', 0) + 1\nprint(f'run {runs} in {os.getpid()}')"
+
+
+def _open_lab(hub, browser, name: str, notebook: str):
+    """``name`` logs in with their password and opens ``notebook`` in JupyterLab: (context, page)."""
+    context, page = local_page(browser, 1200, 900)
+    page.goto(f"{hub.url}/hub/login", timeout=60_000)
+    page.fill("input[name=username]", name)
+    page.fill("input[name=password]", password_of(name))
+    page.click("input[type=submit], button[type=submit]")
+    page.wait_for_url("**/user/**", timeout=120_000)
+    page.goto(hub.user_url(name, f"/lab/tree/{notebook}"), timeout=120_000)
+    page.wait_for_function("() => document.body.innerText.includes('Idle')", timeout=120_000)
+    return context, page
+
+
+def _run_counted(page, run: int, timeout_ms: float, artifacts) -> str:
+    """Runs the page's first cell (``COUNTED_RUN``) and waits for its ``run``-th output; the output."""
+    page.locator(".jp-Notebook .jp-Cell").first.locator(".jp-InputArea-editor").click()
+    page.keyboard.press("Control+Enter")
+    output = page.locator(".jp-Notebook .jp-Cell").first.locator(".jp-OutputArea")
+    try:
+        page.wait_for_function("(run) => [...document.querySelectorAll('.jp-OutputArea')].some("
+                               "o => o.innerText.includes(`run ${run} in`))", arg=run, timeout=timeout_ms)
+    except Exception:
+        page.screenshot(path=artifacts(f"student-page-run-{run}-not-done"))
+        raise AssertionError(f"the student's cell did not give its run {run} within {timeout_ms / 1000:.0f} s; "
+                             f"the page shows: {page.locator('body').inner_text()[-600:]!r}") from None
+    return output.inner_text()
+
+
 @pytest.mark.timeout(900)
-def test_thirty_students_mid_episode_keep_server_and_kernel_across_a_hub_restart_a_hub_kill_and_a_proxy_restart(hub):
+def test_thirty_students_mid_episode_keep_server_and_kernel_across_a_hub_restart_a_hub_kill_and_a_proxy_restart(
+        hub, browser, artifacts):
     """Issue 46: thirty students, each mid-episode (a kernel holding the episode), through three faults
     in turn: the hub stopped the documented way (SIGTERM) and started again, the hub killed (SIGKILL)
     and started again, the proxy killed alone. After each, every student's server is the same process
@@ -600,7 +647,12 @@ def test_thirty_students_mid_episode_keep_server_and_kernel_across_a_hub_restart
     it). After the class ends no process of any student is left, zombie or not.
 
     The module's class of thirty is reused (its servers are running after the class test; alone, this
-    starts them), so the three faults cost about a minute on two cores."""
+    starts them), so the three faults cost about a minute on two cores.
+
+    Meanwhile one of them has a notebook open in JupyterLab in Chromium: they run a cell while the hub
+    is down (it answers: the proxy and their server are up, and their login is their server's to
+    check), and after each fault the same page, never reloaded, runs it again in the same kernel
+    (after the proxy's restart JupyterLab reconnects its kernel's websocket by itself)."""
     users = {user["name"]: user for user in hub.api("GET", "/users")}
     if set(STUDENTS) - set(users):
         hub.create_users(sorted(set(STUDENTS) - set(users)))
@@ -619,27 +671,36 @@ def test_thirty_students_mid_episode_keep_server_and_kernel_across_a_hub_restart
         answer = hub.run_in_kernel(name, NEXT_DEMONSTRATION, timeout=30, kernel_id=kernels[name])
         return answer, time.monotonic() - back
 
-    faults = {"hub stopped (SIGTERM)": lambda: hub.restart(signal.SIGTERM),
+    watcher = STUDENTS[2]
+    _page(hub.homes / watcher, "restart.ipynb", COUNTED_RUN, watcher)
+    context, page = _open_lab(hub, browser, watcher, "restart.ipynb")
+    page_runs = [_run_counted(page, 1, 120_000, artifacts)]
+
+    def stopped_and_tried(signum: int) -> float:
+        hub.end(signum)
+        # While the hub is down, the student runs their cell: the page answers as before.
+        page_runs.append(_run_counted(page, len(page_runs) + 1, 60_000, artifacts))
+        page.screenshot(path=artifacts("student-page-hub-down"))
+        return hub.start_again()
+
+    faults = {"hub stopped (SIGTERM)": lambda: stopped_and_tried(signal.SIGTERM),
               "hub killed (SIGKILL)": lambda: hub.restart(signal.SIGKILL),
               "proxy killed": lambda: _kill_proxy(hub)}
     figures = {}
-    for fault, act in faults.items():
-        before, proxy = _hub_tree(hub), _proxy_pid(hub)
-        down_s = act()
-        back = time.monotonic()
-        with ThreadPoolExecutor(len(STUDENTS)) as pool:
-            answers = dict(zip(STUDENTS, pool.map(next_demonstration, STUDENTS, [back] * len(STUDENTS))))
-        for name, (answer, after_s) in answers.items():
-            assert answer == {**answer, "stdout": f"{name}\n", "error": None, "died": False}, (fault, name, answer)
-            assert after_s < 10, f"{fault}: {name}'s next demonstration came {after_s:.1f} s after the hub was back"
-        assert {name: hub.api("GET", f"/users/{name}")["servers"][""]["state"]["pid"] for name in STUDENTS} == servers
-        # What the old hub started and nobody adopted: an orphan (members' servers and kernels, the
-        # instructor's included, and an adopted proxy are meant to outlive it).
-        members_now = {p.pid for p in _class_processes(hub, [*hub.students, *hub.admins])}
-        adopted = _hub_tree(hub) | members_now | ({proxy} if _proxy_pid(hub) == proxy else set())
-        orphans = [p for p in map(_alive, before - adopted) if p is not None]
-        assert orphans == [], f"{fault} left {[(p.pid, p.cmdline()) for p in orphans]}"
-        figures[fault] = (down_s, max(after_s for _, after_s in answers.values()))
+    try:
+        for fault, act in faults.items():
+            figures[fault] = _through_fault(hub, fault, act, next_demonstration, servers)
+            started = time.monotonic()
+            page_runs.append(_run_counted(page, len(page_runs) + 1, 60_000, artifacts))
+            figures[fault] += (time.monotonic() - started,)
+            page.screenshot(path=artifacts(f"student-page-after-{'-'.join(fault.split()[:2])}"))
+        # A class's JupyterLab asks no student about Jupyter's news (student-config/labconfig): a popup
+        # over a phone's screen, and a request from every student's page to jupyter.org.
+        assert "Jupyter news" not in page.locator("body").inner_text()
+    finally:
+        context.close()
+    kernel_pids = {line.split(" in ")[-1].strip() for line in page_runs}
+    assert len(kernel_pids) == 1, f"the student's page ran its cell in more than one kernel: {page_runs}"
 
     # The class ends: every server stopped through the hub; nothing of any student stays behind.
     with ThreadPoolExecutor(8) as pool:
@@ -650,8 +711,30 @@ def test_thirty_students_mid_episode_keep_server_and_kernel_across_a_hub_restart
     left = [(p.pid, p.status()) for p in _class_processes(hub)]
     assert left == [], f"processes (zombies included) of students after the class ended: {left}"
     print("\nthirty mid-episode: " + "; ".join(
-        f"{fault}: hub back in {down_s:.1f} s, every next demonstration done {slowest_s:.1f} s after"
-        for fault, (down_s, slowest_s) in figures.items()))
+        f"{fault}: hub back in {down_s:.1f} s, every next demonstration done {slowest_s:.1f} s after, the "
+        f"student's JupyterLab page ran its cell {page_s:.1f} s after"
+        for fault, (down_s, slowest_s, page_s) in figures.items()))
+
+
+def _through_fault(hub, fault: str, act, next_demonstration, servers) -> tuple[float, float]:
+    """One fault (``act``) with thirty students mid-episode: (seconds until the hub answered again,
+    seconds after that until every next demonstration was done)."""
+    before, proxy = _hub_tree(hub), _proxy_pid(hub)
+    down_s = act()
+    back = time.monotonic()
+    with ThreadPoolExecutor(len(STUDENTS)) as pool:
+        answers = dict(zip(STUDENTS, pool.map(next_demonstration, STUDENTS, [back] * len(STUDENTS))))
+    for name, (answer, after_s) in answers.items():
+        assert answer == {**answer, "stdout": f"{name}\n", "error": None, "died": False}, (fault, name, answer)
+        assert after_s < 10, f"{fault}: {name}'s next demonstration came {after_s:.1f} s after the hub was back"
+    assert {name: hub.api("GET", f"/users/{name}")["servers"][""]["state"]["pid"] for name in STUDENTS} == servers
+    # What the old hub started and nobody adopted: an orphan (members' servers and kernels, the
+    # instructor's included, and an adopted proxy are meant to outlive it).
+    members_now = {p.pid for p in _class_processes(hub, [*hub.students, *hub.admins])}
+    adopted = _hub_tree(hub) | members_now | ({proxy} if _proxy_pid(hub) == proxy else set())
+    orphans = [p for p in map(_alive, before - adopted) if p is not None]
+    assert orphans == [], f"{fault} left {[(p.pid, p.cmdline()) for p in orphans]}"
+    return down_s, max(after_s for _, after_s in answers.values())
 
 
 def _alive(pid: int) -> psutil.Process | None:

@@ -31,7 +31,7 @@ import psutil
 import pytest
 import requests
 
-from .hub_support import REPO, TEST_INSTRUCTORS, TEST_PREFIX, ClassHub, remove_leftovers
+from .hub_support import REPO, TEST_INSTRUCTORS, TEST_PREFIX, ClassHub, remove_leftovers_unless_busy
 from .lti_platform import INSTRUCTOR, LTIPlatform, Member, new_key
 
 sys.path.insert(0, str(REPO / "deploy" / "jupyterhub"))
@@ -51,7 +51,7 @@ TEACHER, LATE = "sub-dana-9", "sub-eve-4"
 @pytest.fixture(scope="module")
 def course():
     """The platform with the course's people and the tool registered, and the hub taking its launches."""
-    left = remove_leftovers()
+    left = remove_leftovers_unless_busy()
     if left:
         warnings.warn(f"removed {len(left)} test accounts an earlier, killed run left", stacklevel=2)
     with LTIPlatform() as platform:
