@@ -418,7 +418,8 @@ def lecture_hall(count: int) -> None:
               f" target 30 s)")
         print(f"PSS per student (server, kernel template, kernel) p50 {pss:.0f} MiB, with the server template's "
               f"share {pss + template_share:.0f} MiB (target 100 MiB)")
-    print("CPU seconds during the start, by part: " + ", ".join(f"{part} {seconds:.1f}" for part, seconds in cpu.items()))
+    print("CPU seconds during the start, by part: "
+          + ", ".join(f"{part} {seconds:.1f}" for part, seconds in cpu.items()))
     print(f"student {count + 1}: HTTP {page.status_code}, page heading {heading!r}, {beyond_processes} processes")
 
 
