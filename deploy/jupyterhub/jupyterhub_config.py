@@ -309,6 +309,18 @@ c.Spawner.environment = {
 # Students' servers forked from one template that has imported their server and kernel
 # (mt_widgets/kernels/server_template.py says what keeps it safe). Its environment is the
 # students' without anything of a student's or of the hub's: it imports what they will run.
+#: The modules of a student's Jupyter server's REST handlers, which jupyter_server imports by name
+#: when its web app starts (``jupyter_server.serverapp.JUPYTER_SERVICE_HANDLERS``): every forked
+#: server of a class imported them again (py-spy, benchmarks/bench_hub.py).
+SERVER_HANDLER_MODULES = [
+    "jupyter_server.services.api.handlers", "jupyter_server.services.config.handlers",
+    "jupyter_server.services.contents.handlers", "jupyter_server.files.handlers",
+    "jupyter_server.services.kernels.handlers", "jupyter_server.kernelspecs.handlers",
+    "jupyter_server.services.kernelspecs.handlers", "jupyter_server.nbconvert.handlers",
+    "jupyter_server.services.nbconvert.handlers", "jupyter_server.services.security.handlers",
+    "jupyter_server.services.sessions.handlers", "jupyter_server.services.shutdown",
+    "jupyter_server.view.handlers", "jupyter_server.services.events.handlers", "jupyter_server.base.handlers",
+]
 SERVER_TEMPLATE = None
 if os.environ.get("MT_HUB_SERVER_TEMPLATE", "on") != "off":
     SERVER_TEMPLATE = ServerTemplate(
@@ -319,7 +331,14 @@ if os.environ.get("MT_HUB_SERVER_TEMPLATE", "on") != "off":
                  # what a server's and a kernel's start imported after the fork (py-spy, bench_hub.py)
                  "mt_widgets.kernels.activity", "jupyterlab.extensions.readonly", "jupyter_core.migrate",
                  "jinja2.ext", "pdb", "IPython.core.debugger", "IPython.core.oinspect",
-                 "IPython.core.completerlib", "IPython.extensions.storemagic"],
+                 "IPython.core.completerlib", "IPython.extensions.storemagic",
+                 # and what they still imported after it (the modules of a forked server and kernel
+                 # that its template lacked; docs/guide/scaling.md): the server's REST handlers,
+                 # loaded by name at its start, the students' lazy extensions, the kernel spec's
+                 # module, tornado's asyncio loop (imported at the first IOLoop), the process
+                 # title; in a kernel, ipykernel's debugger module (without debugpy) and IPython's logger
+                 *SERVER_HANDLER_MODULES, "mt_hub_nbgrader", "mt_hub_voila", "ipykernel.kernelspec",
+                 "tornado.platform.asyncio", "setproctitle", "ipykernel.debugger", "IPython.core.logger"],
         env={"PATH": str(STUDENT_PYTHON.parent), "PYTHONPATH": _python_path, "PYTHONDONTWRITEBYTECODE": "1",
              "JUPYTER_CONFIG_PATH": str(HERE / "student-config"), "JUPYTER_PATH": str(HERE / "student-share"),
              "MT_HUB_ROLE": "student", "LANG": os.environ.get("LANG", "C.UTF-8")},

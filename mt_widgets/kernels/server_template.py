@@ -218,6 +218,7 @@ def main(argv: list[str] | None = None) -> None:
     if made:
         raise SystemExit(f"server template: importing {preload} made widgets ({made}); preload modules that make none")
     _system_facts_once()
+    _kernel_provisioners_once()
     template.settle(numba_packages)
     serve(template.listen(path, backlog), tuple(servers), tuple(kernels))
 
@@ -236,6 +237,19 @@ def _system_facts_once() -> None:
     sysinfo.pkg_commit_hash = lambda pkg_path: ("", "")
     facts = sysinfo.get_sys_info()
     serverapp.get_sys_info = lambda: dict(facts)
+
+
+def _kernel_provisioners_once() -> None:
+    """A server's first kernel asks jupyter_client which kernel provisioners are installed, and
+    jupyter_client answers by reading the entry points of every installed distribution (every
+    package's metadata files), about a twentieth of a forked server's start (py-spy,
+    benchmarks/bench_hub.py). The answer is the installation's, the same for every student (a
+    server runs the template's Python and packages): read once here, every fork shares it."""
+    factory = sys.modules.get("jupyter_client.provisioning.factory")
+    if factory is None or not callable(getattr(factory.KernelProvisionerFactory, "_get_all_provisioners", None)):
+        return
+    installed = factory.KernelProvisionerFactory._get_all_provisioners()
+    factory.KernelProvisionerFactory._get_all_provisioners = staticmethod(lambda: installed)
 
 
 def untrusted(folder: str) -> str | None:

@@ -280,6 +280,8 @@ def test_students_servers_use_ipc_kernels_and_leave_out_what_lessons_do_not_use(
     # Students' kernels (student-share/ first on their JUPYTER_PATH): ipykernel without its debugger.
     spec = json.loads((HUB / "student-share" / "kernels" / "python3" / "kernel.json").read_text())
     assert spec["argv"][:3] == ["{prefix}/bin/python", "-m", "mt_hub_kernel"] and spec["metadata"]["debugger"] is False
+    # ...and without IPython's SQLite history (a file and a thread per kernel, for past sessions' input).
+    assert "--HistoryManager.enabled=False" in spec["argv"]
     assert (HUB / "student-site" / "mt_hub_kernel.py").is_file()
     # For everyone: activity read from the headers, extensions listed without PyPI's client.
     for config in (student, _server_config("instructor")):
@@ -298,6 +300,11 @@ def test_the_server_template_is_on_unless_the_environment_says_off(setting):
     shutil.rmtree(on.folder)   # its socket's folder, made when the config is read
     assert on.servers == ["jupyterhub.singleuser"] and on.kernels == ["mt_hub_kernel"]
     assert "mt_widgets.kernels.activity" in on.preload   # the server's kernel manager, imported before forking
+    # Every REST handler module jupyter_server imports by name at a server's start.
+    from jupyter_server.serverapp import JUPYTER_SERVICE_HANDLERS
+
+    handlers = {module for modules in JUPYTER_SERVICE_HANDLERS.values() for module in modules or ()}
+    assert handlers | {"jupyter_server.base.handlers"} <= set(on.preload)
     assert template(setting(MT_HUB_SERVER_TEMPLATE="off")) is None
 
 

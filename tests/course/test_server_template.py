@@ -87,6 +87,16 @@ def main():
         subprocess.Popen = popen
     replaced = serverapp.get_sys_info is not sys.modules["jupyter_server._sysinfo"].get_sys_info
     report["system_facts"] = [len(started), replaced, facts["jupyter_server_version"] == jupyter_server.__version__]
+    # The installed kernel provisioners too: read from the packages' metadata once, in the template.
+    factory = sys.modules["jupyter_client.provisioning.factory"]
+    reads = []
+    entry_points = factory.entry_points
+    factory.entry_points = lambda *args, **kwargs: reads.append(args) or entry_points(*args, **kwargs)
+    try:
+        names = sorted(point.name for point in factory.KernelProvisionerFactory._get_all_provisioners())
+    finally:
+        factory.entry_points = entry_points
+    report["provisioners"] = [len(reads), names]
     with open(out, "w") as handle:
         json.dump(report, handle)
 
@@ -195,6 +205,7 @@ def test_each_fork_is_its_student_and_holds_no_one_elses_secret(server_template,
         assert report["kernel_template_socket"].startswith(str(home / "runtime") + "/")
         # jupyter_server's system facts, as the template gathered them: no git run per server.
         assert report["system_facts"] == [0, True, True], report["system_facts"]
+        assert report["provisioners"] == [0, ["local-provisioner"]], report["provisioners"]
 
 
 def test_requests_that_would_run_as_root_or_another_module_run_nothing(server_template, users):

@@ -7,8 +7,12 @@ debugpy (and through it coverage) in every kernel when debugpy is installed: abo
 every kernel's own memory, measured on this project's 2-core machine, for JupyterLab's visual
 debugger, which no lesson uses. An entry of None in ``sys.modules`` makes that import fail as a
 missing package does, so ipykernel runs as it does where debugpy is absent; the spec's
-``"debugger": false`` tells JupyterLab not to offer it. Instructors' kernels keep the debugger
-(their servers keep the usual spec).
+``"debugger": false`` tells JupyterLab not to offer it. The spec also turns IPython's history
+database off (``--HistoryManager.enabled=False``): each kernel opened and created a SQLite file in
+the student's home and started a thread to write it, a twentieth of a forked kernel's start
+(py-spy, benchmarks/bench_hub.py), for the input history of past sessions, which notebooks do not
+use (the session's own ``In`` and ``%history`` stay). Instructors' kernels keep the debugger and
+the history (their servers keep the usual spec).
 
 The blocking is done at import, not only when run: the class's server template
 (``mt_widgets/kernels/server_template.py``) imports this module before ipykernel, so that the
