@@ -231,6 +231,15 @@ class ClassHub:
         self._log_file.flush()
         return self._start()
 
+    def _end_proxy(self) -> None:
+        try:
+            proxy = psutil.Process(int((self.state / "proxy.pid").read_text()))
+            if "configurable-http-proxy" in " ".join(proxy.cmdline()):
+                proxy.kill()
+                proxy.wait(10)
+        except (FileNotFoundError, ValueError, psutil.NoSuchProcess, psutil.ZombieProcess):
+            pass
+
     def tail(self, chars: int = 4000) -> str:
         self._log_file.flush()
         return self.log.read_text()[-chars:]
@@ -452,6 +461,9 @@ class ClassHub:
             except subprocess.TimeoutExpired:
                 os.killpg(self.process.pid, signal.SIGKILL)
                 self.process.wait(5)
+        # The hub leaves its proxy running when it stops (cleanup_proxy=False), and a restarted hub
+        # adopts the proxy the last one started, in that hub's process group: end it by its pid file.
+        self._end_proxy()
         try:
             _remove_hub_accounts([*self.students, *self.admins], [self.cgroup])
         finally:
