@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Sets everything up from a fresh clone and runs the whole test suite in tiers (tests/tiers.py):
-# lint, fast (the science, the widgets without a kernel), fast again on Python 3.10 and 3.13 (their venvs
-# .venv-py310 and .venv-py313, by scripts/python-venv.sh), slow, install (the built wheel in each install
+# lint, fast (the science, the widgets without a kernel), fast again on Python 3.10 and 3.13, both at once
+# (their venvs .venv-py310 and .venv-py313, by scripts/python-venv.sh), slow, install (the built wheel in each install
 # shape), browser (Chromium, installed here from Debian's packages when missing), notebook (every
 # notebook under nbval) and hub. Each tier prints its time; the first tier that fails stops the run, so a lint error or a broken core is
 # reported in a minute or two. With extra arguments, one pytest run with them instead (a folder, -k, -m ...).
