@@ -51,7 +51,7 @@ if [ "$#" -gt 0 ]; then
 fi
 
 # The fast tier on the other Pythons (tests/tiers.py, OTHER_PYTHONS), all at once: each is one pytest
-# process that keeps one core busy, so on a 2-core machine the two take about the time of one. Their
+# process that keeps at most one core busy, so on a 2-core machine the two take about the time of one. Their
 # venvs (scripts/python-venv.sh) are made first, one after the other (two pip installs of one source
 # tree at once would build it into the same folders); each run's output is printed when all are done.
 run_other_pythons() {
