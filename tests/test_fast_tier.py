@@ -83,3 +83,61 @@ def test_the_other_pythons_are_the_oldest_and_the_newest_pyproject_lists():
     assert [version for _, version in OTHER_PYTHONS] == [f"3.{listed[0]}", f"3.{listed[-1]}"]
     assert 11 in listed, "the shared venv's Python is one of them"
     assert f'requires-python = ">=3.{listed[0]}"' in text
+
+
+def _stub_checkout(root: Path, other_status: int) -> Path:
+    """A checkout whose run-tests.sh is the real one and whose Pythons, venvs and tiers are stubs: each
+    "pytest" run writes when it started and ended into runs.txt, and the other Pythons' exit with
+    ``other_status``."""
+    (root / "scripts").mkdir(parents=True)
+    (root / "scripts" / "run-tests.sh").write_text((ROOT / "scripts" / "run-tests.sh").read_text())
+    (root / "scripts" / "setup.sh").write_text('VENV="$REPO/.venv"\n')
+    runs = root / "runs.txt"
+    for venv, status in ((".venv", 0), ("other", other_status)):
+        (root / venv / "bin").mkdir(parents=True)
+        python = root / venv / "bin" / "python"
+        python.write_text(
+            "#!/bin/bash\n"
+            'if [ "$1" = tests/tiers.py ]; then\n'
+            "    printf 'lint\\tlint\\tt.py\\nfast\\tnot slow\\n"
+            "fast-py3.10\\tnot slow\\nfast-py3.13\\tnot slow\\n'; exit\n"
+            "fi\n"
+            f'echo "{venv} start $(date +%s.%N)" >> {runs}\n'
+            "sleep 1\n"
+            f'echo "{venv} end $(date +%s.%N)" >> {runs}\n'
+            f"exit {status}\n")
+        python.chmod(0o755)
+    venv_script = root / "scripts" / "python-venv.sh"
+    venv_script.write_text(f'#!/bin/bash\necho {root / "other"}\n')
+    venv_script.chmod(0o755)
+    return runs
+
+
+@pytest.mark.slow
+def test_run_tests_runs_the_other_pythons_fast_tiers_at_the_same_time_after_the_fast_tier(tmp_path):
+    runs = _stub_checkout(tmp_path, other_status=0)
+    result = subprocess.run(["bash", str(tmp_path / "scripts" / "run-tests.sh")], capture_output=True, text=True,
+                            timeout=120)
+    assert result.returncode == 0, result.stdout + result.stderr
+    times = [line.split() for line in runs.read_text().splitlines()]
+    own = [float(t) for name, _, t in times if name == ".venv"]       # lint then fast: start, end, start, end
+    starts = [float(t) for name, what, t in times if name == "other" and what == "start"]
+    ends = [float(t) for name, what, t in times if name == "other" and what == "end"]
+    other = list(zip(sorted(starts), sorted(ends)))
+    assert len(own) == 4 and len(other) == 2
+    (first_start, first_end), (second_start, second_end) = sorted(other)
+    assert first_start >= own[3], "after the fast tier"
+    assert second_start < first_end, "at the same time, not one after the other"
+    summary = result.stdout[result.stdout.index("== the tiers' times:"):]
+    assert [line.split()[0] for line in summary.splitlines()[1:5]] == ["lint", "fast", "fast-py3.10", "fast-py3.13"]
+    assert summary.count("passed") == 5, summary   # four tiers and "all tiers passed"
+
+
+@pytest.mark.slow
+def test_run_tests_stops_at_a_failing_other_python_and_exits_with_its_status(tmp_path):
+    _stub_checkout(tmp_path, other_status=3)
+    result = subprocess.run(["bash", str(tmp_path / "scripts" / "run-tests.sh")], capture_output=True, text=True,
+                            timeout=120)
+    assert result.returncode == 3
+    assert "fast-py3.10    " in result.stdout and "FAILED (3)" in result.stdout
+    assert "stopped at the tier 'fast-py3.10'" in result.stderr

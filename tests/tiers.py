@@ -55,8 +55,8 @@ TIERS = (
 )
 
 #: (name, Python version): the fast tier run again with these Pythons, the oldest and the newest that
-#: pyproject.toml's classifiers list (the shared venv is 3.11). scripts/run-tests.sh runs each right
-#: after the fast tier, with scripts/python-venv.sh's venv of that Python.
+#: pyproject.toml's classifiers list (the shared venv is 3.11). scripts/run-tests.sh runs them right
+#: after the fast tier, all at once, each with scripts/python-venv.sh's venv of its Python.
 OTHER_PYTHONS = (("fast-py3.10", "3.10"), ("fast-py3.13", "3.13"))
 
 

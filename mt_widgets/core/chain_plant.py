@@ -358,6 +358,8 @@ class ChainPlant(ContinuousPlant):
         shape = np.broadcast_shapes(q.shape[:-1], actions.shape[:-1])
         q = np.ascontiguousarray(np.broadcast_to(q, shape + (n,)).reshape(-1, n), dtype=float)
         u = np.ascontiguousarray(np.broadcast_to(actions, shape + (3,)).reshape(-1, 3), dtype=float)
+        # Always read-only, as SerialChain._flat's: one compiled signature of the kernel, not one per writability.
+        q.flags.writeable = u.flags.writeable = False
         out = np.empty((len(q), n))
         _reference_batch(self.chain.model, self.control(), q, u, out)
         return out.reshape(shape + (n,))

@@ -473,7 +473,8 @@ def rollout_serial(model, scene, control, thetas, start, dt, n_steps, record_eve
 def rollout_parallel(model, scene, control, thetas, start, dt, n_steps, record_every, out):
     """``rollout_serial`` with the batch spread over all cores; each rollout's arithmetic is identical."""
     for b in prange(thetas.shape[0]):
-        _rollout_one(b, model, scene, control, thetas, start, dt, n_steps, record_every, out)
+        # prange's index is unsigned: as int64 the call is rollout_serial's, compiled (and cached) once
+        _rollout_one(np.int64(b), model, scene, control, thetas, start, dt, n_steps, record_every, out)
 
 
 # -- the fast path of a planar pair --------------------------------------------------------------------
@@ -692,7 +693,7 @@ def planar_rollout_serial(p, compensate, thetas, start, dt, n_steps, record_ever
 def planar_rollout_parallel(p, compensate, thetas, start, dt, n_steps, record_every, out):
     """``planar_rollout_serial`` with the batch spread over all cores."""
     for b in prange(thetas.shape[0]):
-        _planar_rollout_one(b, p, compensate, thetas, start, dt, n_steps, record_every, out)
+        _planar_rollout_one(np.int64(b), p, compensate, thetas, start, dt, n_steps, record_every, out)  # as above
 
 
 #: Batches at least this large are spread over cores; below it threads cost more than they save.

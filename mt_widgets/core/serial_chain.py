@@ -186,6 +186,10 @@ class SerialChain:
         shape = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
         flat = [np.ascontiguousarray(np.broadcast_to(a, shape + a.shape[-1:]).reshape(-1, a.shape[-1]))
                 for a in arrays]
+        # Always read-only (a broadcast view is; a reshape's copy would not be): numba compiles a
+        # kernel once per signature, and writability is part of it (a cold cache compiled each twice).
+        for a in flat:
+            a.flags.writeable = False
         return shape, flat
 
     # -- kinematics ---------------------------------------------------------------------------------

@@ -359,9 +359,12 @@ def test_the_emergency_stop_holds_the_arm_until_resume(slow_sim, slow_arm):
     servo = bus.servos[1]
     # The stop's goal is where each servo was when it was read: the still ones hold exactly.
     assert len(servo.goals) == 2 and all(s.holds[-1] for i, s in bus.servos.items() if i != 1)
-    # It brakes at its acceleration, comes back to the hold and stays there.
+    # It brakes at its acceleration, comes back to the hold and stays there. Braking overshoots the
+    # hold, so the shaft passes its step once on the way out: wait for the end of the move (its
+    # `moving` register), not the first reading of that step (which a loaded machine may sample).
     deadline = time.monotonic() + 2.0
-    while bus.present_positions(time.monotonic())[1] != servo.goals[-1] and time.monotonic() < deadline:
+    while ((bus.present_positions(time.monotonic())[1] != servo.goals[-1] or servo.value("moving"))
+           and time.monotonic() < deadline):
         time.sleep(0.01)
     time.sleep(0.05)
     assert bus.present_positions(time.monotonic())[1] == servo.goals[-1]
