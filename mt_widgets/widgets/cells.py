@@ -36,6 +36,7 @@ import weakref
 
 from IPython import get_ipython
 from ipywidgets import Widget
+from ipywidgets.widgets.widget import _instances  # the registry of open widgets (no public name in 8.x)
 
 from .animation import retire
 from .tree import widget_tree
@@ -169,8 +170,6 @@ def _user_roots(shell) -> list:
 def _reached(shell, views: list[Widget]) -> set[int] | None:
     """The ids of those of ``views`` that the user's names or an open widget outside them reach (any of
     their widgets: a part the user kept keeps its view), or None when the search passed ``SEARCH_LIMIT``."""
-    from ipywidgets.widgets.widget import _instances  # the registry of open widgets (no public name in 8.x)
-
     owner = {id(node): id(view) for view in views for node in widget_tree(view)}
     stack = _user_roots(shell) + [widget for widget in list(_instances.values()) if id(widget) not in owner]
     # Never walked into: the kernel and shell (they reach everything), comms (a comm reaches only its own
