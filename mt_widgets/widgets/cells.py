@@ -142,10 +142,7 @@ VIEWS = _Views()
 
 def _parent_metadata(shell) -> dict:
     kernel = getattr(shell, "kernel", None)
-    try:
-        parent = kernel.get_parent("shell") if kernel is not None else {}
-    except TypeError:  # ipykernel < 6.? took no channel
-        parent = kernel.get_parent()
+    parent = kernel.get_parent("shell") if kernel is not None else {}  # as pages.current_page reads it
     return (parent or {}).get("metadata") or {}
 
 
