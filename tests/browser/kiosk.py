@@ -52,15 +52,29 @@ def start_page_server(root: Path, notebook: Path = DEMO, *, shipped_config: bool
 
 
 def kernel_processes(server: Server) -> dict[str, psutil.Process]:
-    """The server's kernels by kernel id (read from each kernel's ``-f .../kernel-<id>.json``)."""
-    kernels = {}
+    """The server's kernels by kernel id (read from each kernel's ``-f .../kernel-<id>.json``).
+
+    A kernel that runs a subprocess has, between fork and exec, a child with its own command
+    line; that child is not the kernel, so the process kept for an id is the one whose parent
+    is not the same kernel (CI once saw the transient child's pid here and then the kernel's)."""
+    matches: dict[str, list[psutil.Process]] = {}
     for child in psutil.Process(server.process.pid).children(recursive=True):
         try:
             match = re.search(r"kernel-([0-9a-f-]{36})\.json", " ".join(child.cmdline()))
         except psutil.NoSuchProcess:
             continue
         if match:
-            kernels[match.group(1)] = child
+            matches.setdefault(match.group(1), []).append(child)
+    def parent(process: psutil.Process) -> int | None:
+        try:
+            return process.ppid()
+        except psutil.NoSuchProcess:
+            return None
+
+    kernels = {}
+    for kernel_id, processes in matches.items():
+        pids = {process.pid for process in processes}
+        kernels[kernel_id] = next((p for p in processes if parent(p) not in pids), processes[0])
     return kernels
 
 
