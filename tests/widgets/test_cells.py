@@ -150,3 +150,20 @@ def test_without_cell_ids_nothing_is_retired(kernel):
     old = kernel.state("plain")["plain"]
     kernel.run("plain = EpisodeWidget('sim-point', seed=2)")
     assert old in kernel.settle()["episodes"], "a Voila-like kernel (no cell ids) had an episode closed"
+
+
+def test_a_retired_episode_is_freed_at_its_close_without_waiting_for_pythons_collector(kernel):
+    """A closed view is garbage in reference cycles. In a kernel forked from a frozen template, Python's
+    own full collections came about every thirty episodes (animation.py, ``_collect_soon``); here they
+    never come, and the episode must still be gone once it is closed."""
+    cell = "cell-freed"
+    # After a full collection every survivor (the first episode) is in the oldest generation, which
+    # only a full collection visits; with its threshold out of reach, only an explicit one frees it.
+    kernel.run("import weakref\nepisode = EpisodeWidget('sim-point', seed=1)\n_first = weakref.ref(episode)\n"
+               "gc.collect(); gc.set_threshold(700, 10, 10**9)", cell=cell)
+    try:
+        kernel.run("episode = EpisodeWidget('sim-point', seed=2)", cell=cell)
+        kernel.run("import time; time.sleep(_animation.CLOSE_MARGIN_S + 0.5)")
+        assert kernel.run("print(_first() is None, gc.get_threshold())").strip() == "True (700, 10, 1000000000)"
+    finally:
+        kernel.run("gc.set_threshold(700, 10, 10)")
