@@ -27,12 +27,15 @@ EXPECTED = {
                           "feedback latency per learner", "guidance per learner in silico",
                           "batched in-silico study per learner", "power by simulation, reward-sim"],
     "bench_kill_soak.py": ["SIGKILLs (before", "nothing lost, nothing duplicated"],
+    "bench_lesson_kernel.py": ["a lesson's kernel, forked from the template", "the largest rise",
+                               "one full collection", "PSS at the last episode"],
 }
 # Shorter runs where a full one takes minutes (the figures are reported, never asserted).
 ARGS = {"bench_kiosk.py": ["--loads", "2", "--no-study"], "bench_online.py": ["--participants", "2", "--think", "1"],
         "bench_install.py": ["--shapes", "core"],
         "bench_so101.py": ["--demonstrations", "3"], "bench_learners.py": ["--quick"],
-        "bench_kill_soak.py": ["--kills", "1", "--protocols", "paper-sim"]}
+        "bench_kill_soak.py": ["--kills", "1", "--protocols", "paper-sim"],
+        "bench_lesson_kernel.py": ["--episodes", "4"]}
 
 
 @pytest.mark.slow

@@ -295,25 +295,23 @@ class _Closing:
 # A closed view is garbage in reference cycles (traitlets' observers, its comms' callbacks, its
 # canvases' handlers): only a full collection frees it. In a kernel forked from a template, whose
 # objects are frozen out of the collector (kernels/template.py, ``settle``), Python's own full
-# collections came about every thirty episodes: a lesson's kernel climbed from 102 to 138 MiB
+# collections came about every thirty episodes: a lesson's kernel climbed from 103 to 138 MiB
 # PSS before the first one, and glibc kept the freed heap afterwards. Collected after each close
-# it stays within 106-108 MiB (60 episodes in four cells, docs/guide/faults.md), at about 10 ms
-# a collection (the frozen objects are not visited), once the page has drawn the closed view.
+# it stays flat (benchmarks/bench_lesson_kernel.py). A collection takes about 10 ms there (the
+# frozen objects are not visited) and up to about 100 ms in a kernel started the usual way; an
+# animation playing meanwhile is not held back, since its chunks go AHEAD_S before they are due.
+# Waiting for no animation to play was tried: back-to-back episodes always have one, and the
+# kernel grew as before.
 _COLLECTION: list = []
 
 
 def _collect_soon(loop) -> None:
-    """One full collection (and the heap trimmed) on ``loop`` after the views closed this turn,
-    once no animation is being sent: a collection in a kernel not forked from a template visits
-    every object (80-110 ms), which would hold back an animation's next chunk."""
+    """One full collection (and the heap trimmed) on ``loop`` after the views closed this turn."""
     if not _COLLECTION:
-        _COLLECTION.append(loop.call_soon(_collect, loop))
+        _COLLECTION.append(loop.call_soon(_collect))
 
 
-def _collect(loop) -> None:
-    if any(not (animation.done or animation.cancelled) for animation in list(_PLAYING.values())):
-        _COLLECTION[:] = [loop.call_later(CHUNK_S, _collect, loop)]
-        return
+def _collect() -> None:
     _COLLECTION.clear()
     gc.collect()
     trim = _malloc_trim()
