@@ -214,6 +214,8 @@ def retire(widget, keep=None, shown_only: bool = False) -> None:
 
     Without a page to answer (none open, or closed meanwhile) the close comes at ``CLOSE_FALLBACK_S``
     (never before the kernel's estimate of playback plus ``CLOSE_MARGIN_S``); without a kernel, at once.
+    In a kernel, the closes of a turn of its loop are followed by one full collection and a heap
+    trim (``_collect_soon``), which free the closed widgets' memory.
 
     Args:
         widget: the view leaving the page.
