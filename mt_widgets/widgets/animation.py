@@ -303,22 +303,33 @@ class _Closing:
 # frozen objects are not visited) and up to about 100 ms in a kernel started the usual way; an
 # animation playing meanwhile is not held back, since its chunks go AHEAD_S before they are due.
 # Waiting for no animation to play was tried: back-to-back episodes always have one, and the
-# kernel grew as before.
-_COLLECTION: list = []
+# kernel grew as before. A notebook holding millions of objects makes each collection long: then
+# they come less often (``COLLECTION_SHARE``).
+#: At most this share of the kernel's time goes to the collections after closes.
+COLLECTION_SHARE = 0.02
+_COLLECTION: list = []  # the handle of the collection to come, if one is
+_LAST_COLLECTION = [0.0, 0.0]  # when the last one ended and what it took (time.monotonic, seconds)
 
 
 def _collect_soon(loop) -> None:
-    """One full collection (and the heap trimmed) on ``loop`` after the views closed this turn."""
-    if not _COLLECTION:
-        _COLLECTION.append(loop.call_soon(_collect))
+    """One full collection (and the heap trimmed) on ``loop`` after the views closed this turn, or
+    later if the last one was recent for what it took."""
+    if _COLLECTION:
+        return
+    ended, took = _LAST_COLLECTION
+    wait = ended + took / COLLECTION_SHARE - time.monotonic()
+    _COLLECTION.append(loop.call_later(wait, _collect) if wait > 0 else loop.call_soon(_collect))
 
 
 def _collect() -> None:
     _COLLECTION.clear()
+    started = time.monotonic()
     gc.collect()
     trim = _malloc_trim()
     if trim is not None:
         trim(0)  # glibc keeps freed heap at the top of its arenas unless told: about 1.5 ms
+    ended = time.monotonic()
+    _LAST_COLLECTION[:] = [ended, ended - started]
 
 
 @functools.cache

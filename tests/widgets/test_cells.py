@@ -163,7 +163,12 @@ def test_a_retired_episode_is_freed_at_its_close_without_waiting_for_pythons_col
                "gc.collect(); gc.set_threshold(700, 10, 10**9)", cell=cell)
     try:
         kernel.run("episode = EpisodeWidget('sim-point', seed=2)", cell=cell)
-        kernel.run("import time; time.sleep(_animation.CLOSE_MARGIN_S + 0.5)")
-        assert kernel.run("print(_first() is None, gc.get_threshold())").strip() == "True (700, 10, 1000000000)"
+        # The close comes CLOSE_MARGIN_S after the retire; its collection then, or once the kernel has
+        # had COLLECTION_SHARE's due since the last one (a few seconds at most under load).
+        deadline, freed = time.monotonic() + 30, "False"
+        while freed.startswith("False") and time.monotonic() < deadline:
+            time.sleep(0.2)
+            freed = kernel.run("print(_first() is None, gc.get_threshold())").strip()
+        assert freed == "True (700, 10, 1000000000)", freed
     finally:
         kernel.run("gc.set_threshold(700, 10, 10)")

@@ -55,24 +55,40 @@ def test_retiring_only_what_a_screen_shows_leaves_what_its_attributes_reach_open
 
 
 
-def test_the_collection_after_closes_comes_once_for_the_views_closed_in_a_turn(monkeypatch):
+
+def test_the_collection_after_closes_comes_once_a_turn_and_takes_at_most_its_share_of_the_kernel(monkeypatch):
     """A closed view is freed by a full collection (animation.py, ``_collect_soon``): one for all the views
-    closed in a turn of the kernel's loop, and one again for a later close."""
+    closed in a turn of the kernel's loop, and, when a collection is long (a notebook holding millions of
+    objects), the next one only once the kernel has had ``1 / COLLECTION_SHARE`` times as long for itself."""
     import asyncio
+    import time
 
     from mt_widgets.widgets import animation
 
     collections = []
-    monkeypatch.setattr(animation.gc, "collect", lambda *args: collections.append(args))
+
+    def collect(*args):
+        time.sleep(0.01)  # a long collection: the next one no sooner than 0.5 s after it
+        collections.append(time.monotonic())
+
+    monkeypatch.setattr(animation.gc, "collect", collect)
+    monkeypatch.setattr(animation, "_LAST_COLLECTION", [0.0, 0.0])
     loop = asyncio.new_event_loop()
     try:
         animation._collect_soon(loop)
         animation._collect_soon(loop)  # a second view closed in the same turn
         assert collections == [], "collected before the loop's next turn"
         loop.run_until_complete(asyncio.sleep(0.05))
-        assert collections == [()], collections
-        animation._collect_soon(loop)  # the next close collects again
-        loop.run_until_complete(asyncio.sleep(0.05))
+        assert len(collections) == 1, collections
+        animation._collect_soon(loop)  # the next close: its collection waits its turn
+        loop.run_until_complete(asyncio.sleep(0.2))
+        assert len(collections) == 1, "a 10 ms collection came again within 0.2 s"
+        loop.run_until_complete(asyncio.sleep(0.6))
         assert len(collections) == 2
+        gap = collections[1] - collections[0]
+        assert 0.01 / animation.COLLECTION_SHARE <= gap + 0.01 < 0.9, gap
     finally:
+        for handle in animation._COLLECTION:
+            handle.cancel()
+        animation._COLLECTION.clear()
         loop.close()
