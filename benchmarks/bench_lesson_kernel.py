@@ -28,6 +28,7 @@ import argparse
 import asyncio
 import json
 import os
+import shutil
 import sys
 import tempfile
 import time
@@ -123,7 +124,18 @@ def main() -> None:
     if args.episodes < 4:
         parser.error(f"--episodes: expected at least 4, got {args.episodes}")
     # A runtime folder of its own: the template's socket lives there.
-    os.environ["JUPYTER_RUNTIME_DIR"] = tempfile.mkdtemp(prefix="mt-bench-lesson-")
+    runtime = tempfile.mkdtemp(prefix="mt-bench-lesson-")
+    os.environ["JUPYTER_RUNTIME_DIR"] = runtime
+    try:
+        compare(args)
+    finally:
+        template = KernelTemplate._shared
+        if template is not None:
+            template.stop()
+        shutil.rmtree(runtime, ignore_errors=True)
+
+
+def compare(args) -> None:
     print(f"a lesson's kernel, forked from the template: {args.episodes} episodes of sim-point in {CELLS} "
           f"cells run again with cell ids, {args.pause:g} s before each arrow", flush=True)
     results = {}
@@ -140,7 +152,6 @@ def main() -> None:
     shipped, reference = results["shipped"][-1][1], results["reference"][-1][1]
     print(f"PSS at the last episode: shipped {shipped:.1f} MiB, reference {reference:.1f} MiB "
           f"(ratio {shipped / reference:.2f})")
-    KernelTemplate.shared().stop()
 
 
 if __name__ == "__main__":
