@@ -291,34 +291,40 @@ class _Closing:
             self._fallback.cancel()
         RECEIPTS.forget(self._on_drawn)
         self._close()
-        _collect_soon(self._loop)
+        try:
+            _collect_soon(self._loop)
+        except RuntimeError:  # the loop closed meanwhile (the kernel is ending): nothing to free for
+            pass
 
 
 # A closed view is garbage in reference cycles (traitlets' observers, its comms' callbacks, its
-# canvases' handlers): only a full collection frees it. In a kernel forked from a template, whose
-# objects are frozen out of the collector (kernels/template.py, ``settle``), Python's own full
-# collections came about every thirty episodes: a lesson's kernel climbed from 103 to 138 MiB
-# PSS before the first one, and glibc kept the freed heap afterwards. Collected after each close
-# it stays flat (benchmarks/bench_lesson_kernel.py). A collection takes about 10 ms there (the
-# frozen objects are not visited) and up to about 100 ms in a kernel started the usual way; an
-# animation playing meanwhile is not held back, since its chunks go AHEAD_S before they are due.
-# Waiting for no animation to play was tried: back-to-back episodes always have one, and the
-# kernel grew as before. A notebook holding millions of objects makes each collection long: then
-# they come less often (``COLLECTION_SHARE``).
+# canvases' handlers): only a full collection frees it. Python runs one only once the objects that
+# outlived younger collections since the last exceed a quarter of all long-lived ones, and a class
+# kernel holds about 290,000 of those (what the template imported; ``gc.freeze`` does not take them
+# out of that count): the first came after about thirty episodes, a lesson's kernel had climbed from
+# 103 to 133 MiB PSS, and glibc kept the freed heap afterwards. Collected after the closes it stays
+# within 7 % (benchmarks/bench_lesson_kernel.py). A collection takes 10-30 ms in a kernel forked from
+# the template (its frozen objects are not visited) and up to about 100 ms in one started the usual
+# way; an animation playing meanwhile is held back only by one longer than AHEAD_S, since its chunks
+# go that early. Waiting until no animation played was tried: back-to-back episodes always have one,
+# and the kernel grew as before. A notebook holding millions of objects makes each collection long:
+# then they come less often (``COLLECTION_SHARE``).
 #: At most this share of the kernel's time goes to the collections after closes.
 COLLECTION_SHARE = 0.02
-_COLLECTION: list = []  # the handle of the collection to come, if one is
-_LAST_COLLECTION = [0.0, 0.0]  # when the last one ended and what it took (time.monotonic, seconds)
+#: The loop and the timer of the collection to come, if one is.
+_COLLECTION: dict = {}
+#: When the last collection ended and what it took (time.monotonic, seconds).
+_LAST_COLLECTION = [0.0, 0.0]
 
 
 def _collect_soon(loop) -> None:
     """One full collection (and the heap trimmed) on ``loop`` after the views closed this turn, or
     later if the last one was recent for what it took."""
-    if _COLLECTION:
-        return
+    if _COLLECTION.get("loop") is loop:
+        return  # one is coming on this loop (a timer left on another, closed, loop does not count)
     ended, took = _LAST_COLLECTION
-    wait = ended + took / COLLECTION_SHARE - time.monotonic()
-    _COLLECTION.append(loop.call_later(wait, _collect) if wait > 0 else loop.call_soon(_collect))
+    wait = max(0.0, ended + took / COLLECTION_SHARE - time.monotonic())
+    _COLLECTION.update(loop=loop, timer=loop.call_later(wait, _collect))
 
 
 def _collect() -> None:
@@ -337,7 +343,7 @@ def _malloc_trim():
     """glibc's ``malloc_trim``, or None (another C library: nothing to give back this way)."""
     try:
         return ctypes.CDLL(None).malloc_trim
-    except (OSError, AttributeError):
+    except (OSError, AttributeError, TypeError):  # TypeError: Windows has no CDLL(None)
         return None
 
 

@@ -65,6 +65,8 @@ def kernel(monkeypatch):
     monkeypatch.setattr(animation, "kernel_loop", lambda: loop)
     monkeypatch.setattr(animation, "RECEIPTS", receipts)
     monkeypatch.setattr(animation._Queue, "free_at", 0.0)
+    # The collection after a close is another timer (test_retire.py tests it): not this loop's business.
+    monkeypatch.setattr(animation, "_collect_soon", lambda loop: None)
     monkeypatch.setattr(_CANVAS_MANAGER, "_send_custom", lambda command, buffers=[]: sent.append(command))
     return loop, receipts, sent
 
