@@ -18,9 +18,13 @@ NOTEBOOK = "cell_rerun.ipynb"
 EPISODE_CELL = ('from mt_widgets.widgets import EpisodeWidget\n'
                 'episode = EpisodeWidget("sim-point", seed=0, guidance=True)\n'
                 'episode')
+# Numbered runs: the test reads the answer of the run it asked for, not an output area JupyterLab has
+# just cleared for it (which read "open episodes: None" on a loaded CI machine).
 PROBE_CELL = ('from ipywidgets.widgets.widget import _instances\n'
               'import gc; gc.collect()\n'
-              'print("open episodes:", sum(isinstance(w, EpisodeWidget) for w in list(_instances.values())))')
+              '_probe_run = globals().get("_probe_run", 0) + 1\n'
+              'print(f"probe {_probe_run}: open episodes:", '
+              'sum(isinstance(w, EpisodeWidget) for w in list(_instances.values())))')
 #: Seconds within which the replaced episodes are closed once the page has drawn them: far below the
 #: 60 s a close takes when no page answers (``animation.CLOSE_FALLBACK_S``).
 CLOSED_WITHIN_S = 20.0
@@ -67,14 +71,14 @@ def test_a_cell_run_again_and_again_keeps_one_episode_open_and_the_page_drawing(
         wait_for_color(page, 0, *ee_pixel(expected), OKABE["yellow"], timeout=60_000)
 
         # The kernel closes the replaced episodes once the page has drawn what they held.
-        deadline, open_episodes = time.monotonic() + CLOSED_WITHIN_S, None
+        deadline, open_episodes, run = time.monotonic() + CLOSED_WITHIN_S, None, 0
         while time.monotonic() < deadline:
+            run += 1
             cells.nth(1).locator(".jp-InputArea-editor").click()
             page.keyboard.press("Control+Enter")
-            page.wait_for_function("() => document.body.innerText.includes('Idle')", timeout=60_000)
-            output = cells.nth(1).locator(".jp-OutputArea").inner_text(timeout=10_000)
-            found = re.search(r"open episodes: (\d+)", output)
-            open_episodes = int(found.group(1)) if found else None
+            answer = cells.nth(1).locator(".jp-OutputArea").get_by_text(f"probe {run}: open episodes:")
+            answer.wait_for(timeout=60_000)
+            open_episodes = int(re.search(r"open episodes: (\d+)", answer.inner_text()).group(1))
             if open_episodes == 1:
                 break
             page.wait_for_timeout(500)
