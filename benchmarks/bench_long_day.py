@@ -222,8 +222,10 @@ def main() -> None:
     log_errors = [line for line in day_log if ERROR_LINE.search(line)]
     reference = next(s for s in samples if s["minute"] >= 10)
     later = [s for s in samples if s["minute"] >= reference["minute"]]
-    median_change = max(abs(statistics.median(s["pss"]) / statistics.median(reference["pss"]) - 1) for s in later)
-    student_change = max(abs(after / before - 1) for s in later for before, after in zip(reference["pss"], s["pss"]))
+    median_changes = [statistics.median(s["pss"]) / statistics.median(reference["pss"]) - 1 for s in later]
+    student_changes = [after / before - 1 for s in later for before, after in zip(reference["pss"], s["pss"])]
+    median_change = max(abs(change) for change in median_changes)
+    student_change = max(abs(change) for change in student_changes)
     # A lesson's kernel grows with every episode run in it (each cell run makes new widgets, and a
     # notebook keeps the old ones until they are closed); a new lesson starts a new kernel. So the
     # day's growth is read at the same point of every lesson as well: each sample at minute 10 of a
@@ -243,7 +245,9 @@ def main() -> None:
               f"max {max(latencies) * 1000:.0f} ms")
     print(f"memory per student (PSS) p50 at minute {reference['minute']:.0f}: "
           f"{statistics.median(reference['pss']):.0f} MiB; the class's median after it changed by at most "
-          f"{median_change * 100:.1f} %, one student's by at most {student_change * 100:.1f} % (target 10 %); at "
+          f"{median_change * 100:.1f} % ({max(median_changes) * 100:+.1f} % up, {min(median_changes) * 100:+.1f} % "
+          f"down), one student's by at most {student_change * 100:.1f} % ({max(student_changes) * 100:+.1f} % up, "
+          f"{min(student_changes) * 100:+.1f} % down: a new lesson's kernel starts smaller) (target 10 %); at "
           f"minute {reference['minute'] % LESSON_MIN:.0f} of every lesson ("
           + ", ".join(f"{s['minute']:.0f}: {statistics.median(s['pss']):.0f} MiB" for s in same_point)
           + f") by at most {lesson_change * 100:.1f} %")
